@@ -1,0 +1,163 @@
+"""The ``flashsync`` command: a thin layer over the library API.
+
+Every command prints one clear line on stderr and exits non-zero on bad input; outputs are
+written atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from flashsync.errors import FlashsyncError
+
+EXAMPLES = {
+    "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv",
+    "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
+    "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
+    "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
+    "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
+    "simulate": "flashsync simulate sample -o sim/",
+    "demo": "flashsync demo",
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit code (0 ok, 1 bad input, 130 interrupted)."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.run(args) or 0
+    except FlashsyncError as error:
+        print(f"flashsync {args.command}: error: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"flashsync {args.command}: interrupted; no output written", file=sys.stderr)
+        return 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="flashsync", description="Synchronise rolling-shutter cameras to a fraction of a "
+        "millisecond from the bands that flashes leave in their frames.")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def command(name: str, help_text: str, run) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text,
+                                  epilog=f"example:\n  {EXAMPLES[name]}",
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub.set_defaults(run=run)
+        return sub
+
+    detect = command("detect", "Detect flash events (band edges) in videos.", _run_detect)
+    detect.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
+    detect.add_argument("-o", "--output", type=Path, default=Path("events.csv"),
+                        help="events table, .csv or .parquet (default: events.csv)")
+    _detection_options(detect)
+
+    sync = command("sync", "Detect, match and solve: write the model file sync.json.", _run_sync)
+    sync.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
+    sync.add_argument("-o", "--output", type=Path, default=Path("sync.json"),
+                      help="model file (default: sync.json)")
+    sync.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
+    sync.add_argument("--row-time", action="append", default=[], metavar="CAMERA=MS",
+                      help="known time per row of a camera in ms (datasheet); repeatable")
+    sync.add_argument("--anchor", action="append", default=[], metavar="CAMERA:EVENT",
+                      help="events (0-based per camera) that are one flash; optional, repeatable")
+    sync.add_argument("--events", type=Path, help="also write the detected events table here")
+    _detection_options(sync)
+
+    restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
+    restamp.add_argument("detections", type=Path, metavar="DETECTIONS")
+    restamp.add_argument("--model", type=Path, default=Path("sync.json"),
+                         help="model file (default: sync.json in the current folder)")
+    restamp.add_argument("-o", "--output", type=Path,
+                         help="output table, .csv or .parquet (default: DETECTIONS with suffix .restamped.csv)")
+
+    simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
+    simulate.add_argument("scenario", nargs="?", default="sample",
+                          help="preset name or a YAML/JSON scenario file (default: sample)")
+    simulate.add_argument("-o", "--output", type=Path, required=True, help="output folder")
+
+    demo = command("demo", "Run detect -> sync -> restamp on the shipped sample and compare "
+                   "with its ground truth.", _run_demo)
+    demo.add_argument("--samples", type=Path, help="sample folder (default: the shipped samples/)")
+    demo.add_argument("-o", "--output", type=Path, default=Path("flashsync-demo"),
+                      help="folder for the demo's outputs (default: flashsync-demo)")
+    return parser
+
+
+def _detection_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--flipped", action="append", default=[], metavar="CAMERA",
+                        help="camera mounted upside down (reads bottom-up); repeatable")
+
+
+def _progress(camera: str, total: int):
+    from tqdm import tqdm
+
+    bar = tqdm(total=total or None, desc=camera, unit="frame", leave=False, disable=None)
+    return bar.update
+
+
+def _run_detect(args) -> None:
+    from flashsync.pipeline import all_events, detect_videos
+    from flashsync.tables import write_table
+
+    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress))
+    write_table(events, args.output)
+    print(f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
+          f"in {len(args.videos)} videos -> {args.output}", file=sys.stderr)
+
+
+def _run_sync(args) -> None:
+    from flashsync.model_file import save_model
+    from flashsync.pipeline import all_events, detect_videos, synchronize
+    from flashsync.report import sync_table
+    from flashsync.tables import write_table
+
+    detections = detect_videos(args.videos, args.flipped, progress=_progress)
+    if args.events:
+        write_table(all_events(detections), args.events)
+    model, report = synchronize(detections, args.reference, _row_times(args.row_time), args.anchor)
+    for warning in report.warnings:
+        print(f"flashsync sync: warning: {warning}", file=sys.stderr)
+    save_model(model, args.output)
+    print(sync_table(model))
+    print(f"model -> {args.output}", file=sys.stderr)
+
+
+def _row_times(values: list[str]) -> dict[str, float]:
+    result = {}
+    for text in values:
+        camera, _, value = text.partition("=")
+        try:
+            result[camera] = float(value)
+        except ValueError:
+            raise FlashsyncError(f"--row-time {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
+        if not result[camera] > 0:
+            raise FlashsyncError(f"--row-time {text}: the time per row must be positive")
+    return result
+
+
+def _run_restamp(args) -> int:
+    from flashsync.model_file import load_model
+    from tracking_adapter.restamp import restamp_file
+
+    output = args.output or args.detections.with_suffix(".restamped.csv")
+    summary = restamp_file(args.detections, output, load_model(args.model))
+    print(summary.describe(output), file=sys.stderr)
+    return 0
+
+
+def _run_simulate(args) -> None:
+    from flashsync.simulation import load_scenario, render_scenario
+
+    truth = render_scenario(load_scenario(args.scenario), args.output)
+    print(f"{len(truth.cameras)} cameras rendered -> {args.output}", file=sys.stderr)
+
+
+def _run_demo(args) -> None:
+    from flashsync.demo import run_demo
+
+    run_demo(args.samples, args.output, progress=_progress)

@@ -1,0 +1,142 @@
+"""The time model: a global time (ms, reference clock) for every (camera, frame, row).
+
+A camera's map onto the reference clock is affine in its container time ``t_f`` and
+linear in the readout row ``q`` (``q = row``, or ``height - 1 - row`` for a camera that
+reads bottom-up)::
+
+    t_global_ms(f, row) = alpha * t_f + beta_ms + q * row_time_ms
+
+``t_global_ms`` is the end-of-exposure instant of that row (DESIGN.md, time convention).
+This module knows no file format; :mod:`flashsync.model_file` reads and writes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from flashsync.errors import FlashsyncError
+
+
+@dataclass
+class CameraClock:
+    """One camera's frame timestamps and its map onto the reference clock.
+
+    Attributes
+    ----------
+    name : str
+        Camera name (the video file stem).
+    frame_times_ms : ndarray of shape (n_frames,)
+        Container timestamps of the decoded frames, presentation order, ms.
+    height, width : int
+        Stored image size, px.
+    alpha : float
+        Clock rate relative to the reference (1 + drift).
+    beta_ms : float
+        Shift, ms (absorbs the hidden rows before the first visible row).
+    row_time_ms : float
+        Time per row, ms (reference clock).
+    flipped : bool
+        True when the sensor reads bottom-up in stored rows (camera upside down).
+    covariance : ndarray of shape (3, 3)
+        Covariance of (alpha, beta_ms, row_time_ms) from the solve; zeros if unknown.
+    exposure_ms : float or None
+        Exposure time, ms, where known.
+    video : str
+        The video file the camera came from.
+    """
+
+    name: str
+    frame_times_ms: np.ndarray
+    height: int
+    width: int
+    alpha: float = 1.0
+    beta_ms: float = 0.0
+    row_time_ms: float = 0.0
+    flipped: bool = False
+    covariance: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+    exposure_ms: float | None = None
+    video: str = ""
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.frame_times_ms)
+
+    def readout_row(self, row: np.ndarray) -> np.ndarray:
+        """Readout index (0 = first row read) of stored-image rows."""
+        row = np.asarray(row, dtype=np.float64)
+        return self.height - 1 - row if self.flipped else row
+
+    def t_global_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
+        """Global time (ms) of the end of exposure of ``row`` in ``frame``.
+
+        Parameters
+        ----------
+        frame : int array
+            0-based decoded frame indices, ``0 <= frame < n_frames``.
+        row : float array, broadcastable with ``frame``
+            Stored-image rows (top = 0), sub-row precision allowed.
+        """
+        t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
+        return self.alpha * t_frame + self.beta_ms + self.readout_row(row) * self.row_time_ms
+
+    def t_global_std_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
+        """Standard deviation (ms) of :meth:`t_global_ms` from the solve's covariance."""
+        t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
+        q = self.readout_row(row)
+        t_frame, q = np.broadcast_arrays(t_frame, q)
+        gradient = np.stack([t_frame, np.ones_like(t_frame), q], axis=-1)
+        variance = np.einsum("...i,ij,...j->...", gradient, self.covariance, gradient)
+        return np.sqrt(np.maximum(variance, 0.0))
+
+    def locate(self, t_global_ms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Inverse of :meth:`t_global_ms`: the frame and stored row imaged at a global time.
+
+        Returns
+        -------
+        frame : int array
+            Index of the last frame whose first row ends its exposure at or before the
+            instant; -1 before the first frame.
+        row : float array
+            Stored-image row (sub-row); NaN where no visible row of that frame ends its
+            exposure at the instant (vertical blanking, a dropped frame, outside the video).
+        """
+        t = np.asarray(t_global_ms, dtype=np.float64)
+        starts = self.alpha * self.frame_times_ms + self.beta_ms
+        frame = np.searchsorted(starts, t, side="right") - 1
+        q = (t - starts[np.clip(frame, 0, None)]) / self.row_time_ms
+        visible = (frame >= 0) & (q <= self.height - 1)
+        q = np.where(visible, q, np.nan)
+        row = self.height - 1 - q if self.flipped else q
+        return frame, row
+
+
+@dataclass
+class SyncModel:
+    """Every camera's clock on the reference clock, and the events it was fitted to.
+
+    Attributes
+    ----------
+    reference : str
+        Name of the reference camera (alpha = 1, beta = 0).
+    cameras : dict[str, CameraClock]
+        In the order the videos were given.
+    events : DataFrame
+        Matched events: ``flash, camera, frame, row, t_frame_ms, t_global_ms,
+        residual_ms, inlier``.
+    """
+
+    reference: str
+    cameras: dict[str, CameraClock]
+    events: pd.DataFrame = field(default_factory=pd.DataFrame)
+
+    def camera(self, name: str) -> CameraClock:
+        """The camera called ``name``, or an error listing the known ones."""
+        try:
+            return self.cameras[name]
+        except KeyError:
+            raise FlashsyncError(
+                f"camera {name!r} is not in the model (it has {', '.join(self.cameras)}); "
+                "sync its video too or fix the camera name") from None

@@ -1,0 +1,127 @@
+"""Frame timestamps in ms: from video containers, from CSV files and from RTP 90 kHz stamps.
+
+flashsync works with container timestamps, never with ``frame_index / fps``, so dropped
+frames and variable frame rates cost nothing. All functions return float64 arrays of
+shape (n_frames,) in milliseconds, in presentation order.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import av
+import numpy as np
+import pandas as pd
+
+from flashsync.errors import FlashsyncError
+
+RTP_CLOCK_HZ = 90_000
+_RTP_WRAP = 2**32
+
+
+def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
+    """Return ``times_ms`` as float64 if they are finite and strictly increasing.
+
+    Parameters
+    ----------
+    times_ms : array of shape (n_frames,)
+        Frame times in ms, presentation order.
+    source : str
+        File name used in the error message.
+    """
+    times = np.asarray(times_ms, dtype=np.float64)
+    if times.ndim != 1 or times.size == 0:
+        raise FlashsyncError(f"{source}: no frame timestamps found; check that it holds video frames")
+    if not np.all(np.isfinite(times)):
+        raise FlashsyncError(
+            f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; "
+            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+    steps = np.diff(times)
+    if np.any(steps <= 0):
+        bad = int(np.argmax(steps <= 0)) + 1
+        raise FlashsyncError(
+            f"{source}: frame timestamps are not increasing at frame {bad} "
+            f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); remux the file or give the "
+            "timestamps as CSV")
+    return times
+
+
+def video_timestamps(path: str | Path) -> np.ndarray:
+    """Presentation times (ms) of every frame of a video file, without decoding pixels.
+
+    Packet PTS times the stream time base, sorted into presentation order (B-frames are
+    stored out of order). Frames without a PTS are an error, as are repeated stamps.
+
+    Examples
+    --------
+    >>> video_timestamps("cam1.mp4")[:3]       # doctest: +SKIP
+    array([ 0.    , 33.3667, 66.7333])
+    """
+    path = Path(path)
+    with open_video(path) as container:
+        stream = container.streams.video[0]
+        pts = [packet.pts for packet in container.demux(stream) if packet.size > 0]
+        time_base = stream.time_base
+    if any(p is None for p in pts):
+        raise FlashsyncError(
+            f"{path}: {sum(p is None for p in pts)} frames have no timestamp; remux the file "
+            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+    times = np.sort(np.asarray(pts, dtype=np.float64)) * float(time_base) * 1000.0
+    return check_timestamps(times, str(path))
+
+
+def open_video(path: Path) -> av.container.InputContainer:
+    """Open a video file for reading, or raise a one-line error naming the file."""
+    if not path.is_file():
+        raise FlashsyncError(f"{path}: no such file; check the path")
+    try:
+        container = av.open(str(path))
+    except av.FFmpegError as error:
+        raise FlashsyncError(f"{path}: not a video file FFmpeg can open ({error.strerror})") from None
+    if not container.streams.video:
+        container.close()
+        raise FlashsyncError(f"{path}: has no video stream; give a video file")
+    return container
+
+
+def csv_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
+    """Frame times (ms) from a CSV file, one row per frame in presentation order.
+
+    The column is ``column`` if given, else the first of ``t_ms``, ``timestamp_ms``,
+    ``time_ms``; a column ``rtp`` (90 kHz RTP stamps) is unwrapped with
+    :func:`rtp_timestamps`.
+    """
+    path = Path(path)
+    try:
+        table = pd.read_csv(path)
+    except (OSError, ValueError) as error:
+        raise FlashsyncError(f"{path}: cannot read as CSV ({error})") from None
+    candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
+    found = [name for name in candidates if name in table.columns]
+    if not found:
+        raise FlashsyncError(
+            f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
+    values = pd.to_numeric(table[found[0]], errors="coerce").to_numpy()
+    if found[0] == "rtp":
+        if np.any(~np.isfinite(values)):
+            raise FlashsyncError(f"{path}: column rtp has empty or non-numeric values")
+        values = rtp_timestamps(values.astype(np.uint64))
+    return check_timestamps(values, str(path))
+
+
+def rtp_timestamps(stamps: np.ndarray, clock_hz: int = RTP_CLOCK_HZ) -> np.ndarray:
+    """Unwrap 32-bit RTP timestamps into ms since the first frame.
+
+    RTP video stamps count a 90 kHz clock modulo 2**32 (a wrap every 13.25 h). Each
+    step is taken modulo 2**32 as a signed number, so a wrap between two frames costs
+    nothing and a step backwards stays negative (and is caught by :func:`check_timestamps`).
+
+    Parameters
+    ----------
+    stamps : integer array of shape (n_frames,)
+        RTP timestamps, 0 <= stamp < 2**32.
+    """
+    stamps = np.asarray(stamps, dtype=np.int64)
+    steps = (np.diff(stamps) + _RTP_WRAP // 2) % _RTP_WRAP - _RTP_WRAP // 2
+    ticks = np.concatenate([[0], np.cumsum(steps)])
+    return ticks * (1000.0 / clock_hz)
