@@ -160,4 +160,4 @@ def _run_simulate(args) -> None:
 def _run_demo(args) -> None:
     from flashsync.demo import run_demo
 
-    run_demo(args.samples, args.output, progress=_progress)
+    print(run_demo(args.samples, args.output, progress=_progress))

@@ -1,0 +1,71 @@
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from flashsync.errors import FlashsyncError
+from flashsync.simulation.encode import write_video
+from flashsync.timestamps import csv_timestamps, rtp_timestamps, video_timestamps
+
+
+def frames(n):
+    return [np.full((32, 48), 40 + 5 * i, np.uint8) for i in range(n)]
+
+
+def test_variable_frame_rate_and_drops_in_mp4(tmp_path):
+    # 90 kHz stamps: 40 ms steps, one dropped frame (80 ms gap), then 33.3 ms steps
+    stamps_ms = np.array([0, 40, 80, 160, 200, 233.333, 266.667, 300, 333.333, 366.667, 400, 433.333])
+    pts = np.round(stamps_ms * 90).astype(int)
+    write_video(tmp_path / "vfr.mp4", frames(len(pts)), pts, Fraction(1, 90_000))
+    np.testing.assert_allclose(video_timestamps(tmp_path / "vfr.mp4"), pts / 90.0, atol=1e-9)
+
+
+def test_b_frames_come_back_in_presentation_order(tmp_path):
+    pts = np.arange(30) * 40
+    write_video(tmp_path / "b.mkv", frames(30), pts, Fraction(1, 1000))  # libx264 uses B-frames
+    times = video_timestamps(tmp_path / "b.mkv")
+    np.testing.assert_array_equal(times, pts.astype(float))
+
+
+def test_rtp_wraparound_is_unwrapped():
+    start = 2**32 - 3 * 3600
+    stamps = (start + np.arange(8) * 3600) % 2**32     # wraps after the third frame
+    assert stamps[3] < stamps[2]
+    np.testing.assert_allclose(rtp_timestamps(stamps), np.arange(8) * 40.0)
+
+
+def test_rtp_csv_and_step_backwards(tmp_path):
+    good = tmp_path / "rtp.csv"
+    good.write_text("rtp\n" + "\n".join(str((2**32 - 3600 + i * 3000) % 2**32) for i in range(5)))
+    np.testing.assert_allclose(csv_timestamps(good), np.arange(5) * 1000 / 30)
+    bad = tmp_path / "back.csv"
+    bad.write_text("rtp\n1000\n4600\n2000\n")
+    with pytest.raises(FlashsyncError, match="not increasing at frame 2"):
+        csv_timestamps(bad)
+
+
+def test_csv_timestamps_in_ms(tmp_path):
+    path = tmp_path / "t.csv"
+    path.write_text("frame,t_ms\n0,0.0\n1,33.4\n2,66.7\n")
+    np.testing.assert_allclose(csv_timestamps(path), [0.0, 33.4, 66.7])
+
+
+@pytest.mark.parametrize("content, message", [
+    ("frame,when\n0,1\n", "no timestamp column"),
+    ("t_ms\n0\nabc\n5\n", "1 frames have no timestamp"),
+    ("t_ms\n0\n40\n40\n", "not increasing at frame 2"),
+])
+def test_bad_timestamp_csv(tmp_path, content, message):
+    path = tmp_path / "t.csv"
+    path.write_text(content)
+    with pytest.raises(FlashsyncError, match=message):
+        csv_timestamps(path)
+
+
+def test_not_a_video_and_missing_file(tmp_path):
+    text = tmp_path / "notes.mp4"
+    text.write_text("hello")
+    with pytest.raises(FlashsyncError, match="not a video file"):
+        video_timestamps(text)
+    with pytest.raises(FlashsyncError, match="no such file"):
+        video_timestamps(tmp_path / "missing.mp4")
