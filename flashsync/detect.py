@@ -1,7 +1,7 @@
 """Flash events from row profiles: bands of rows that changed brightness, and their edges.
 
-Each frame's row profile is compared with a baseline (per-row median of the last few quiet
-profiles) as a relative change ``(p - b) / b``: illumination is multiplicative, so a flash
+Each frame's row profile is compared with a baseline (per-row median of the last few
+profiles, so one or two flashed frames do not move it) as a relative change ``(p - b) / b``: illumination is multiplicative, so a flash
 gives a flat plateau whatever the scene's texture. Rows over a noise-adaptive threshold form
 bands; a band's leading edge (first affected row in readout order) is the row where the
 change crosses half of the band's plateau, interpolated to a fraction of a row — the same
@@ -19,7 +19,7 @@ The detector is streaming: :class:`EventDetector` keeps a few profiles, not the 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -41,48 +41,51 @@ class DetectorSettings:
     Attributes
     ----------
     history : int
-        Quiet profiles in the baseline median.
+        Recent profiles in the baseline median (a flash lights at most two of them).
     k_sigma : float
         Threshold in units of the video's profile noise (robust sigma, relative change).
     min_change : float
         Smallest relative brightness change that can be an event (0.03 = 3 %).
     min_rows : int
-        Shortest band, rows.
+        Shortest band, rows; at least 1 % of the frame height is used.
+    min_level : float
+        Darkest row (DN above black) whose relative change is measured; darker rows are blind.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
     flipped : bool
         The sensor reads bottom-up in stored rows (camera mounted upside down).
     """
 
-    history: int = 4
+    history: int = 5
     k_sigma: float = 8.0
     min_change: float = 0.03
     min_rows: int = 3
+    min_level: float = 8.0
     step_frames: int = 2
     flipped: bool = False
 
 
 @dataclass
-class _Band:
-    """A run of changed rows in one frame, in readout rows (None: edge outside the frame)."""
-
-    leading: float | None
-    trailing: float | None
-    sign: int
-    strength: float
-    quality: float
-    saturated: bool
-
-
-@dataclass
-class _OpenEvent:
-    """A band that reached the last row and continues in the next frame."""
+class _Segment:
+    """A run ``[start, stop)`` of changed readout rows in one frame; ``change`` is that
+    frame's relative change times the run's sign (so the band is positive)."""
 
     frame: int
     t_frame_ms: float
-    band: _Band
+    change: np.ndarray
+    start: int
+    stop: int
+    sign: int
+    saturated: bool
+    sigma: float
+
+
+@dataclass
+class _Event:
+    """A band followed across frames: its segments, first to last."""
+
+    segments: list[_Segment]
     full_frames: int = 0
-    flags: set[str] = field(default_factory=set)
 
 
 class EventDetector:
@@ -103,7 +106,7 @@ class EventDetector:
         self.settings = settings
         self._history: deque[np.ndarray] = deque(maxlen=settings.history)
         self._noise: deque[float] = deque(maxlen=25)
-        self._open: _OpenEvent | None = None
+        self._open: _Event | None = None
         self._global_frames = 0
         self._n_events = 0
         self.events: list[dict] = []
@@ -116,111 +119,82 @@ class EventDetector:
             self._history.append(readout)
             return
         baseline = np.median(np.stack(self._history), axis=0)
-        change = (readout - baseline) / np.maximum(baseline, 16.0)
-        self._noise.append(1.4826 * float(np.median(np.abs(np.diff(change)))) / np.sqrt(2.0))
+        lit = baseline >= self.settings.min_level
+        change = np.where(lit, (readout - baseline) / np.where(lit, baseline, 1.0), np.nan)
+        self._noise.append(1.4826 * float(np.nanmedian(np.abs(np.diff(change)))) / np.sqrt(2.0))
         sigma = max(float(np.median(self._noise)), 1e-4)
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
-        bands = _find_bands(change, threshold, sigma, self.settings.min_rows, readout)
-        self._consume(frame, t_frame_ms, bands, readout)
+        segments = []
+        for sign in (1, -1):
+            signed = sign * change
+            for start, stop in _runs(signed > threshold, gap=2):
+                if stop - start >= max(self.settings.min_rows, self.height // 100):
+                    segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
+                                             bool(np.max(readout[start:stop]) >= 250), sigma))
+        self._history.append(readout)
+        self._consume(sorted(segments, key=lambda s: s.start), readout)
 
     def finish(self) -> pd.DataFrame:
         """Close a band still open at the end of the video; return all events (EVENT_COLUMNS)."""
         if self._open is not None:
-            self._close_open(trailing=None, frame=None, t_frame_ms=None)
+            self._emit(self._open, "pulse", trailing_visible=False)
+            self._open = None
         return pd.DataFrame(self.events, columns=EVENT_COLUMNS)
 
-    def _consume(self, frame: int, t_frame_ms: float, bands: list[_Band], readout: np.ndarray) -> None:
-        continued = False
-        for band in bands:
-            whole_frame = band.leading is None and band.trailing is None
-            if band.leading is None and self._open is not None and band.sign == self._open.band.sign:
-                continued = True
-                self._open.flags.add("split")
-                if whole_frame:
-                    self._open.full_frames += 1
-                    if self._open.full_frames >= self.settings.step_frames:
-                        self._emit_step(readout)
+    def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
+        opened, self._open = self._open, None
+        for segment in segments:
+            at_top, at_bottom = segment.start == 0, segment.stop == self.height
+            if at_top and opened is not None and segment.sign == opened.segments[0].sign:
+                opened.segments.append(segment)
+                if not at_bottom:
+                    self._emit(opened, "pulse")
+                elif opened.full_frames + 1 >= self.settings.step_frames:
+                    self._emit(opened, "on" if segment.sign > 0 else "off", trailing_visible=False)
+                    self._reset_baseline(readout)
                 else:
-                    self._close_open(band.trailing, frame, t_frame_ms)
-            elif whole_frame:
+                    opened.full_frames += 1
+                    self._open = opened
+                opened = None
+            elif at_top and at_bottom:
                 self._global_frames += 1
                 if self._global_frames >= self.settings.step_frames:
                     self._reset_baseline(readout)
                 return
-            elif band.trailing is None:
-                self._open = _OpenEvent(frame, t_frame_ms, band)
-                continued = True
+            elif at_bottom:
+                self._open = _Event([segment])
             else:
-                self._emit(frame, t_frame_ms, band, band.leading, frame, t_frame_ms, band.trailing,
-                           "pulse", {"leading_hidden"} if band.leading is None else set())
-        if self._open is not None and not continued:
-            self._close_open(trailing=None, frame=None, t_frame_ms=None)
+                self._emit(_Event([segment]), "pulse")
+        if opened is not None:
+            self._emit(opened, "pulse", trailing_visible=False)
         self._global_frames = 0
-        if not bands:
-            self._history.append(readout)
-
-    def _close_open(self, trailing: float | None, frame: int | None, t_frame_ms: float | None) -> None:
-        opened = self._open
-        flags = set(opened.flags)
-        if trailing is None:
-            flags.add("trailing_hidden")
-        self._emit(opened.frame, opened.t_frame_ms, opened.band, opened.band.leading, frame,
-                   t_frame_ms, trailing, "pulse", flags)
-        self._open = None
-
-    def _emit_step(self, readout: np.ndarray) -> None:
-        opened = self._open
-        kind = "on" if opened.band.sign > 0 else "off"
-        self._emit(opened.frame, opened.t_frame_ms, opened.band, opened.band.leading, None, None,
-                   None, kind, set(opened.flags) - {"split"})
-        self._open = None
-        self._reset_baseline(readout)
 
     def _reset_baseline(self, readout: np.ndarray) -> None:
         self._history.clear()
         self._history.append(readout)
         self._global_frames = 0
 
-    def _emit(self, lead_frame: int, lead_t: float, band: _Band, leading: float | None,
-              trail_frame: int | None, trail_t: float | None, trailing: float | None, kind: str,
-              flags: set[str]) -> None:
-        if band.saturated:
-            flags.add("saturated")
-        if leading is None:
-            flags.add("leading_hidden")
-        edges = [("leading", lead_frame, lead_t, leading), ("trailing", trail_frame, trail_t, trailing)]
-        for edge, frame, t_frame_ms, row in edges:
+    def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
+        """Locate the edges of a finished band at half its plateau and record them."""
+        first, last = event.segments[0], event.segments[-1]
+        plateau = float(np.median(np.concatenate([s.change[s.start:s.stop] for s in event.segments])))
+        window = max(6, self.height // 40)
+        leading = _local_edge(_rising_crossing, first, plateau, window)
+        trailing = _local_edge(_falling_crossing, last, plateau, window) if trailing_visible else None
+        flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
+        flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
+        flags |= {"leading_hidden"} if leading is None else set()
+        flags |= {"trailing_hidden"} if trailing is None and kind == "pulse" else set()
+        for edge, segment, row in (("leading", first, leading), ("trailing", last, trailing)):
             if row is None:
                 continue
             stored = self.height - 1 - row if self.settings.flipped else row
             self.events.append({
-                "camera": self.camera, "event": self._n_events, "frame": frame,
-                "t_frame_ms": t_frame_ms, "row": stored, "edge": edge, "band": kind,
-                "strength": band.strength, "quality": band.quality,
+                "camera": self.camera, "event": self._n_events, "frame": segment.frame,
+                "t_frame_ms": segment.t_frame_ms, "row": stored, "edge": edge, "band": kind,
+                "strength": first.sign * plateau, "quality": plateau / first.sigma,
                 "flags": "|".join(sorted(flags))})
         self._n_events += 1
-
-
-def _find_bands(change: np.ndarray, threshold: float, sigma: float, min_rows: int,
-                readout: np.ndarray) -> list[_Band]:
-    """Runs of rows whose relative change exceeds ``threshold`` (either sign), with edges;
-    a band's quality is its plateau over the noise ``sigma``."""
-    bands = []
-    for sign in (1, -1):
-        signed = sign * change
-        for start, stop in _runs(signed > threshold, gap=2):
-            if stop - start < min_rows:
-                continue
-            plateau = float(np.median(signed[start:stop]))
-            half = 0.5 * plateau
-            bands.append(_Band(
-                leading=_rising_crossing(signed, half, start),
-                trailing=_falling_crossing(signed, half, stop - 1),
-                sign=sign,
-                strength=sign * plateau,
-                quality=plateau / sigma,
-                saturated=bool(np.max(readout[start:stop]) >= 250)))
-    return sorted(bands, key=lambda band: -1.0 if band.leading is None else band.leading)
 
 
 def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
@@ -237,29 +211,60 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
-def _rising_crossing(values: np.ndarray, level: float, start: int) -> float | None:
-    """Sub-row position where ``values`` first rises through ``level`` near ``start``;
-    None when it is already above ``level`` at row 0 (the edge is outside the frame)."""
+def _local_edge(crossing, segment: _Segment, plateau: float, window: int) -> float | None:
+    """Edge at half of the band's local plateau.
+
+    Brightness, saturation and scene vary along a band, so the whole band's median would move
+    the half-rise point. The local plateau is the median change of ``window`` rows that start
+    where the ramp has settled: five times the 10 %-to-50 % rise length past the edge (an
+    exponential ramp is then within 3 % of its plateau).
+    """
+    level = plateau
+    row = None
+    for _ in range(2):
+        row = crossing(segment.change, 0.5 * level, segment.start, segment.stop)
+        foot = crossing(segment.change, 0.1 * level, segment.start, segment.stop)
+        if row is None or foot is None:
+            return row
+        settle = int(np.ceil(row + 5 * (row - foot)))
+        inside = segment.change[max(min(settle, settle + window), 0):max(settle + window, settle, 0)]
+        if crossing is _falling_crossing:
+            inside = segment.change[max(settle - window, 0):max(settle, 0)]
+        if not np.isfinite(inside).any():
+            return row
+        level = float(np.nanmedian(inside))
+    return row
+
+
+#: Rows before a leading edge (after a trailing edge) that must be visible and lit.
+_EDGE_CONTEXT = 3
+
+
+def _rising_crossing(values: np.ndarray, level: float, start: int, stop: int) -> float | None:
+    """Sub-row position where ``values`` rises through ``level`` at the start of the run
+    ``[start, stop)``; None when the run never reaches ``level``, or when the rows just
+    before the crossing are outside the frame or blind (NaN: too dark to measure)."""
     i = start
     while i > 0 and values[i - 1] >= level:
         i -= 1
-    while values[i] < level:
+    while i < stop and values[i] < level:
         i += 1
-    if i == 0:
+    if i < _EDGE_CONTEXT or i == stop or np.isnan(values[i - _EDGE_CONTEXT:i]).any():
         return None
     return i - 1 + (level - values[i - 1]) / (values[i] - values[i - 1])
 
 
-def _falling_crossing(values: np.ndarray, level: float, stop: int) -> float | None:
-    """Sub-row position where ``values`` last falls through ``level`` near ``stop``;
-    None when it is still above ``level`` at the last row."""
+def _falling_crossing(values: np.ndarray, level: float, start: int, stop: int) -> float | None:
+    """Sub-row position where ``values`` falls through ``level`` at the end of the run
+    ``[start, stop)``; None when the run never reaches ``level``, or when the rows just
+    after the crossing are outside the frame or blind."""
     last = len(values) - 1
-    i = stop
+    i = stop - 1
     while i < last and values[i + 1] >= level:
         i += 1
-    while values[i] < level:
+    while i >= start and values[i] < level:
         i -= 1
-    if i == last:
+    if i > last - _EDGE_CONTEXT or i < start or np.isnan(values[i + 1:i + 1 + _EDGE_CONTEXT]).any():
         return None
     return i + (values[i] - level) / (values[i] - values[i + 1])
 

@@ -107,7 +107,7 @@ class CameraClock:
         starts = self.alpha * self.frame_times_ms + self.beta_ms
         frame = np.searchsorted(starts, t, side="right") - 1
         q = (t - starts[np.clip(frame, 0, None)]) / self.row_time_ms
-        visible = (frame >= 0) & (q <= self.height - 1)
+        visible = (frame >= 0) & (q <= self.height - 1 + 1e-6)
         q = np.where(visible, q, np.nan)
         row = self.height - 1 - q if self.flipped else q
         return frame, row

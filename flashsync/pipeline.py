@@ -21,7 +21,7 @@ from flashsync.errors import FlashsyncError
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.profiles import probe_video
-from flashsync.solve import solve_clocks
+from flashsync.solve import Durations, Events, Priors, solve_clocks
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
@@ -116,36 +116,60 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     if reference not in connected or len(connected) < 2:
         raise FlashsyncError(f"no camera shares at least 3 flashes with {reference}; check that "
                              "the videos overlap in time and saw the same flashes")
-    observations = _observations(connected, sync_events, flashes, cameras)
+    observations = _observations(connected, sync_events, flashes)
     order = {name: i for i, name in enumerate(connected)}
-    priors = {order[name]: (value, 1e-4 * value) for name, value in (row_times or {}).items()
-              if name in order}
+    row_time_priors = {order[name]: (value, 1e-4 * value) for name, value in (row_times or {}).items()
+                       if name in order}
     for name in connected:
-        if order[name] not in priors:
+        if order[name] not in row_time_priors:
             nominal = _frame_period(cameras[name]) / (NOMINAL_HIDDEN_ROWS * cameras[name].height)
-            priors[order[name]] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
-    solution = solve_clocks(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
-                            observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy(),
-                            len(connected), order[reference], priors)
+            row_time_priors[order[name]] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
+    solution = solve_clocks(
+        Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
+               observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
+        len(connected), order[reference],
+        durations=_durations([cameras[name] for name in connected]),
+        priors=Priors(row_time_priors))
     report.sigma_ms = solution.sigma_ms
+    n_events = len(observations)
     clocks = {}
     for name in connected:
         d, s = cameras[name], solution.cameras[order[name]]
         clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
                                    s.row_time_ms, d.flipped, s.covariance, video=str(d.video))
     observations["t_global_ms"] = solution.flash_ms[observations["flash"].to_numpy()]
-    observations["residual_ms"] = solution.residual_ms
-    observations["inlier"] = solution.inlier
+    observations["residual_ms"] = solution.residual_ms[:n_events]
+    observations["inlier"] = solution.inlier[:n_events]
     events = observations.drop(columns=["camera_index", "q"])
     return SyncModel(reference, clocks, events.reset_index(drop=True)), report
 
 
+def _with_readout_rows(detection: CameraDetection) -> pd.DataFrame:
+    """The camera's events with their readout row ``q``."""
+    events = detection.events
+    q = detection.height - 1 - events["row"] if detection.flipped else events["row"]
+    return events.assign(q=q.to_numpy())
+
+
 def _sync_events(detection: CameraDetection) -> pd.DataFrame:
     """Leading edges, the synchronisation events, with their readout row ``q``."""
-    events = detection.events
-    leading = events[events["edge"] == "leading"].reset_index(drop=True)
-    q = detection.height - 1 - leading["row"] if detection.flipped else leading["row"]
-    return leading.assign(q=q.to_numpy())
+    events = _with_readout_rows(detection)
+    return events[events["edge"] == "leading"].reset_index(drop=True)
+
+
+def _durations(detections: list[CameraDetection]) -> Durations:
+    """Pulse bands with both edges visible and unsaturated, camera indices in list order."""
+    camera, dt, dq = [], [], []
+    for index, detection in enumerate(detections):
+        events = _with_readout_rows(detection)
+        usable = events[(events["band"] == "pulse") & ~events["flags"].str.contains("saturated")]
+        both = usable.pivot_table(index="event", columns="edge", values=["t_frame_ms", "q"]).dropna()
+        if both.empty:
+            continue
+        camera += [index] * len(both)
+        dt += list(both[("t_frame_ms", "trailing")] - both[("t_frame_ms", "leading")])
+        dq += list(both[("q", "trailing")] - both[("q", "leading")])
+    return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
 
 
 def _frame_period(detection: CameraDetection) -> float:
@@ -172,7 +196,7 @@ def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str
 
 
 def _observations(names: list[str], sync_events: dict[str, pd.DataFrame],
-                  flashes: dict[tuple[str, int], int], cameras: dict[str, CameraDetection]) -> pd.DataFrame:
+                  flashes: dict[tuple[str, int], int]) -> pd.DataFrame:
     """One row per (camera, event) that belongs to a flash seen by >= 2 connected cameras."""
     rows = []
     for index, name in enumerate(names):

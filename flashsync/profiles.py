@@ -1,7 +1,7 @@
-"""Row profiles: the median luma of each image row, one profile per decoded frame.
+"""Row profiles: the robust mean luma of each image row, one profile per decoded frame.
 
-The median ignores moving players and bright spots, so a profile changes only where a
-whole row changed its brightness: where it integrated flash light. Profiles are computed
+A robust row statistic ignores moving players and bright spots, so a profile changes only
+where a whole row changed its brightness: where it integrated flash light. Profiles are computed
 on the decoder's luma plane directly (no colour conversion) from every ``column_step``-th
 column, streaming, so memory stays flat whatever the video's length.
 """
@@ -13,13 +13,14 @@ from pathlib import Path
 from typing import Iterator
 
 import av
+import numba
 import numpy as np
 
 from flashsync.errors import FlashsyncError
 from flashsync.timestamps import open_video
 
-#: Columns between median samples; 4 costs < 0.1 DN of profile accuracy on textured scenes.
-DEFAULT_COLUMN_STEP = 4
+#: Columns between samples of a row.
+DEFAULT_COLUMN_STEP = 2
 
 
 @dataclass(frozen=True)
@@ -61,24 +62,67 @@ _PLANAR_LUMA = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
                 "nv21", "gray"}
 
 
-def row_median(luma: np.ndarray, column_step: int = DEFAULT_COLUMN_STEP) -> np.ndarray:
-    """Median of each row of ``luma`` (shape (height, width), uint8) over every
-    ``column_step``-th column; float32 array of shape (height,)."""
-    samples = luma[:, ::column_step]
-    middle = samples.shape[1] // 2
-    upper = np.partition(samples, middle, axis=1)
-    if samples.shape[1] % 2:
-        return upper[:, middle].astype(np.float32)
-    lower = np.max(upper[:, :middle], axis=1)
-    return (upper[:, middle].astype(np.float32) + lower) * 0.5
+def row_profile(luma: np.ndarray, column_step: int = DEFAULT_COLUMN_STEP) -> np.ndarray:
+    """Interquartile mean of each row of ``luma`` over every ``column_step``-th column.
+
+    The mean of the middle half of each row's values: robust like the median (players,
+    bright spots and anything else covering under a quarter of a row are ignored) but
+    continuous where a row holds two populations of similar size (rink and crowd), where
+    the median jumps from one to the other with the noise. Computed from a per-row
+    histogram of the uint8 values in a compiled kernel, about ten times faster than
+    ``np.median``.
+
+    Parameters
+    ----------
+    luma : uint8 array of shape (height, width)
+    column_step : int
+        Columns between samples.
+
+    Returns
+    -------
+    float32 array of shape (height,), DN.
+    """
+    return _interquartile_mean(np.ascontiguousarray(luma) if luma.strides[1] != 1 else luma, column_step)
+
+
+@numba.njit(cache=True, nogil=True)
+def _interquartile_mean(luma, column_step):  # pragma: no cover - compiled
+    height, width = luma.shape
+    out = np.empty(height, np.float32)
+    histogram = np.empty(256, np.int64)
+    for r in range(height):
+        histogram[:] = 0
+        n = 0
+        for c in range(0, width, column_step):
+            histogram[luma[r, c]] += 1
+            n += 1
+        low, high = 0.25 * n, 0.75 * n
+        below, total = 0, 0.0
+        for v in range(256):
+            count = histogram[v]
+            inside = min(below + count, high) - max(below, low)
+            if inside > 0:
+                total += inside * v
+            below += count
+            if below >= high:
+                break
+        out[r] = total / (high - low)
+    return out
+
+
+def black_level(frame: av.VideoFrame) -> float:
+    """Luma of black, DN: 0 for full-range video (JPEG range, ``yuvj*``, gray), else 16."""
+    full = frame.color_range == 2 or frame.format.name.startswith(("yuvj", "gray"))
+    return 0.0 if full else 16.0
 
 
 def iter_profiles(path: str | Path, column_step: int = DEFAULT_COLUMN_STEP,
                   ) -> Iterator[tuple[float, np.ndarray]]:
     """Decode a video and yield ``(t_frame_ms, profile)`` per frame, presentation order.
 
-    ``profile`` is the float32 row-median luma of shape (height,). Frames without a
-    timestamp are an error naming the file.
+    ``profile`` is the float32 robust row mean of the luma above the black level (DN,
+    shape (height,)), so that light scales it: a flash multiplies it by the same factor
+    whatever the row's content. Frames without a timestamp are an error naming the file.
     """
     path = Path(path)
     with open_video(path) as container:
@@ -89,6 +133,7 @@ def iter_profiles(path: str | Path, column_step: int = DEFAULT_COLUMN_STEP,
                 if frame.pts is None:
                     raise FlashsyncError(f"{path}: a frame has no timestamp; remux the file "
                                          "(ffmpeg -i IN -c copy OUT.mkv)")
-                yield float(frame.pts * frame.time_base) * 1000.0, row_median(luma_plane(frame), column_step)
+                profile = row_profile(luma_plane(frame), column_step) - black_level(frame)
+                yield float(frame.pts * frame.time_base) * 1000.0, profile
         except av.FFmpegError as error:
             raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None

@@ -6,11 +6,17 @@ of them, so cameras need not share flashes with the reference directly)::
 
     alpha_c * t + beta_c + q * T_row_c - tau_k = 0          (reference: alpha = 1, beta = 0)
 
+Information inside one camera enters too (DESIGN.md, "a trap"): a band lasts the same
+time ``D_c`` in every frame of a camera, so a band split across two frames, whose rows
+skip the hidden rows, ties ``T_row_c`` to the frame period::
+
+    (t_trailing - t_leading) + (q_trailing - q_leading) * T_row_c - D_c = 0
+
 All equations form one sparse system. Drift is solved as ``alpha - 1`` about the camera's
 mid time for conditioning. Iteratively reweighted least squares with Cauchy weights keeps a
-bad event from moving a camera; events beyond ``reject_sigma`` robust sigmas are rejected
-and the final fit uses the rest. Optional priors on ``T_row`` (a datasheet value, or a
-weak nominal value where the events cannot tell it) enter as pseudo-observations.
+bad event from moving a camera; equations beyond ``reject_sigma`` robust sigmas are
+rejected and the final fit uses the rest. Priors (a datasheet ``T_row``, a weak nominal
+one, clock drift within a few tens of ppm) enter as pseudo-observations.
 """
 
 from __future__ import annotations
@@ -22,6 +28,43 @@ import scipy.sparse as sparse
 import scipy.sparse.linalg as sparse_linalg
 
 from flashsync.errors import FlashsyncError
+
+#: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
+MIN_SIGMA_MS = 1e-3
+
+
+@dataclass(frozen=True)
+class Events:
+    """Matched event edges: one entry per (camera, flash) observation.
+
+    ``camera``, ``flash``: int arrays (n,); ``t_frame_ms``: frame timestamps (n,), ms;
+    ``q``: readout rows (n,).
+    """
+
+    camera: np.ndarray
+    flash: np.ndarray
+    t_frame_ms: np.ndarray
+    q: np.ndarray
+
+
+@dataclass(frozen=True)
+class Durations:
+    """Bands with both edges: one entry per band. ``camera`` (n,); ``dt_frame_ms``: frame
+    time of the trailing edge minus that of the leading edge (0 unless split), ms; ``dq``:
+    trailing minus leading readout row."""
+
+    camera: np.ndarray
+    dt_frame_ms: np.ndarray
+    dq: np.ndarray
+
+
+@dataclass(frozen=True)
+class Priors:
+    """Pseudo-observations: ``row_time`` maps a camera index to (mean, std) of ``T_row`` in
+    ms; ``drift_std`` is the prior std of ``alpha - 1`` for every camera (None: no prior)."""
+
+    row_time: dict[int, tuple[float, float]]
+    drift_std: float | None = 50e-6
 
 
 @dataclass(frozen=True)
@@ -39,9 +82,9 @@ class CameraSolution:
 class Solution:
     """Result of :func:`solve_clocks`.
 
-    ``residual_ms`` and ``inlier`` have one entry per observation; ``flash_ms`` the global
-    time of each flash index (NaN for an index no observation names); ``sigma_ms`` is the
-    robust residual scale.
+    ``residual_ms`` and ``inlier`` have one entry per event then one per duration;
+    ``flash_ms`` the global time of each flash index (NaN for an index no event names);
+    ``sigma_ms`` is the robust residual scale.
     """
 
     cameras: list[CameraSolution]
@@ -51,41 +94,30 @@ class Solution:
     sigma_ms: float
 
 
-def solve_clocks(camera: np.ndarray, flash: np.ndarray, t_frame_ms: np.ndarray, q: np.ndarray,
-                 n_cameras: int, reference: int = 0,
-                 row_time_prior: dict[int, tuple[float, float]] | None = None,
+def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
+                 durations: Durations | None = None, priors: Priors | None = None,
                  event_sigma_ms: float = 0.05, reject_sigma: float = 5.0,
                  cauchy_k: float = 2.385, iterations: int = 10) -> Solution:
-    """Solve all cameras' clocks jointly.
+    """Solve all cameras' clocks jointly and robustly.
 
     Parameters
     ----------
-    camera, flash : int arrays of shape (n_obs,)
-        Camera index (0..n_cameras-1) and flash index (0..n_flashes-1) per observation.
-    t_frame_ms : float array of shape (n_obs,)
-        Container timestamp of the frame holding the event, ms (camera clock).
-    q : float array of shape (n_obs,)
-        Readout row of the event edge (sub-row).
-    reference : int
-        Index of the reference camera.
-    row_time_prior : dict camera index -> (mean_ms, std_ms), optional
-        Prior knowledge of ``T_row``.
-    event_sigma_ms : float
-        Expected event-time noise, ms; weighs the priors against the events.
+    events : matched event edges.
+    n_cameras : number of cameras (indices 0..n_cameras-1).
+    reference : index of the reference camera.
+    durations : bands with both edges; used for cameras where they can tell ``T_row``
+        (at least two different frame gaps, i.e. split and unsplit bands).
+    priors : pseudo-observations, weighed against events of ``event_sigma_ms`` noise;
+        None: the events alone.
 
     Raises
     ------
     FlashsyncError
-        When the events cannot determine every unknown.
+        When the equations cannot determine every unknown.
     """
-    camera = np.asarray(camera, dtype=np.int64)
-    flash = np.asarray(flash, dtype=np.int64)
-    t_frame_ms = np.asarray(t_frame_ms, dtype=np.float64)
-    q = np.asarray(q, dtype=np.float64)
-    flash_ids, flash = np.unique(flash, return_inverse=True)
-    system = _System(camera, flash, t_frame_ms, q, n_cameras, len(flash_ids), reference,
-                     row_time_prior or {}, event_sigma_ms)
-    weights = np.ones(len(camera))
+    system = _System(events, n_cameras, reference, durations, priors or Priors({}, None),
+                     event_sigma_ms)
+    weights = np.ones(system.n_equations)
     for _ in range(iterations):
         x = system.solve(weights)
         residual = system.residuals(x)
@@ -96,16 +128,11 @@ def solve_clocks(camera: np.ndarray, flash: np.ndarray, t_frame_ms: np.ndarray, 
     residual = system.residuals(x)
     sigma = _robust_sigma(residual[inlier])
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
-    scale = float(np.sum(residual[inlier] ** 2)) / dof
-    covariance = system.covariance(inlier.astype(np.float64), scale)
-    flash_ms = np.full(int(flash_ids.max()) + 1 if flash_ids.size else 0, np.nan)
-    flash_ms[flash_ids] = x[system.flash_columns]
+    covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
+    flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
+    flash_ms[system.flash_ids] = x[system.flash_columns]
     return Solution([system.camera_solution(x, covariance, c) for c in range(n_cameras)],
                     flash_ms, residual, inlier, sigma)
-
-
-#: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
-MIN_SIGMA_MS = 1e-3
 
 
 def _robust_sigma(residual: np.ndarray) -> float:
@@ -114,52 +141,66 @@ def _robust_sigma(residual: np.ndarray) -> float:
 
 
 class _System:
-    """The sparse design of :func:`solve_clocks` with columns scaled to unit norm.
+    """The sparse design of :func:`solve_clocks`, columns scaled to unit norm.
 
-    Columns: per camera (drift about mid time, shift at mid time, row time) with the
-    reference's first two left out, then one column per flash.
+    Columns: per camera (drift about mid time, shift at mid time, row time), the
+    reference's first two left out; one band duration per camera that has informative
+    durations; one global time per flash. Rows: events, durations, then priors.
     """
 
-    def __init__(self, camera, flash, t_frame_ms, q, n_cameras, n_flashes, reference,
-                 row_time_prior, event_sigma_ms):
-        self.camera, self.t_frame_ms, self.q = camera, t_frame_ms, q
-        self.reference, self.n_cameras = reference, n_cameras
-        self.mid_ms = np.array([np.median(t_frame_ms[camera == c]) if np.any(camera == c) else 0.0
+    def __init__(self, events: Events, n_cameras: int, reference: int, durations: Durations | None,
+                 priors: Priors, event_sigma_ms: float):
+        camera = np.asarray(events.camera, dtype=np.int64)
+        t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
+        q = np.asarray(events.q, dtype=np.float64)
+        self.flash_ids, flash = np.unique(np.asarray(events.flash, dtype=np.int64), return_inverse=True)
+        self.mid_ms = np.array([np.median(t_frame[camera == c]) if np.any(camera == c) else 0.0
                                 for c in range(n_cameras)])
         self.param_columns = np.full((n_cameras, 3), -1)
-        column = 0
+        n_columns = 0
         for c in range(n_cameras):
             for k in range(3):
                 if c != reference or k == 2:
-                    self.param_columns[c, k] = column
-                    column += 1
-        self.flash_columns = column + np.arange(n_flashes)
-        self.n_unknowns = column + n_flashes
-        rows, cols, values = [], [], []
-        n_obs = len(camera)
-        index = np.arange(n_obs)
-        centred = t_frame_ms - self.mid_ms[camera]
-        for k, value in enumerate([centred, np.ones(n_obs), q]):
-            columns = self.param_columns[camera, k]
-            keep = columns >= 0
-            rows.append(index[keep]), cols.append(columns[keep]), values.append(value[keep])
-        rows.append(index), cols.append(self.flash_columns[flash]), values.append(-np.ones(n_obs))
-        self.rhs = -t_frame_ms.copy()
-        self.n_priors = 0
-        prior_rhs = []
-        for c, (mean, std) in sorted(row_time_prior.items()):
-            weight = event_sigma_ms / std
-            rows.append(np.array([n_obs + self.n_priors])), cols.append(np.array([self.param_columns[c, 2]]))
-            values.append(np.array([weight]))
-            prior_rhs.append(weight * mean)
-            self.n_priors += 1
-        self.rhs = np.concatenate([self.rhs, prior_rhs])
-        matrix = sparse.csr_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
-                                   shape=(n_obs + self.n_priors, self.n_unknowns))
+                    self.param_columns[c, k] = n_columns
+                    n_columns += 1
+        durations = _informative(durations, n_cameras)
+        duration_cameras = np.unique(durations.camera)
+        duration_column = {c: n_columns + i for i, c in enumerate(duration_cameras)}
+        n_columns += len(duration_cameras)
+        self.flash_columns = n_columns + np.arange(len(self.flash_ids))
+        self.n_unknowns = n_columns + len(self.flash_ids)
+
+        triplets = _Triplets()
+        n_events = len(camera)
+        rows = np.arange(n_events)
+        for k, value in enumerate([t_frame - self.mid_ms[camera], np.ones(n_events), q]):
+            triplets.add(rows, self.param_columns[camera, k], value)
+        triplets.add(rows, self.flash_columns[flash], -np.ones(n_events))
+        rhs = [-t_frame]
+
+        rows = n_events + np.arange(len(durations.camera))
+        triplets.add(rows, self.param_columns[durations.camera, 2], durations.dq)
+        triplets.add(rows, np.array([duration_column[c] for c in durations.camera], dtype=np.int64),
+                     -np.ones(len(rows)))
+        rhs.append(-durations.dt_frame_ms)
+        self.n_equations = n_events + len(rows)
+
+        prior_rows = []
+        for c, (mean, std) in sorted(priors.row_time.items()):
+            prior_rows.append((self.param_columns[c, 2], event_sigma_ms / std, mean))
+        for c in range(n_cameras):
+            if c != reference and priors.drift_std is not None:
+                prior_rows.append((self.param_columns[c, 0], event_sigma_ms / priors.drift_std, 0.0))
+        for i, (column, weight, mean) in enumerate(prior_rows):
+            triplets.add(np.array([self.n_equations + i]), np.array([column]), np.array([weight]))
+        rhs.append(np.array([weight * mean for _, weight, mean in prior_rows]))
+        self.n_priors = len(prior_rows)
+        self.rhs = np.concatenate(rhs)
+        matrix = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
             raise FlashsyncError("the matched events leave a camera parameter undetermined; "
-                                 "each camera needs events on at least two flashes shared with others")
+                                 "each camera needs events on flashes shared with other cameras")
         self.column_scale = 1.0 / norms
         self.matrix = matrix @ sparse.diags(self.column_scale)
 
@@ -175,8 +216,7 @@ class _System:
             raise FlashsyncError(
                 f"the cameras share too few events: {n_used} equations for {self.n_unknowns} "
                 "unknowns; record more flashes seen by several cameras, or give --row-time")
-        dense = normal.toarray()
-        eigenvalues = np.linalg.eigvalsh(dense)
+        eigenvalues = np.linalg.eigvalsh(normal.toarray())
         if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
             raise FlashsyncError(
                 "the matched events cannot separate every camera's drift, shift and time per row "
@@ -185,9 +225,8 @@ class _System:
         return sparse_linalg.spsolve(normal, right) * self.column_scale
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        """Observation residuals, ms (alpha t + beta + q T - tau)."""
-        n_obs = len(self.camera)
-        return ((self.matrix @ (x / self.column_scale)) - self.rhs)[:n_obs]
+        """Residuals of the events and durations, ms."""
+        return ((self.matrix @ (x / self.column_scale)) - self.rhs)[: self.n_equations]
 
     def covariance(self, weights: np.ndarray, scale: float) -> np.ndarray:
         """Covariance of the unknowns (unscaled units) for residual variance ``scale``."""
@@ -196,13 +235,44 @@ class _System:
         return scale * inverse * np.outer(self.column_scale, self.column_scale)
 
     def camera_solution(self, x: np.ndarray, covariance: np.ndarray, c: int) -> CameraSolution:
-        """Camera ``c``'s (alpha, beta, T_row) and their covariance from (drift, shift at mid, T_row)."""
+        """Camera ``c``'s (alpha, beta, T_row) and covariance from (drift, shift at mid, T_row)."""
         columns = self.param_columns[c]
-        values = np.array([x[k] if k >= 0 else 0.0 for k in columns])
-        local = np.zeros((3, 3))
         used = columns >= 0
+        drift, shift, row_time = np.where(used, x[np.maximum(columns, 0)], 0.0)
+        local = np.zeros((3, 3))
         local[np.ix_(used, used)] = covariance[np.ix_(columns[used], columns[used])]
         jacobian = np.array([[1.0, 0.0, 0.0], [-self.mid_ms[c], 1.0, 0.0], [0.0, 0.0, 1.0]])
-        drift, shift, row_time = values
         return CameraSolution(1.0 + drift, shift - drift * self.mid_ms[c], row_time,
                               jacobian @ local @ jacobian.T)
+
+
+def _informative(durations: Durations | None, n_cameras: int) -> Durations:
+    """The durations of cameras whose bands span at least two different frame gaps (else
+    the duration and ``T_row`` cannot be told apart)."""
+    if durations is None or len(durations.camera) == 0:
+        return Durations(np.empty(0, np.int64), np.empty(0), np.empty(0))
+    camera = np.asarray(durations.camera, dtype=np.int64)
+    dt = np.asarray(durations.dt_frame_ms, dtype=np.float64)
+    keep = np.zeros(len(camera), dtype=bool)
+    for c in range(n_cameras):
+        mine = camera == c
+        if mine.any() and np.ptp(dt[mine]) > 0:
+            keep |= mine
+    return Durations(camera[keep], dt[keep], np.asarray(durations.dq, dtype=np.float64)[keep])
+
+
+class _Triplets:
+    """Collects (row, column, value) entries of a sparse matrix; negative columns are skipped."""
+
+    def __init__(self):
+        self.rows, self.columns, self.values = [], [], []
+
+    def add(self, rows: np.ndarray, columns: np.ndarray, values: np.ndarray) -> None:
+        keep = columns >= 0
+        self.rows.append(rows[keep])
+        self.columns.append(columns[keep])
+        self.values.append(values[keep])
+
+    def matrix(self, shape: tuple[int, int]) -> sparse.csr_matrix:
+        return sparse.csr_matrix((np.concatenate(self.values),
+                                  (np.concatenate(self.rows), np.concatenate(self.columns))), shape=shape)
