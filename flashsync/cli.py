@@ -73,7 +73,26 @@ def _parser() -> argparse.ArgumentParser:
     restamp.add_argument("--model", type=Path, default=Path("sync.json"),
                          help="model file (default: sync.json in the current folder)")
     restamp.add_argument("-o", "--output", type=Path,
-                         help="output table, .csv or .parquet (default: DETECTIONS with suffix .restamped.csv)")
+                         help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv)")
+    restamp.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
+    restamp.add_argument("--exposure", action="append", default=[], metavar="CAMERA=MS",
+                         help="exposure time of a camera in ms: adds t_center_ms; repeatable")
+    restamp.add_argument("--std", action="store_true", help="add t_global_std_ms from the solve")
+    restamp.add_argument("--strict", action="store_true",
+                         help="exit with code 1 if any row could not be stamped")
+
+    validate = command("validate", "Cross-camera interpolation errors of a fast object, with "
+                       "sub-frame and frame-level sync.", _run_validate)
+    validate.add_argument("detections", nargs="+", type=Path, metavar="DETECTIONS")
+    validate.add_argument("--model", type=Path, default=Path("sync.json"),
+                          help="model file (default: sync.json)")
+    validate.add_argument("--homographies", type=Path, required=True,
+                          help="JSON {camera: 3x3 image->plane (metres) matrix}")
+    validate.add_argument("--max-gap-ms", type=float,
+                          help="longest gap between bracketing observations (default 2.5 frames)")
+    validate.add_argument("--exposure", action="append", default=[], metavar="CAMERA=MS",
+                          help="exposure time of a camera in ms; repeatable")
+    validate.add_argument("--json", type=Path, metavar="OUT.json", help="also write the report as JSON")
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
     simulate.add_argument("scenario", nargs="?", default="sample",
@@ -119,7 +138,7 @@ def _run_sync(args) -> None:
     detections = detect_videos(args.videos, args.flipped, progress=_progress)
     if args.events:
         write_table(all_events(detections), args.events)
-    model, report = synchronize(detections, args.reference, _row_times(args.row_time), args.anchor)
+    model, report = synchronize(detections, args.reference, _per_camera_ms("--row-time", args.row_time), args.anchor)
     for warning in report.warnings:
         print(f"flashsync sync: warning: {warning}", file=sys.stderr)
     save_model(model, args.output)
@@ -127,27 +146,49 @@ def _run_sync(args) -> None:
     print(f"model -> {args.output}", file=sys.stderr)
 
 
-def _row_times(values: list[str]) -> dict[str, float]:
+def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
+    """``['cam1=0.03', ...]`` -> ``{'cam1': 0.03}``; positive milliseconds."""
     result = {}
     for text in values:
         camera, _, value = text.partition("=")
         try:
             result[camera] = float(value)
         except ValueError:
-            raise FlashsyncError(f"--row-time {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
+            raise FlashsyncError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
         if not result[camera] > 0:
-            raise FlashsyncError(f"--row-time {text}: the time per row must be positive")
+            raise FlashsyncError(f"{option} {text}: the value must be a positive number of ms")
     return result
 
 
 def _run_restamp(args) -> int:
     from flashsync.model_file import load_model
-    from tracking_adapter.restamp import restamp_file
+    from tracking_adapter.restamp import format_summary, restamp_file
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
-    summary = restamp_file(args.detections, output, load_model(args.model))
-    print(summary.describe(output), file=sys.stderr)
-    return 0
+    summary = restamp_file(args.detections, output, load_model(args.model), camera=args.camera,
+                           exposure_ms=_per_camera_ms("--exposure", args.exposure), with_std=args.std)
+    print(format_summary(summary), file=sys.stderr)
+    return 1 if args.strict and summary.stamped < summary.rows else 0
+
+
+def _run_validate(args) -> None:
+    import json
+
+    import pandas as pd
+
+    from flashsync.atomic import atomic_output
+    from flashsync.model_file import load_model
+    from tracking_adapter.formats import load_homographies, read_detections
+    from tracking_adapter.validate import format_report, validate
+
+    detections = pd.concat([read_detections(path) for path in args.detections], ignore_index=True)
+    report = validate(detections, load_model(args.model), load_homographies(args.homographies),
+                      max_gap_ms=args.max_gap_ms, exposure_ms=_per_camera_ms("--exposure", args.exposure),
+                      source=", ".join(map(str, args.detections)))
+    print(format_report(report))
+    if args.json:
+        with atomic_output(args.json) as temporary:
+            temporary.write_text(json.dumps(report.to_dict(), indent=1))
 
 
 def _run_simulate(args) -> None:

@@ -14,8 +14,9 @@ from flashsync.model_file import save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
 from flashsync.simulation import load_ground_truth
-from flashsync.tables import read_table, write_table
-from tracking_adapter.restamp import restamp_file
+from flashsync.tables import write_table
+from tracking_adapter.formats import read_detections
+from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
 
@@ -45,7 +46,7 @@ def run_demo(samples: Path | None, output: Path,
 
     truth = load_ground_truth(samples / "truth.json")
     errors = sync_errors(model, truth)
-    detection_error = stamp_errors(read_table(output / "restamped.csv"), model, truth)
+    detection_error = stamp_errors(read_detections(output / "restamped.csv"), model, truth)
 
     lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "",
              sync_table(model), ""]
@@ -55,7 +56,8 @@ def run_demo(samples: Path | None, output: Path,
         lines.append(f"  {row.camera:<10} RMS {row.rms_ms:.4f} ms   max {row.max_ms:.4f} ms")
     overall = float(np.sqrt(np.mean(errors["rms_ms"] ** 2)))
     lines.append(f"  {'all':<10} RMS {overall:.4f} ms")
-    lines.append(f"re-stamped {summary.describe(output / 'restamped.csv')}; puck detections "
-                 f"RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms against truth")
+    lines.append(f"re-stamped {format_summary(summary)}")
+    lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms "
+                 "against truth")
     lines.append(f"outputs in {output}/: events.csv sync.json restamped.csv")
     return "\n".join(lines)

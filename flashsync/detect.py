@@ -175,12 +175,13 @@ class EventDetector:
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
-        """Locate the edges of a finished band at half its plateau and record them."""
+        """Locate the edges of a finished band (:func:`_local_edge`) and record them."""
         first, last = event.segments[0], event.segments[-1]
         plateau = float(np.median(np.concatenate([s.change[s.start:s.stop] for s in event.segments])))
         window = max(6, self.height // 40)
-        leading = _local_edge(_rising_crossing, first, plateau, window)
-        trailing = _local_edge(_falling_crossing, last, plateau, window) if trailing_visible else None
+        leading = _local_edge(_rising_crossing, first, plateau, window, kind)
+        trailing = (_local_edge(_falling_crossing, last, plateau, window, kind)
+                    if trailing_visible else None)
         flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
         flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
         flags |= {"leading_hidden"} if leading is None else set()
@@ -211,29 +212,39 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
-def _local_edge(crossing, segment: _Segment, plateau: float, window: int) -> float | None:
-    """Edge at half of the band's local plateau.
+def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: str) -> float | None:
+    """Sub-row edge of a band: its half-rise point for a pulse, the foot of its ramp for a step.
 
-    Brightness, saturation and scene vary along a band, so the whole band's median would move
-    the half-rise point. The local plateau is the median change of ``window`` rows that start
-    where the ramp has settled: five times the 10 %-to-50 % rise length past the edge (an
-    exponential ramp is then within 3 % of its plateau).
+    Brightness, saturation and scene vary along a band, so the level is the band's local
+    plateau: the median change of ``window`` rows that start where the ramp has settled, five
+    times the 10 %-to-50 % rise length past the edge (an exponential ramp is then within 3 %
+    of its plateau). A pulse's half-rise point marks the same instant in every camera. A step
+    ramps linearly over one exposure, so its half-rise point moves with the exposure; its
+    foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
+    switch.
     """
     level = plateau
-    row = None
     for _ in range(2):
         row = crossing(segment.change, 0.5 * level, segment.start, segment.stop)
         foot = crossing(segment.change, 0.1 * level, segment.start, segment.stop)
         if row is None or foot is None:
             return row
-        settle = int(np.ceil(row + 5 * (row - foot)))
-        inside = segment.change[max(min(settle, settle + window), 0):max(settle + window, settle, 0)]
-        if crossing is _falling_crossing:
-            inside = segment.change[max(settle - window, 0):max(settle, 0)]
+        if row > foot:
+            settle = min(int(np.ceil(row + 5 * (row - foot))), segment.stop - window)
+            inside = segment.change[max(settle, int(row) + 1):settle + window]
+        else:
+            settle = max(int(row + 5 * (row - foot)), segment.start + window)
+            inside = segment.change[settle - window:min(settle, int(row))]
         if not np.isfinite(inside).any():
-            return row
+            break
         level = float(np.nanmedian(inside))
-    return row
+    if kind == "pulse":
+        return row
+    quarter = crossing(segment.change, 0.25 * level, segment.start, segment.stop)
+    three_quarters = crossing(segment.change, 0.75 * level, segment.start, segment.stop)
+    if quarter is None or three_quarters is None:
+        return None
+    return row - (three_quarters - quarter)
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.

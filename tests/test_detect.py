@@ -1,0 +1,100 @@
+"""Detection on rendered, H.264-compressed rolling-shutter clips with known flash instants."""
+
+import numpy as np
+import pytest
+
+from flashsync.detect import detect_video
+from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, Scenario, render_scenario
+
+FPS, HEIGHT, R0, R1 = 25.0, 180, 10, 40           # 230 rows per frame, 40 of them after the image
+ROW_MS = 1000.0 / FPS / (R0 + HEIGHT + R1)
+
+
+def flash_at(frame: int, readout_row: float, strength: float = 0.5) -> FlashSpec:
+    """A flash whose light starts at the end of exposure of ``readout_row`` of ``frame``
+    (rows past the image are the hidden rows)."""
+    return FlashSpec(world_ms=frame * 1000.0 / FPS + (R0 + readout_row) * ROW_MS, strength=strength)
+
+
+def render(tmp_path, name="cam", flashes=(), switches=(), n_frames=30, exposure_ms=8.0, **camera):
+    spec = CameraSpec(name, 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=exposure_ms, n_frames=n_frames,
+                      noise_std=1.0, crf=23, **camera)
+    scenario = Scenario("test", (spec,), flashes=tuple(flashes), switches=tuple(switches),
+                        n_players=4, seed=3)
+    truth = render_scenario(scenario, tmp_path)
+    return tmp_path / f"{name}.{spec.container}", truth
+
+
+def leading(events):
+    return events[events["edge"] == "leading"].reset_index(drop=True)
+
+
+def test_leading_edges_match_the_flash_instants(tmp_path):
+    rows = [40.3, 75.8, 110.5, 131.2]
+    video, truth = render(tmp_path, flashes=[flash_at(4 + 6 * i, row) for i, row in enumerate(rows)])
+    events = leading(detect_video(video).events)
+    assert len(events) == len(rows)
+    edge_ms = truth.global_time_ms("cam", events["frame"].to_numpy(), events["row"].to_numpy())
+    true_ms = np.array([f["half_rise_global_ms"] for f in truth.flashes])
+    error_rows = (edge_ms - true_ms) / ROW_MS
+    assert np.sqrt(np.mean(error_rows**2)) < 0.5, error_rows
+
+
+def test_straddling_flash_is_one_event_with_its_leading_edge_in_the_first_frame(tmp_path):
+    # a 16 ms band is 92 rows: 12 at the bottom of frame 10, 50 hidden rows, 30 in frame 11
+    video, truth = render(tmp_path, flashes=[flash_at(10, HEIGHT - 12)], exposure_ms=16.0)
+    events = detect_video(video).events
+    assert events["event"].nunique() == 1
+    lead = events[events["edge"] == "leading"].iloc[0]
+    trail = events[events["edge"] == "trailing"].iloc[0]
+    assert lead["frame"] == 10 and trail["frame"] == 11
+    assert "split" in lead["flags"]
+    edge_ms = truth.global_time_ms("cam", [10], [lead["row"]])[0]
+    assert abs(edge_ms - truth.flashes[0]["half_rise_global_ms"]) < 0.5 * ROW_MS
+
+
+def test_leading_edge_hidden_in_blanking_is_flagged_not_used(tmp_path):
+    video, _ = render(tmp_path, flashes=[flash_at(10, HEIGHT + R1 / 2)])
+    events = detect_video(video).events
+    assert len(events) == 1
+    only = events.iloc[0]
+    assert only["edge"] == "trailing" and only["frame"] == 11
+    assert "leading_hidden" in only["flags"]
+
+
+@pytest.mark.parametrize("factor, kind", [(1.6, "on"), (1 / 1.6, "off")])
+def test_light_switch_is_a_step_event(tmp_path, factor, kind):
+    world_ms = 12 * 1000.0 / FPS + (R0 + 70.0) * ROW_MS
+    video, _ = render(tmp_path, switches=[LightSwitch(world_ms, factor)])
+    events = detect_video(video).events
+    assert len(events) == 1
+    step = events.iloc[0]
+    assert (step["band"], step["edge"], step["frame"]) == (kind, "leading", 12)
+    assert abs(step["row"] - 70.0) < 3.0
+
+
+def test_flipped_camera_leading_edge_is_at_the_bottom_of_the_band(tmp_path):
+    readout_row = 60.4
+    video, truth = render(tmp_path, flashes=[flash_at(10, readout_row)], flipped=True)
+    plain = leading(detect_video(video).events)
+    flipped = leading(detect_video(video, flipped=True).events)
+    assert len(flipped) == 1
+    # the half-rise comes decay * ln 2 after the flash: 2 rows; stored rows count bottom-up
+    half_rise_row = readout_row + 0.5 * np.log(2) / ROW_MS
+    assert flipped["row"].iloc[0] == pytest.approx(HEIGHT - 1 - half_rise_row, abs=0.5)
+    edge_ms = truth.global_time_ms("cam", [10], [flipped["row"].iloc[0]])[0]
+    assert abs(edge_ms - truth.flashes[0]["half_rise_global_ms"]) < 0.5 * ROW_MS
+    # read top-down, the same band's first row is its other end: a different, wrong instant
+    assert abs(plain["row"].iloc[0] - flipped["row"].iloc[0]) > 20
+
+
+def test_no_events_in_flicker_only_clip(tmp_path):
+    spec = CameraSpec("cam", 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=8.0, n_frames=40, crf=23)
+    scenario = Scenario("flicker", (spec,), flicker_depth=0.05, flicker_hz=100.0, n_players=6, seed=5)
+    render_scenario(scenario, tmp_path)
+    assert detect_video(tmp_path / "cam.mp4").events.empty
+
+
+def test_no_events_for_an_auto_exposure_step(tmp_path):
+    video, _ = render(tmp_path, gain_steps=((14 * 1000.0 / FPS + 3.0, 1.4),))
+    assert detect_video(video).events.empty

@@ -1,0 +1,433 @@
+"""Re-stamp tracker detections with global times from a :class:`~flashsync.model.SyncModel`.
+
+Every input row and column is kept, in order and unchanged, and new columns follow:
+
+``t_global_ms``
+    End-of-exposure instant of the detection's row, reference clock, ms (DESIGN.md, time
+    convention); empty where the row cannot be stamped.
+``t_global_std_ms``
+    Its standard deviation from the solve's covariance, ms (only with ``with_std=True``).
+``t_center_ms``
+    Mid-exposure instant ``t_global_ms - exposure_ms / 2``, ms, the instant a blurred
+    centroid belongs to; present when any model camera has a known exposure (from the
+    model or given by the caller), empty for cameras whose exposure is unknown.
+``restamp_error``
+    Why a row was not stamped (one of :data:`REASONS`), empty for stamped rows.
+
+A row is stamped when its camera is in the model, its frame is an integer in
+``[0, n_frames)`` and its ``y`` (stored-image row, px) lies in ``[-0.5, height - 0.5]``,
+the image's extent in pixel-centre coordinates.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
+
+from flashsync.atomic import atomic_output
+from flashsync.errors import FlashsyncError
+from flashsync.model import SyncModel
+from tracking_adapter.formats import (REQUIRED_COLUMNS, detections_format, first_line,
+                                      iter_csv_blocks, read_csv_header, read_mot,
+                                      require_columns)
+
+#: Why a row was not stamped, in the order the checks run (the first failing one is reported).
+REASONS = (
+    "camera missing",
+    "unknown camera",
+    "frame missing",
+    "frame not a number",
+    "frame not an integer",
+    "frame negative",
+    "frame past the end of the video",
+    "y missing",
+    "y not a number",
+    "y outside the image rows",
+)
+NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "restamp_error")
+_MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
+_BATCH_ROWS = 1 << 20
+
+
+@dataclass
+class RestampSummary:
+    """What :func:`restamp_file` did.
+
+    Attributes
+    ----------
+    source, output : str
+        Input and output files.
+    rows : int
+        Detections read (= written).
+    stamped : int
+        Rows given a ``t_global_ms``.
+    failed : dict of str to int
+        Rows not stamped, by reason (:data:`REASONS`), only reasons that occurred.
+    """
+
+    source: str
+    output: str
+    rows: int = 0
+    stamped: int = 0
+    failed: dict[str, int] = field(default_factory=dict)
+
+
+def restamp(detections: pd.DataFrame, model: SyncModel, *,
+            exposure_ms: Mapping[str, float] | None = None, with_std: bool = False,
+            source: str = "detections") -> pd.DataFrame:
+    """Add global times to a detections table.
+
+    Parameters
+    ----------
+    detections : DataFrame
+        Columns ``camera`` (name), ``frame`` (0-based decoded frame index), ``y`` (stored-
+        image row, px) and any others, of any dtype (numbers as text are parsed).
+    model : SyncModel
+        The synchronisation model.
+    exposure_ms : mapping of str to float, optional
+        Exposure time per camera, ms; overrides the model's value for those cameras.
+    with_std : bool
+        Add ``t_global_std_ms``.
+    source : str
+        Name of the table's file, used in error messages.
+
+    Returns
+    -------
+    DataFrame
+        A copy of ``detections`` (same index, columns, dtypes and values) followed by
+        ``t_global_ms`` (float64, NaN where not stamped), optionally ``t_global_std_ms``
+        and ``t_center_ms`` (float64), and ``restamp_error`` (str, NaN where stamped).
+
+    Examples
+    --------
+    >>> stamped = restamp(pd.read_csv("detections.csv"), load_model("sync.json"))  # doctest: +SKIP
+    >>> stamped.loc[stamped.restamp_error.isna(), "t_global_ms"]                    # doctest: +SKIP
+    """
+    names = list(detections.columns)
+    require_columns(names, REQUIRED_COLUMNS, source)
+    _check_free(names, source)
+    exposures = _exposures(model, exposure_ms)
+    columns, reasons = _stamp([_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS],
+                              model, exposures, with_std)
+    columns["restamp_error"] = pd.array(np.array([None, *REASONS], dtype=object)[reasons],
+                                        dtype="str")
+    return detections.assign(**{name: pd.Series(values, index=detections.index)
+                                for name, values in columns.items()})
+
+
+def restamp_file(in_path: str | Path, out_path: str | Path, model: SyncModel, *,
+                 camera: str | None = None, input_format: str | None = None,
+                 exposure_ms: Mapping[str, float] | None = None, with_std: bool = False,
+                 block_bytes: int = 1 << 24) -> RestampSummary:
+    """Re-stamp a detections file into another, streaming, with bounded memory.
+
+    CSV to CSV copies every input line byte for byte and appends the new values, so
+    nothing is reformatted. CSV to Parquet stores the input columns as text, exactly as
+    in the CSV. Parquet input keeps its column types. A MOTChallenge file (one camera,
+    read whole) becomes the table of :func:`~tracking_adapter.formats.read_mot`. The
+    output is written atomically: an interrupted run leaves no file behind.
+
+    Parameters
+    ----------
+    in_path : str or Path
+        Detections: ``.csv``, ``.parquet`` / ``.pq``, or ``.txt`` (MOTChallenge).
+    out_path : str or Path
+        ``.csv`` or ``.parquet`` / ``.pq``.
+    model : SyncModel
+        The synchronisation model.
+    camera : str, optional
+        Camera name of a MOTChallenge input; default: its file stem.
+    input_format : {"csv", "parquet", "mot"}, optional
+        Overrides the input's extension.
+    exposure_ms : mapping of str to float, optional
+        Exposure time per camera, ms; overrides the model's value.
+    with_std : bool
+        Add ``t_global_std_ms``.
+    block_bytes : int
+        Size of the CSV blocks read at a time, bytes; memory use is a small multiple.
+
+    Returns
+    -------
+    RestampSummary
+        Rows read, stamped, and not stamped by reason; :func:`format_summary` prints it.
+    """
+    kind = detections_format(in_path, input_format)
+    out_kind = detections_format(out_path)
+    if camera is not None and kind != "mot":
+        raise FlashsyncError(f"{in_path}: a camera name is only given for MOTChallenge files; "
+                             "the detections' camera column names the cameras")
+    if out_kind == "mot":
+        raise FlashsyncError(f"{out_path}: re-stamped detections are written as .csv or "
+                             ".parquet; change the output extension")
+    exposures = _exposures(model, exposure_ms)
+    summary = RestampSummary(source=str(in_path), output=str(out_path))
+    if kind == "csv" and out_kind == "csv":
+        _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std,
+                          block_bytes, summary)
+    else:
+        _restamp_batches(Path(in_path), kind, camera, Path(out_path), out_kind, model,
+                         exposures, with_std, block_bytes, summary)
+    return summary
+
+
+def format_summary(summary: RestampSummary) -> str:
+    """One line for the terminal, e.g. ``detections.csv -> out.csv: 1000 rows, 998 stamped,
+    2 not stamped (2 unknown camera)``."""
+    text = (f"{summary.source} -> {summary.output}: {summary.rows} rows, "
+            f"{summary.stamped} stamped")
+    if summary.failed:
+        reasons = ", ".join(f"{count} {reason}" for reason, count in summary.failed.items())
+        text += f", {summary.rows - summary.stamped} not stamped ({reasons})"
+    return text
+
+
+def _restamp_csv_text(in_path: Path, out_path: Path, model: SyncModel,
+                      exposures: dict[str, float | None], with_std: bool, block_bytes: int,
+                      summary: RestampSummary) -> None:
+    header = read_csv_header(in_path)
+    require_columns(header.names, REQUIRED_COLUMNS, in_path)
+    _check_free(header.names, in_path)
+    options = dict(
+        read_options=pacsv.ReadOptions(column_names=header.names),
+        parse_options=pacsv.ParseOptions(newlines_in_values=False),
+        convert_options=pacsv.ConvertOptions(
+            include_columns=list(REQUIRED_COLUMNS), strings_can_be_null=True,
+            column_types={name: pa.string() for name in REQUIRED_COLUMNS}))
+    names = _new_columns(exposures, with_std)
+    with open(in_path, "rb") as source, atomic_output(out_path) as temporary, \
+            open(temporary, "wb") as output:
+        source.seek(header.size)
+        output.write(header.raw + b"," + ",".join(names).encode())
+        for block in iter_csv_blocks(source, block_bytes, header.eol):
+            lines = _lines(block, header.eol, in_path)
+            try:
+                table = pacsv.read_csv(pa.BufferReader(block), **options)
+            except pa.ArrowInvalid as error:
+                raise FlashsyncError(
+                    f"{in_path}: {first_line(error)}; every row needs the header's "
+                    f"{len(header.names)} columns") from None
+            if table.num_rows != len(lines):
+                raise FlashsyncError(f"{in_path}: a quoted value spans several lines; "
+                                     "remove the line breaks inside values")
+            columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS],
+                                      model, exposures, with_std)
+            _count(reasons, summary)
+            texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string())
+                     for name in names[:-1]]
+            texts.append(_reason_texts(reasons))
+            joined = pc.binary_join_element_wise(
+                lines, *(text.cast(pa.binary()) for text in texts), b",",
+                null_handling="replace", null_replacement=b"")
+            end = np.frombuffer(joined.buffers()[1], dtype=np.int32)[len(joined)]
+            output.write(memoryview(joined.buffers()[2])[:end])
+        output.write(header.eol)
+
+
+def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
+    """The non-empty lines of ``block`` as ``eol + line`` (line endings moved to the front)."""
+    data = np.frombuffer(block, dtype=np.uint8)
+    ends = np.flatnonzero(data == ord("\n"))
+    carriage = data[ends - 1] == ord("\r")
+    if not np.all(carriage == (eol == b"\r\n")):
+        raise FlashsyncError(f"{path}: mixed line endings (\\n and \\r\\n); convert the file "
+                             "to one kind, e.g. with dos2unix")
+    offsets = np.concatenate([[0], ends + 1]).astype(np.int32)
+    buffer = pa.py_buffer(eol + block[:-len(eol)])
+    lines = pa.Array.from_buffers(pa.binary(), len(ends), [None, pa.py_buffer(offsets), buffer])
+    filled = np.diff(offsets) > len(eol)
+    return lines if filled.all() else lines.filter(pa.array(filled))
+
+
+def _restamp_batches(in_path: Path, kind: str, camera: str | None, out_path: Path,
+                     out_kind: str, model: SyncModel, exposures: dict[str, float | None],
+                     with_std: bool, block_bytes: int, summary: RestampSummary) -> None:
+    schema, batches = _read_batches(in_path, kind, camera, block_bytes)
+    require_columns(schema.names, REQUIRED_COLUMNS, in_path)
+    _check_free(schema.names, in_path)
+    names = _new_columns(exposures, with_std)
+    for name in names:
+        schema = schema.append(pa.field(name, pa.string() if name == "restamp_error"
+                                        else pa.float64()))
+    with atomic_output(out_path) as temporary:
+        writer = (pq.ParquetWriter(temporary, schema) if out_kind == "parquet"
+                  else pacsv.CSVWriter(temporary, schema))
+        with writer:
+            try:
+                for batch in batches:
+                    columns, reasons = _stamp([batch.column(name) for name in REQUIRED_COLUMNS],
+                                              model, exposures, with_std)
+                    _count(reasons, summary)
+                    new = [pa.array(columns[name], from_pandas=True) for name in names[:-1]]
+                    writer.write_batch(pa.RecordBatch.from_arrays(
+                        [*batch.columns, *new, _reason_texts(reasons)], schema=schema))
+            except pa.ArrowInvalid as error:
+                raise FlashsyncError(f"{in_path}: {first_line(error)}; fix the file") from None
+
+
+def _read_batches(path: Path, kind: str, camera: str | None,
+                  block_bytes: int) -> tuple[pa.Schema, Iterator[pa.RecordBatch]]:
+    """The schema of a detections file and an iterator over its record batches."""
+    try:
+        if kind == "parquet":
+            parquet = pq.ParquetFile(path)
+            return parquet.schema_arrow, parquet.iter_batches(batch_size=_BATCH_ROWS)
+        if kind == "mot":
+            table = pa.Table.from_pandas(read_mot(path, camera), preserve_index=False)
+            return table.schema, iter(table.to_batches(max_chunksize=_BATCH_ROWS))
+        header = read_csv_header(path)
+        reader = pacsv.open_csv(path, read_options=pacsv.ReadOptions(block_size=block_bytes),
+                                convert_options=pacsv.ConvertOptions(
+                                    column_types={name: pa.string() for name in header.names}))
+        return reader.schema, reader
+    except (OSError, pa.ArrowException) as error:
+        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
+                             "check the file") from None
+
+
+def _stamp(arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None],
+           with_std: bool) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays.
+
+    Returns
+    -------
+    columns : dict of str to ndarray of shape (n,)
+        ``t_global_ms``, optionally ``t_global_std_ms`` and ``t_center_ms``, ms, NaN where
+        not stamped.
+    reasons : ndarray of shape (n,), int8
+        0 where stamped, else ``1 +`` index into :data:`REASONS`.
+    """
+    codes, names = _camera_codes(arrays[0])
+    frame, frame_text = _to_float(arrays[1])
+    y, y_text = _to_float(arrays[2])
+    clocks = [model.cameras.get(name) for name in names]
+    codes = np.where(codes < 0, len(clocks), codes)             # missing camera -> last entry
+    known = np.array([clock is not None for clock in clocks] + [True])
+    n_frames = np.array([clock.n_frames if clock else 0 for clock in clocks] + [0])
+    height = np.array([clock.height if clock else 0 for clock in clocks] + [0])
+    with np.errstate(invalid="ignore"):
+        checks = [
+            codes == len(clocks),
+            ~known[codes],
+            np.isnan(frame) & ~frame_text,
+            frame_text,
+            np.floor(frame) != frame,
+            frame < 0,
+            frame >= n_frames[codes],
+            np.isnan(y) & ~y_text,
+            y_text,
+            (y < -0.5) | (y > height[codes] - 0.5),
+        ]
+    reasons = np.zeros(len(frame), dtype=np.int8)
+    for code, failed in enumerate(checks, start=1):
+        reasons[(reasons == 0) & failed] = code
+    columns = {name: np.full(len(frame), np.nan) for name in _new_columns(exposures, with_std)[:-1]}
+    for code, clock in enumerate(clocks):
+        rows = np.flatnonzero((codes == code) & (reasons == 0))
+        if clock is None or not len(rows):
+            continue
+        frames = frame[rows].astype(np.int64)
+        columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
+        if "t_global_std_ms" in columns:
+            columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
+        if "t_center_ms" in columns and exposures[clock.name] is not None:
+            columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposures[clock.name] / 2
+    return columns, reasons
+
+
+def _camera_codes(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, list[str]]:
+    """Integer codes (-1 = missing) and the distinct names of a camera column."""
+    array = _plain(array)
+    if not pa.types.is_string(array.type) and not pa.types.is_large_string(array.type):
+        array = array.cast(pa.string())
+    array = pc.if_else(pc.equal(array, ""), pa.scalar(None, array.type), array)
+    encoded = pc.dictionary_encode(array)
+    codes = pc.fill_null(encoded.indices, -1).to_numpy(zero_copy_only=False).astype(np.int64)
+    return codes, encoded.dictionary.to_pylist()
+
+
+def _to_float(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, np.ndarray]:
+    """Numbers of a column as float64 (NaN where missing or not a number), and a mask of
+    the values that are present but not numbers."""
+    array = _plain(array)
+    kind = array.type
+    if pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind):
+        return (array.cast(pa.float64()).to_numpy(zero_copy_only=False),
+                np.zeros(len(array), dtype=bool))
+    try:
+        values = pc.cast(array, pa.float64())
+        return values.to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool)
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+        pass
+    text = pd.Series(array.cast(pa.string()).to_pandas(), dtype="str")
+    values = pd.to_numeric(text, errors="coerce").to_numpy(dtype=np.float64, na_value=np.nan)
+    missing = text.isna() | text.str.strip().str.lower().isin(_MISSING_TEXT)
+    return values, np.isnan(values) & ~missing.to_numpy(dtype=bool)
+
+
+def _plain(array: pa.Array | pa.ChunkedArray) -> pa.Array:
+    """A single, non-dictionary array."""
+    if isinstance(array, pa.ChunkedArray):
+        array = array.combine_chunks()
+    if pa.types.is_dictionary(array.type):
+        array = array.dictionary_decode()
+    return array
+
+
+def _series_to_arrow(series: pd.Series) -> pa.Array:
+    try:
+        return pa.array(series, from_pandas=True)
+    except (pa.ArrowInvalid, pa.ArrowTypeError):                  # mixed Python objects
+        return pa.array(series.astype("str"), from_pandas=True)
+
+
+def _reason_texts(reasons: np.ndarray) -> pa.Array:
+    return pc.take(pa.array([None, *REASONS], type=pa.string()), pa.array(reasons))
+
+
+def _count(reasons: np.ndarray, summary: RestampSummary) -> None:
+    counts = np.bincount(reasons, minlength=len(REASONS) + 1)
+    summary.rows += len(reasons)
+    summary.stamped += int(counts[0])
+    for reason, count in zip(REASONS, counts[1:]):
+        if count:
+            summary.failed[reason] = summary.failed.get(reason, 0) + int(count)
+
+
+def _exposures(model: SyncModel,
+               exposure_ms: Mapping[str, float] | None) -> dict[str, float | None]:
+    """Each model camera's exposure, ms (None if unknown); the caller's values first."""
+    given = dict(exposure_ms or {})
+    unknown = [name for name in given if name not in model.cameras]
+    if unknown:
+        raise FlashsyncError(f"exposure given for camera {', '.join(unknown)}, which the model "
+                             f"does not have (it has {', '.join(model.cameras)}); fix the name")
+    for name, value in given.items():
+        if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
+            raise FlashsyncError(f"exposure of camera {name} is {value!r}; give a time >= 0 "
+                                 "in ms")
+    return {name: given.get(name, clock.exposure_ms) for name, clock in model.cameras.items()}
+
+
+def _new_columns(exposures: dict[str, float | None], with_std: bool) -> list[str]:
+    """The columns restamp adds, in order."""
+    wanted = {"t_global_ms", "restamp_error"}
+    if with_std:
+        wanted.add("t_global_std_ms")
+    if any(value is not None for value in exposures.values()):
+        wanted.add("t_center_ms")
+    return [name for name in NEW_COLUMNS if name in wanted]
+
+
+def _check_free(columns: list, source: str | Path) -> None:
+    taken = [name for name in NEW_COLUMNS if name in columns]
+    if taken:
+        raise FlashsyncError(f"{source}: already has column {', '.join(taken)}; restamp the "
+                             "original detections or drop those columns")

@@ -1,0 +1,301 @@
+"""Validate a synchronisation on fast objects seen by several cameras.
+
+For every detection of an object in camera B, camera A's two detections of the same object
+that bracket it in global time are interpolated linearly to B's instant and the
+interpolated position is compared with B's on the ground plane (homographies image px ->
+plane m). With a good synchronisation the distance is the detection and homography
+noise; a timing error ``dt`` adds ``speed * dt`` (36 m/s: 3.6 cm per ms).
+
+The same triples are measured under three time models, each with its own bracketing:
+
+``subframe``
+    The full model, ``alpha * t_f + beta + q * T_row`` (what ``restamp`` writes).
+``frame``
+    Frame-level synchronisation: every detection gets the time of its frame's middle row,
+    ``alpha * t_f + beta + (height - 1) / 2 * T_row``, as if the camera had a global
+    shutter exposed at mid-readout (the best a per-frame stamp can do).
+``no_drift``
+    No clock drift, ``alpha = 1``, with the shift moved to keep the model's time at the
+    camera's mean frame time, ``beta + (alpha - 1) * mean(t_f)`` (the best constant offset).
+
+Instants are mid-exposure (``t_center_ms``) when the exposure of every camera used is
+known, else end of exposure (``t_global_ms``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from flashsync.errors import FlashsyncError
+from flashsync.model import CameraClock, SyncModel
+from tracking_adapter.formats import require_columns
+from tracking_adapter.restamp import restamp
+
+TIME_MODELS = {
+    "subframe": "sub-frame (model)",
+    "frame": "frame-level (mid row)",
+    "no_drift": "no drift (alpha = 1)",
+}
+DEFAULT_GAP_FRAMES = 2.5
+OBJECT_COLUMNS = ("object", "id")
+
+
+@dataclass
+class ErrorStats:
+    """Interpolation errors of one camera pair under one time model.
+
+    Attributes
+    ----------
+    triples : int
+        Detections of B with a bracketing pair of A's detections within the gap limit.
+    median_m, p95_m, max_m : float or None
+        Median, 95th percentile and maximum of the plane distance, m; None without triples.
+    skipped : dict of str to int
+        Detections of B not used, by reason: ``object not seen by A``, ``outside A's
+        track`` (before A's first or after its last detection of the object), ``A's gap
+        over the limit``.
+    """
+
+    triples: int
+    median_m: float | None
+    p95_m: float | None
+    max_m: float | None
+    skipped: dict[str, int] = field(default_factory=dict)
+
+
+@dataclass
+class PairValidation:
+    """One ordered camera pair: A's track interpolated at B's detections.
+
+    Attributes
+    ----------
+    interpolated : str
+        Camera A.
+    observed : str
+        Camera B.
+    max_gap_ms : float
+        Longest time between A's bracketing detections, ms.
+    stats : dict of str to ErrorStats
+        By time model (keys of :data:`TIME_MODELS`).
+    """
+
+    interpolated: str
+    observed: str
+    max_gap_ms: float
+    stats: dict[str, ErrorStats]
+
+
+@dataclass
+class ValidationReport:
+    """Result of :func:`validate`; ``to_dict()`` is JSON-able.
+
+    Attributes
+    ----------
+    pairs : list of PairValidation
+        Every ordered pair of cameras with usable detections, in model order; a pair that
+        does not overlap has no triples and says why in ``skipped``.
+    instant : str
+        ``"t_center_ms"`` (mid-exposure) or ``"t_global_ms"`` (end of exposure).
+    not_used : dict of str to int
+        Detections left out, by reason (the restamp reasons, ``x missing or not a number``,
+        ``object id missing``, ``camera without homography``).
+    """
+
+    pairs: list[PairValidation]
+    instant: str
+    not_used: dict[str, int] = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """Plain dicts, lists, numbers and strings, for ``json.dumps``."""
+        return asdict(self)
+
+
+def image_to_plane(x: np.ndarray, y: np.ndarray, homography: np.ndarray) -> np.ndarray:
+    """Map image points to the plane of a homography.
+
+    Parameters
+    ----------
+    x, y : arrays of shape (n,)
+        Image column and stored-image row, px.
+    homography : array of shape (3, 3)
+        Image px -> plane m.
+
+    Returns
+    -------
+    ndarray of shape (n, 2)
+        Plane coordinates, m.
+    """
+    points = homography @ np.vstack([x, y, np.ones(len(x))])
+    return (points[:2] / points[2]).T
+
+
+def validate(detections: pd.DataFrame, model: SyncModel,
+             homographies: Mapping[str, np.ndarray], *, max_gap_ms: float | None = None,
+             exposure_ms: Mapping[str, float] | None = None,
+             source: str = "detections") -> ValidationReport:
+    """Cross-camera interpolation errors of fast objects, per ordered camera pair.
+
+    Parameters
+    ----------
+    detections : DataFrame
+        ``camera``, ``frame`` (0-based), ``x``, ``y`` (stored-image px) and optionally an
+        object id ``object`` (or ``id``); without one, all detections are one object.
+    model : SyncModel
+        The synchronisation model.
+    homographies : mapping of str to array of shape (3, 3)
+        Image px -> plane m, per camera; cameras without one are left out.
+    max_gap_ms : float, optional
+        Longest time between camera A's bracketing detections, ms; default 2.5 frame
+        periods of camera A.
+    exposure_ms : mapping of str to float, optional
+        Exposure per camera, ms, overriding the model's.
+    source : str
+        Name of the detections file, for error messages.
+
+    Returns
+    -------
+    ValidationReport
+        Per pair and time model: triples, median / p95 / max plane error (m), skips.
+
+    Examples
+    --------
+    >>> report = validate(read_detections("puck.csv"), load_model("sync.json"),
+    ...                   load_homographies("H.json"))               # doctest: +SKIP
+    >>> print(format_report(report))                                  # doctest: +SKIP
+    """
+    require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
+    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms,
+                      source=source)
+    not_used = stamped["restamp_error"].value_counts().to_dict()
+    usable = stamped["restamp_error"].isna().to_numpy().copy()
+    id_column = next((name for name in OBJECT_COLUMNS if name in detections.columns), None)
+    objects = (pd.factorize(detections[id_column])[0] if id_column
+               else np.zeros(len(detections), dtype=np.int64))
+    x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
+    cameras = stamped["camera"].astype("str").to_numpy(dtype=object)
+    for reason, bad in (("x missing or not a number", np.isnan(x)),
+                        ("object id missing", objects < 0),
+                        ("camera without homography", ~np.isin(cameras, list(homographies)))):
+        _add(not_used, reason, int(np.count_nonzero(usable & bad)))
+        usable &= ~bad
+
+    instant = ("t_center_ms" if "t_center_ms" in stamped
+               and not stamped.loc[usable, "t_center_ms"].isna().any() else "t_global_ms")
+    rows = np.flatnonzero(usable)
+    names, objects, x = cameras[rows], objects[rows], x[rows]
+    frames = pd.to_numeric(stamped["frame"].iloc[rows]).to_numpy().astype(np.int64)
+    y = pd.to_numeric(stamped["y"].iloc[rows]).to_numpy(dtype=np.float64)
+    shift = (stamped["t_global_ms"] - stamped[instant]).to_numpy()[rows]    # exposure / 2 or 0
+    used = [name for name in model.cameras if name in set(names)]
+    plane = np.empty((len(rows), 2))
+    times = {time_model: np.empty(len(rows)) for time_model in TIME_MODELS}
+    for name in used:
+        mine = names == name
+        plane[mine] = image_to_plane(x[mine], y[mine], np.asarray(homographies[name]))
+        for time_model in TIME_MODELS:
+            times[time_model][mine] = (_times(model.camera(name), time_model, frames[mine],
+                                              y[mine]) - shift[mine])
+
+    report = ValidationReport(pairs=[], instant=instant, not_used=not_used)
+    for a in used:
+        gap = max_gap_ms if max_gap_ms is not None else _default_gap_ms(model.camera(a))
+        in_a = names == a
+        for b in used:
+            if a == b:
+                continue
+            in_b = names == b
+            stats = {time_model: _pair_stats(objects[in_a], values[in_a], plane[in_a],
+                                             objects[in_b], values[in_b], plane[in_b], gap)
+                     for time_model, values in times.items()}
+            report.pairs.append(PairValidation(a, b, float(gap), stats))
+    return report
+
+
+def format_report(report: ValidationReport) -> str:
+    """A text table: one line per camera pair, median / p95 / max error (m) per time model."""
+    header = f"{'A -> B':<24}{'triples':>8}" + "".join(
+        f"  {title:^26}" for title in TIME_MODELS.values())
+    units = f"{'':<24}{'':>8}" + "  {:>8}{:>9}{:>9}".format("median", "p95", "max") * len(
+        TIME_MODELS)
+    lines = [f"interpolation error on the plane, m (instant: {report.instant}; "
+             "A's track interpolated at B's detections)", header, units]
+    for pair in report.pairs:
+        name = f"{pair.interpolated} -> {pair.observed}"
+        line = f"{name:<24}{pair.stats['subframe'].triples:>8}"
+        for time_model in TIME_MODELS:
+            stats = pair.stats[time_model]
+            line += "  " + "".join(f"{_number(value):>{width}}" for value, width in
+                                   ((stats.median_m, 8), (stats.p95_m, 9), (stats.max_m, 9)))
+        lines.append(line)
+    for pair in report.pairs:
+        skipped = pair.stats["subframe"].skipped
+        if skipped:
+            lines.append(f"skipped {pair.interpolated} -> {pair.observed} (gap limit "
+                         f"{pair.max_gap_ms:.1f} ms): "
+                         + ", ".join(f"{count} {reason}" for reason, count in skipped.items()))
+    if report.not_used:
+        lines.append("detections not used: " + ", ".join(
+            f"{count} {reason}" for reason, count in report.not_used.items()))
+    return "\n".join(lines)
+
+
+def _times(clock: CameraClock, time_model: str, frames: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """End-of-exposure times (ms) of detections under one time model."""
+    if time_model == "frame":
+        return clock.t_global_ms(frames, np.full(len(frames), (clock.height - 1) / 2))
+    if time_model == "no_drift":
+        mean_ms = float(np.mean(clock.frame_times_ms))
+        clock = replace(clock, alpha=1.0, beta_ms=clock.beta_ms + (clock.alpha - 1) * mean_ms)
+    return clock.t_global_ms(frames, y)
+
+
+def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
+                object_b: np.ndarray, t_b: np.ndarray, plane_b: np.ndarray,
+                max_gap_ms: float) -> ErrorStats:
+    """Interpolate A's track (times ms, plane m) at B's detections and measure the distance."""
+    errors, skipped = [], {}
+    for obj in np.unique(object_b):
+        in_a, in_b = object_a == obj, object_b == obj
+        order = np.argsort(t_a[in_a], kind="stable")
+        times, points = t_a[in_a][order], plane_a[in_a][order]
+        if not len(times):
+            _add(skipped, "object not seen by A", int(in_b.sum()))
+            continue
+        instants = t_b[in_b]
+        after = np.searchsorted(times, instants, side="right")
+        inside = (after > 0) & (after < len(times))
+        _add(skipped, "outside A's track", int((~inside).sum()))
+        after, instants, observed = after[inside], instants[inside], plane_b[in_b][inside]
+        gap = times[after] - times[after - 1]
+        close = gap <= max_gap_ms
+        _add(skipped, "A's gap over the limit", int((~close).sum()))
+        after, instants, observed, gap = after[close], instants[close], observed[close], gap[close]
+        weight = ((instants - times[after - 1]) / gap)[:, None]
+        interpolated = points[after - 1] + weight * (points[after] - points[after - 1])
+        errors.append(np.linalg.norm(interpolated - observed, axis=1))
+    errors = np.concatenate(errors) if errors else np.empty(0)
+    if not len(errors):
+        return ErrorStats(0, None, None, None, skipped)
+    return ErrorStats(len(errors), float(np.median(errors)), float(np.percentile(errors, 95)),
+                      float(errors.max()), skipped)
+
+
+def _default_gap_ms(clock: CameraClock) -> float:
+    """``DEFAULT_GAP_FRAMES`` frame periods of a camera, ms (reference clock)."""
+    if clock.n_frames < 2:
+        raise FlashsyncError(f"camera {clock.name} has {clock.n_frames} frame in the model; "
+                             "give --max-gap-ms or sync a longer video")
+    return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
+
+
+def _add(counts: dict[str, int], reason: str, count: int) -> None:
+    if count:
+        counts[reason] = counts.get(reason, 0) + count
+
+
+def _number(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
