@@ -165,9 +165,15 @@ def _run_restamp(args) -> int:
     from tracking_adapter.restamp import format_summary, restamp_file
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
-    summary = restamp_file(args.detections, output, load_model(args.model), camera=args.camera,
+    model = load_model(args.model)
+    summary = restamp_file(args.detections, output, model, camera=args.camera,
                            exposure_ms=_per_camera_ms("--exposure", args.exposure), with_std=args.std)
     print(format_summary(summary), file=sys.stderr)
+    if "unknown camera" in summary.failed:
+        print(f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model} "
+              f"({', '.join(model.cameras)}); their rows are kept without t_global_ms - sync those "
+              "videos too or fix the camera names", file=sys.stderr)
+        return 1
     return 1 if args.strict and summary.stamped < summary.rows else 0
 
 

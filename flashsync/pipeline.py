@@ -94,9 +94,9 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
             report.warnings.append(f"{cameras[name].video}: {len(sync_events[name])} usable flash "
                                    "events (need at least 2); left out")
     if len(usable) < 2:
-        raise FlashsyncError(f"only {len(usable)} camera(s) with at least two usable flash events "
-                             f"({', '.join(usable) or 'none'}); need two or more cameras that saw "
-                             "the same flashes")
+        counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
+        raise FlashsyncError(f"need two or more cameras with at least two flash events each; found "
+                             f"{counts}; check that the videos show flashes (or lights switching)")
     anchor_events = parse_anchors(list(anchors), {n: len(sync_events[n]) for n in usable})
     approx = {name: _approximate_times(cameras[name], sync_events[name]) for name in usable}
     tolerance = max(5.0, 0.25 * max(_frame_period(cameras[n]) for n in usable))

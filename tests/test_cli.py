@@ -1,0 +1,202 @@
+"""The flashsync command end to end on rendered videos, and every bad input it must refuse."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from flashsync.cli import main
+from flashsync.evaluate import sync_errors
+from flashsync.model_file import load_model
+from flashsync.simulation import (CameraSpec, FlashSpec, Scenario, load_ground_truth,
+                                  render_scenario)
+
+
+def run(capsys, *args):
+    """Run the CLI in-process; return (exit code, stdout, stderr)."""
+    code = main([str(a) for a in args])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def one_error_line(err: str, *words: str) -> None:
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err and "error:" in lines[0]
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+@pytest.fixture(scope="module")
+def three_cameras(tmp_path_factory):
+    """Three unseen cameras (mp4, mkv, mp4) at 25/30/50 fps that share exactly three flashes."""
+    cameras = (
+        CameraSpec("a", 320, 180, 25.0, r0=8, r1=6, start_ms=0.0, n_frames=75),
+        CameraSpec("b", 320, 180, 30.0, r0=6, r1=8, start_ms=5000.0, offset_ms=-5000.0 + 130.0,
+                   drift_ppm=-20.0, container="mkv", n_frames=90),
+        CameraSpec("c", 256, 144, 50.0, r0=10, r1=6, start_ms=90_000.0, offset_ms=-90_000.0 - 210.0,
+                   drift_ppm=30.0, exposure_ms=6.0, n_frames=150),
+    )
+    flashes = (FlashSpec(700.0, 0.5), FlashSpec(1460.0, 0.6), FlashSpec(2270.0, 0.45))
+    folder = tmp_path_factory.mktemp("three")
+    render_scenario(Scenario("three", cameras, flashes=flashes, n_players=4, seed=2), folder)
+    return folder
+
+
+def test_sync_unseen_videos_sharing_three_flashes(three_cameras, tmp_path, capsys):
+    videos = [three_cameras / name for name in ("a.mp4", "b.mkv", "c.mp4")]
+    code, out, err = run(capsys, "sync", *videos, "-o", tmp_path / "sync.json")
+    assert code == 0, err
+    assert "drift ppm" in out and "T_row ms" in out
+    model = load_model(tmp_path / "sync.json")
+    assert list(model.cameras) == ["a", "b", "c"]
+    errors = sync_errors(model, load_ground_truth(three_cameras / "truth.json"))
+    assert errors["rms_ms"].max() < 0.5, errors
+
+
+def test_detect_writes_events_table(three_cameras, tmp_path, capsys):
+    code, _, err = run(capsys, "detect", three_cameras / "a.mp4", "-o", tmp_path / "events.parquet")
+    assert code == 0, err
+    events = pd.read_parquet(tmp_path / "events.parquet")
+    assert (events["edge"] == "leading").sum() == 3
+    assert {"camera", "event", "frame", "t_frame_ms", "row", "edge", "band", "flags"} <= set(events.columns)
+
+
+def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, capsys):
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
+                       "-o", tmp_path / "sync.json")
+    assert code == 0, err
+    detections = pd.read_csv(tiny_scenario / "detections.csv")
+    bad = pd.DataFrame({"camera": ["cam1", "cam2"], "frame": [-1, 10_000], "x": [1.0, 2.0],
+                        "y": [5.0, 6.0], "object": ["puck", "puck"]})
+    table = pd.concat([detections, bad], ignore_index=True)
+    table.to_csv(tmp_path / "in.csv", index=False)
+    code, _, err = run(capsys, "restamp", tmp_path / "in.csv", "--model", tmp_path / "sync.json",
+                       "-o", tmp_path / "out.csv")
+    assert code == 0, err
+    out = pd.read_csv(tmp_path / "out.csv")
+    assert len(out) == len(table)
+    pd.testing.assert_frame_equal(out[table.columns], table)
+    assert out["t_global_ms"].notna().sum() == len(detections)
+    assert list(out["restamp_error"].tail(2)) == ["frame negative", "frame past the end of the video"]
+    code, _, _ = run(capsys, "restamp", tmp_path / "in.csv", "--model", tmp_path / "sync.json",
+                     "-o", tmp_path / "strict.csv", "--strict")
+    assert code == 1
+
+
+def test_help_of_every_command_has_an_example():
+    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo"):
+        result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"],
+                                capture_output=True, text=True)
+        assert result.returncode == 0 and "example:" in result.stdout and "flashsync " + command in result.stdout
+
+
+def test_missing_file(tmp_path, capsys):
+    code, _, err = run(capsys, "detect", tmp_path / "nope.mp4")
+    assert code == 1
+    one_error_line(err, "nope.mp4", "no such file")
+
+
+def test_not_a_video(tmp_path, capsys):
+    (tmp_path / "notes.mp4").write_text("not a video")
+    code, _, err = run(capsys, "sync", tmp_path / "notes.mp4", tmp_path / "notes.mp4")
+    assert code == 1
+    one_error_line(err)
+
+
+def test_file_that_is_not_a_video(tmp_path, capsys):
+    (tmp_path / "a.mp4").write_text("not a video")
+    (tmp_path / "b.mkv").write_bytes(b"\x00" * 100)
+    code, _, err = run(capsys, "sync", tmp_path / "a.mp4", tmp_path / "b.mkv")
+    assert code == 1
+    one_error_line(err, "a.mp4", "not a video file")
+    assert not (tmp_path / "sync.json").exists()
+
+
+def test_duplicate_camera_names(tiny_scenario, tmp_path, capsys):
+    (tmp_path / "cam1.mkv").write_bytes((tiny_scenario / "cam2.mkv").read_bytes())
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tmp_path / "cam1.mkv")
+    assert code == 1
+    one_error_line(err, "cam1", "rename")
+
+
+@pytest.fixture(scope="module")
+def no_flash_videos(tmp_path_factory):
+    cameras = (CameraSpec("quiet1", 160, 90, 25.0, n_frames=25),
+               CameraSpec("quiet2", 160, 90, 30.0, n_frames=30, container="mkv"))
+    folder = tmp_path_factory.mktemp("quiet")
+    render_scenario(Scenario("quiet", cameras, n_players=3, seed=4), folder)
+    return folder
+
+
+def test_videos_with_no_flashes(no_flash_videos, tmp_path, capsys):
+    code, _, err = run(capsys, "sync", no_flash_videos / "quiet1.mp4", no_flash_videos / "quiet2.mkv",
+                       "-o", tmp_path / "sync.json")
+    assert code == 1
+    one_error_line(err, "quiet1.mp4: 0", "quiet2.mkv: 0", "flash events")
+    assert not (tmp_path / "sync.json").exists()
+
+
+def test_fewer_than_two_cameras(tiny_scenario, capsys):
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4")
+    assert code == 1
+    one_error_line(err, "two or more cameras", "cam1.mp4: 4")
+
+
+def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, capsys):
+    # cam1 sees four flashes, cam2's clip is cut to its first two: 2 shared events
+    import av
+
+    from flashsync.simulation.encode import write_video
+    frames, pts = [], []
+    with av.open(str(tiny_scenario / "cam2.mkv")) as container:
+        time_base = container.streams.video[0].time_base
+        for frame in container.decode(video=0):
+            if frame.time * 1000 > 1934 + 40:
+                break
+            frames.append(frame.to_ndarray(format="gray"))
+            pts.append(frame.pts)
+    write_video(tmp_path / "short.mkv", frames, pts, time_base)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tmp_path / "short.mkv",
+                       "-o", tmp_path / "sync.json")
+    assert code == 1
+    one_error_line(err, "share")
+
+
+def test_detections_without_required_columns(tiny_scenario, tmp_path, capsys):
+    run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "sync.json")
+    pd.DataFrame({"camera": ["cam1"], "frame_no": [1], "row": [3.0]}).to_csv(tmp_path / "d.csv", index=False)
+    code, _, err = run(capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json",
+                       "-o", tmp_path / "out.csv")
+    assert code == 1
+    one_error_line(err, "d.csv", "frame", "y")
+    assert not (tmp_path / "out.csv").exists()
+
+
+def test_camera_missing_from_model(tiny_scenario, tmp_path, capsys):
+    run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "sync.json")
+    pd.DataFrame({"camera": ["cam1", "cam7"], "frame": [1, 1], "y": [3.0, 4.0]}).to_csv(tmp_path / "d.csv", index=False)
+    code, _, err = run(capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json",
+                       "-o", tmp_path / "out.csv")
+    assert code == 1
+    error_lines = [line for line in err.splitlines() if "error:" in line]
+    assert len(error_lines) == 1 and "not in" in error_lines[0] and "Traceback" not in err
+    out = pd.read_csv(tmp_path / "out.csv")
+    assert list(out["restamp_error"].fillna("")) == ["", "unknown camera"]
+
+
+def test_missing_model_file(tmp_path, capsys):
+    pd.DataFrame({"camera": ["a"], "frame": [1], "y": [3.0]}).to_csv(tmp_path / "d.csv", index=False)
+    code, _, err = run(capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "none.json")
+    assert code == 1
+    one_error_line(err, "none.json", "flashsync sync")
+
+
+def test_bad_option_values(tiny_scenario, capsys):
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
+                       "--row-time", "cam1=fast")
+    assert code == 1
+    one_error_line(err, "--row-time")
