@@ -124,11 +124,12 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
         if order[name] not in row_time_priors:
             nominal = _frame_period(cameras[name]) / (NOMINAL_HIDDEN_ROWS * cameras[name].height)
             row_time_priors[order[name]] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
+    durations = _durations([cameras[name] for name in connected])
     solution = solve_clocks(
         Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
                observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
         len(connected), order[reference],
-        durations=_durations([cameras[name] for name in connected]),
+        durations=durations,
         priors=Priors(row_time_priors))
     report.sigma_ms = solution.sigma_ms
     n_events = len(observations)
@@ -136,7 +137,9 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     for name in connected:
         d, s = cameras[name], solution.cameras[order[name]]
         clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
-                                   s.row_time_ms, d.flipped, s.covariance, video=str(d.video))
+                                   s.row_time_ms, d.flipped, s.covariance,
+                                   _exposure_ms(durations, order[name], s.alpha, s.row_time_ms),
+                                   video=str(d.video))
     observations["t_global_ms"] = solution.flash_ms[observations["flash"].to_numpy()]
     observations["residual_ms"] = solution.residual_ms[:n_events]
     observations["inlier"] = solution.inlier[:n_events]
@@ -155,6 +158,18 @@ def _sync_events(detection: CameraDetection) -> pd.DataFrame:
     """Leading edges, the synchronisation events, with their readout row ``q``."""
     events = _with_readout_rows(detection)
     return events[events["edge"] == "leading"].reset_index(drop=True)
+
+
+def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
+    """Exposure time (ms, reference clock) from the camera's bands, or None without any.
+
+    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
+    flash are the ones whose exposure window holds it), so its duration is the exposure.
+    """
+    mine = durations.camera == camera
+    if not mine.any():
+        return None
+    return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
 
 
 def _durations(detections: list[CameraDetection]) -> Durations:
