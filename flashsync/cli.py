@@ -135,12 +135,14 @@ def _run_sync(args) -> None:
     from flashsync.report import sync_table
     from flashsync.tables import write_table
 
-    detections = detect_videos(args.videos, args.flipped, progress=_progress)
+    detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress)
     if args.events:
         write_table(all_events(detections), args.events)
     model, report = synchronize(detections, args.reference, _per_camera_ms("--row-time", args.row_time), args.anchor)
     for warning in report.warnings:
         print(f"flashsync sync: warning: {warning}", file=sys.stderr)
+    for name in report.flipped_found:
+        print(f"flashsync sync: {name} reads bottom-up (mounted upside down)", file=sys.stderr)
     save_model(model, args.output)
     print(sync_table(model))
     print(f"model -> {args.output}", file=sys.stderr)

@@ -19,7 +19,7 @@ The detector is streaming: :class:`EventDetector` keeps a few profiles, not the 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
@@ -282,7 +282,11 @@ def _falling_crossing(values: np.ndarray, level: float, start: int, stop: int) -
 
 @dataclass
 class CameraDetection:
-    """One video's detection pass: its frame timestamps and its events."""
+    """One video's detection pass: its frame timestamps and its events.
+
+    ``events`` are read in the direction ``flipped`` says; ``alternative`` holds the same
+    video's events read the other way, where the direction is still to be estimated.
+    """
 
     camera: str
     video: Path
@@ -291,9 +295,16 @@ class CameraDetection:
     frame_times_ms: np.ndarray
     events: pd.DataFrame
     flipped: bool = False
+    alternative: pd.DataFrame | None = None
+
+    def read_flipped(self, flipped: bool) -> CameraDetection:
+        """This detection with the readout direction ``flipped`` (needs ``alternative``)."""
+        if flipped == self.flipped:
+            return self
+        return replace(self, events=self.alternative, alternative=self.events, flipped=flipped)
 
 
-def detect_video(path: str | Path, flipped: bool = False,
+def detect_video(path: str | Path, flipped: bool | None = False,
                  settings: DetectorSettings | None = None,
                  column_step: int = DEFAULT_COLUMN_STEP,
                  progress: Callable[[int], None] | None = None) -> CameraDetection:
@@ -302,9 +313,10 @@ def detect_video(path: str | Path, flipped: bool = False,
     Parameters
     ----------
     path : path of a video file FFmpeg can open.
-    flipped : the camera reads bottom-up in stored rows (mounted upside down).
+    flipped : the camera reads bottom-up in stored rows (mounted upside down); None: not
+        known, events are detected both ways (``events`` top-down, ``alternative`` bottom-up).
     settings : detector tuning; ``flipped`` overrides its field.
-    column_step : columns between median samples.
+    column_step : columns between samples of a row.
     progress : called with the number of frames decoded since the last call.
 
     Returns
@@ -312,16 +324,20 @@ def detect_video(path: str | Path, flipped: bool = False,
     CameraDetection with ``events`` in EVENT_COLUMNS (rows are stored-image rows).
     """
     info = probe_video(path)
-    settings = DetectorSettings(**{**(settings or DetectorSettings()).__dict__, "flipped": flipped})
-    detector = EventDetector(info.camera, info.height, settings)
+    directions = [False, True] if flipped is None else [flipped]
+    base = settings or DetectorSettings()
+    detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction))
+                 for direction in directions]
     times = []
     for frame, (t_ms, profile) in enumerate(iter_profiles(info.path, column_step)):
         times.append(t_ms)
-        detector.push(frame, t_ms, profile)
+        for detector in detectors:
+            detector.push(frame, t_ms, profile)
         if progress is not None:
             progress(1)
     frame_times = check_timestamps(np.asarray(times), str(info.path))
     if len(frame_times) < 2:
         raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
-    return CameraDetection(info.camera, info.path, info.width, info.height, frame_times,
-                           detector.finish(), flipped)
+    events = [detector.finish() for detector in detectors]
+    return CameraDetection(info.camera, info.path, info.width, info.height, frame_times, events[0],
+                           directions[0], events[1] if len(events) > 1 else None)

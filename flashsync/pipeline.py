@@ -3,13 +3,17 @@
 The CLI is a thin layer over these functions; a notebook calls them the same way::
 
     detections = detect_videos(["cam1.mp4", "cam2.mkv", "cam3.mp4"])
-    model = synchronize(detections)
+    model, report = synchronize(detections)
     model.camera("cam2").t_global_ms(frame=120, row=200.5)
+
+:func:`synchronize` runs four steps: each camera's frame clock (steady period behind
+quantised stamps), the coarse matching of events across cameras, the choice of readout
+direction of cameras where it is not given, and the joint robust solve.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -18,24 +22,33 @@ import pandas as pd
 
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
 from flashsync.errors import FlashsyncError
+from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.profiles import probe_video
-from flashsync.solve import Durations, Events, Priors, solve_clocks
+from flashsync.solve import Durations, Events, Priors, Solution, solve_clocks
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
 NOMINAL_HIDDEN_ROWS = 1.05
 NOMINAL_ROW_TIME_STD = 0.08
+#: Fewest flashes two cameras must share for their pair alignment to count.
+MIN_SHARED_FLASHES = 3
 
 
 def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
-                  settings: DetectorSettings | None = None,
+                  estimate_readout: bool = False, settings: DetectorSettings | None = None,
                   progress: Callable[[str, int], Callable[[int], None]] | None = None,
                   ) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
-    ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
+    Parameters
+    ----------
+    paths : video files.
+    flipped : cameras known to be mounted upside down.
+    estimate_readout : detect the other cameras' events both ways, so that
+        :func:`synchronize` can find an upside-down camera.
+    progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     """
     paths = [Path(p) for p in paths]
     stems = [p.stem for p in paths]
@@ -48,11 +61,9 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         raise FlashsyncError(f"--flipped {', '.join(unknown)}: no such camera among {', '.join(stems)}")
     results = []
     for path in paths:
-        callback = None
-        if progress is not None:
-            callback = progress(path.stem, probe_video(path).n_frames_hint)
-        results.append(detect_video(path, flipped=path.stem in flipped, settings=settings,
-                                    progress=callback))
+        callback = progress(path.stem, probe_video(path).n_frames_hint) if progress else None
+        direction = True if path.stem in flipped else (None if estimate_readout else False)
+        results.append(detect_video(path, flipped=direction, settings=settings, progress=callback))
     return results
 
 
@@ -63,9 +74,20 @@ def all_events(detections: Sequence[CameraDetection]) -> pd.DataFrame:
 
 @dataclass
 class SyncReport:
-    """What :func:`synchronize` found besides the model: pair alignments and warnings."""
+    """What :func:`synchronize` found besides the model.
+
+    Attributes
+    ----------
+    alignments : accepted pair alignments (camera a, camera b) -> coarse map and matches.
+    frame_clocks : per camera, the frame clock found behind its stamps.
+    flipped_found : cameras found to read bottom-up (upside down).
+    warnings : cameras left out and why.
+    sigma_ms : robust residual scale of the solve, ms.
+    """
 
     alignments: dict[tuple[str, str], PairAlignment] = field(default_factory=dict)
+    frame_clocks: dict[str, FrameClock] = field(default_factory=dict)
+    flipped_found: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
 
@@ -77,74 +99,150 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
 
     Parameters
     ----------
-    detections : one per camera (from :func:`detect_videos`).
+    detections : one per camera (from :func:`detect_videos`); a detection with
+        ``alternative`` events has its readout direction chosen here.
     reference : camera whose clock is the global clock; default the first.
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional).
     """
-    cameras = {d.camera: d for d in detections}
     reference = reference or detections[0].camera
-    if reference not in cameras:
-        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(cameras)}")
+    names = [d.camera for d in detections]
+    if reference not in names:
+        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
+    report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
+    cameras = {d.camera: _on_frame_clock(d, report.frame_clocks[d.camera]) for d in detections}
+    undecided = [name for name, d in cameras.items() if d.alternative is not None]
+    best = _attempt(cameras, reference, row_times, anchors)
+    for name in undecided:
+        trial = {**best.cameras, name: best.cameras[name].read_flipped(not best.cameras[name].flipped)}
+        try:
+            attempt = _attempt(trial, reference, row_times, anchors)
+        except FlashsyncError:
+            continue
+        if attempt.score > best.score:
+            best = attempt
+    report.alignments, report.warnings = best.alignments, best.warnings
+    report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
+    report.sigma_ms = best.solution.sigma_ms
+    return best.model(reference), report
+
+
+@dataclass
+class _Attempt:
+    """One matching and solve with given readout directions."""
+
+    cameras: dict[str, CameraDetection]
+    connected: list[str]
+    alignments: dict[tuple[str, str], PairAlignment]
+    warnings: list[str]
+    observations: pd.DataFrame
+    durations: Durations
+    solution: Solution
+
+    @property
+    def score(self) -> tuple[int, float]:
+        """More inlier events first, then a smaller residual scale."""
+        return int(self.solution.inlier[: len(self.observations)].sum()), -self.solution.sigma_ms
+
+    def model(self, reference: str) -> SyncModel:
+        clocks = {}
+        for index, name in enumerate(self.connected):
+            d, s = self.cameras[name], self.solution.cameras[index]
+            clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
+                                       s.row_time_ms, d.flipped, s.covariance,
+                                       _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                                       video=str(d.video))
+        n_events = len(self.observations)
+        events = self.observations.assign(
+            t_global_ms=self.solution.flash_ms[self.observations["flash"].to_numpy()],
+            residual_ms=self.solution.residual_ms[:n_events],
+            inlier=self.solution.inlier[:n_events])
+        return SyncModel(reference, clocks, events.drop(columns=["camera_index", "q"]))
+
+
+def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None,
+             anchors: Sequence[str]) -> _Attempt:
+    """Match and solve with the cameras' current readout directions."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
-    report = SyncReport()
-    for name in cameras:
-        if name not in usable:
-            report.warnings.append(f"{cameras[name].video}: {len(sync_events[name])} usable flash "
-                                   "events (need at least 2); left out")
+    warnings = [f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at "
+                "least 2); left out" for name in cameras if name not in usable]
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
         raise FlashsyncError(f"need two or more cameras with at least two flash events each; found "
                              f"{counts}; check that the videos show flashes (or lights switching)")
-    anchor_events = parse_anchors(list(anchors), {n: len(sync_events[n]) for n in usable})
-    approx = {name: _approximate_times(cameras[name], sync_events[name]) for name in usable}
-    tolerance = max(5.0, 0.25 * max(_frame_period(cameras[n]) for n in usable))
-    for i, name_a in enumerate(usable):
-        for name_b in usable[i + 1:]:
-            anchor = ((anchor_events[name_a], anchor_events[name_b])
-                      if name_a in anchor_events and name_b in anchor_events else None)
-            alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
-            if alignment is not None and len(alignment.matches) >= 3 and not alignment.ambiguous:
-                report.alignments[(name_a, name_b)] = alignment
-    flashes = group_flashes({n: len(sync_events[n]) for n in usable}, report.alignments)
-    connected = _connected(reference, usable, report.alignments)
-    for name in usable:
-        if name not in connected:
-            report.warnings.append(f"{cameras[name].video}: shares fewer than 3 unambiguous flashes "
-                                   f"with the other cameras; cannot be tied to {reference}; left out")
+    alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable},
+                              anchors)
+    flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
+    connected = _connected(reference, usable, alignments)
+    warnings += [f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
+                 f"with the other cameras; cannot be tied to {reference}; left out"
+                 for name in usable if name not in connected]
     if reference not in connected or len(connected) < 2:
-        raise FlashsyncError(f"no camera shares at least 3 flashes with {reference}; check that "
-                             "the videos overlap in time and saw the same flashes")
+        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
+                             "check that the videos overlap in time and saw the same flashes")
     observations = _observations(connected, sync_events, flashes)
-    order = {name: i for i, name in enumerate(connected)}
-    row_time_priors = {order[name]: (value, 1e-4 * value) for name, value in (row_times or {}).items()
-                       if name in order}
-    for name in connected:
-        if order[name] not in row_time_priors:
-            nominal = _frame_period(cameras[name]) / (NOMINAL_HIDDEN_ROWS * cameras[name].height)
-            row_time_priors[order[name]] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     durations = _durations([cameras[name] for name in connected])
+    priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
     solution = solve_clocks(
         Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
                observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
-        len(connected), order[reference],
-        durations=durations,
-        priors=Priors(row_time_priors))
-    report.sigma_ms = solution.sigma_ms
-    n_events = len(observations)
-    clocks = {}
-    for name in connected:
-        d, s = cameras[name], solution.cameras[order[name]]
-        clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
-                                   s.row_time_ms, d.flipped, s.covariance,
-                                   _exposure_ms(durations, order[name], s.alpha, s.row_time_ms),
-                                   video=str(d.video))
-    observations["t_global_ms"] = solution.flash_ms[observations["flash"].to_numpy()]
-    observations["residual_ms"] = solution.residual_ms[:n_events]
-    observations["inlier"] = solution.inlier[:n_events]
-    events = observations.drop(columns=["camera_index", "q"])
-    return SyncModel(reference, clocks, events.reset_index(drop=True)), report
+        len(connected), connected.index(reference), durations=durations, priors=Priors(priors))
+    return _Attempt(cameras, connected, alignments, warnings, observations, durations, solution)
+
+
+def _on_frame_clock(detection: CameraDetection, clock: FrameClock) -> CameraDetection:
+    """The detection with frame times (and event frame times) from its steady frame clock."""
+    def retimed(events: pd.DataFrame | None) -> pd.DataFrame | None:
+        if events is None:
+            return None
+        return events.assign(t_frame_ms=clock.times_ms[events["frame"].to_numpy(dtype=np.int64)])
+
+    return replace(detection, frame_times_ms=clock.times_ms, events=retimed(detection.events),
+                   alternative=retimed(detection.alternative))
+
+
+def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, pd.DataFrame],
+                 anchors: Sequence[str]) -> dict[tuple[str, str], PairAlignment]:
+    """Coarse alignment of every pair of cameras; pairs sharing too few or ambiguous flashes
+    are left out."""
+    anchor_events = parse_anchors(list(anchors), {n: len(e) for n, e in sync_events.items()})
+    approx = {name: _approximate_times(cameras[name], sync_events[name]) for name in cameras}
+    tolerance = max(5.0, 0.25 * max(_frame_period(d) for d in cameras.values()))
+    names = list(cameras)
+    alignments = {}
+    for i, name_a in enumerate(names):
+        for name_b in names[i + 1:]:
+            anchor = ((anchor_events[name_a], anchor_events[name_b])
+                      if name_a in anchor_events and name_b in anchor_events else None)
+            alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
+            if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
+                alignments[(name_a, name_b)] = alignment
+    return alignments
+
+
+def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
+    """Per camera index: a datasheet T_row (std 0.01 %) or the weak nominal prior."""
+    priors = {}
+    for index, camera in enumerate(cameras):
+        if camera.camera in row_times:
+            priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
+        else:
+            nominal = _frame_period(camera) / (NOMINAL_HIDDEN_ROWS * camera.height)
+            priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
+    return priors
+
+
+def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
+    """Exposure time (ms, reference clock) from the camera's bands, or None without any.
+
+    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
+    flash are the ones whose exposure window holds it), so its duration is the exposure.
+    """
+    mine = durations.camera == camera
+    if not mine.any():
+        return None
+    return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
 
 
 def _with_readout_rows(detection: CameraDetection) -> pd.DataFrame:
@@ -160,27 +258,16 @@ def _sync_events(detection: CameraDetection) -> pd.DataFrame:
     return events[events["edge"] == "leading"].reset_index(drop=True)
 
 
-def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
-    """Exposure time (ms, reference clock) from the camera's bands, or None without any.
-
-    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
-    flash are the ones whose exposure window holds it), so its duration is the exposure.
-    """
-    mine = durations.camera == camera
-    if not mine.any():
-        return None
-    return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
-
-
 def _durations(detections: list[CameraDetection]) -> Durations:
     """Pulse bands with both edges visible and unsaturated, camera indices in list order."""
     camera, dt, dq = [], [], []
     for index, detection in enumerate(detections):
         events = _with_readout_rows(detection)
         usable = events[(events["band"] == "pulse") & ~events["flags"].str.contains("saturated")]
-        both = usable.pivot_table(index="event", columns="edge", values=["t_frame_ms", "q"]).dropna()
-        if both.empty:
+        both = usable.pivot_table(index="event", columns="edge", values=["t_frame_ms", "q"])
+        if not {("q", "leading"), ("q", "trailing")} <= set(both.columns):
             continue
+        both = both.dropna()
         camera += [index] * len(both)
         dt += list(both[("t_frame_ms", "trailing")] - both[("t_frame_ms", "leading")])
         dq += list(both[("q", "trailing")] - both[("q", "leading")])
@@ -215,8 +302,7 @@ def _observations(names: list[str], sync_events: dict[str, pd.DataFrame],
     """One row per (camera, event) that belongs to a flash seen by >= 2 connected cameras."""
     rows = []
     for index, name in enumerate(names):
-        events = sync_events[name]
-        for i, event in events.iterrows():
+        for i, event in sync_events[name].iterrows():
             if (name, i) in flashes:
                 rows.append({"flash": flashes[(name, i)], "camera": name, "camera_index": index,
                              "event": int(event["event"]), "frame": int(event["frame"]),
