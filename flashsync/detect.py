@@ -30,8 +30,8 @@ from flashsync.errors import FlashsyncError
 from flashsync.profiles import DEFAULT_COLUMN_STEP, iter_profiles, probe_video
 from flashsync.timestamps import check_timestamps
 
-EVENT_COLUMNS = ["camera", "event", "frame", "t_frame_ms", "row", "edge", "band", "strength",
-                 "quality", "flags"]
+EVENT_COLUMNS = ["camera", "event", "frame", "t_frame_ms", "row", "edge", "band", "rise_rows",
+                 "strength", "quality", "flags"]
 
 
 @dataclass(frozen=True)
@@ -175,25 +175,29 @@ class EventDetector:
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
-        """Locate the edges of a finished band (:func:`_local_edge`) and record them."""
+        """Locate the edges of a finished band (:func:`_local_edge`) and record them; a band
+        that darkens rows without staying dark (a passing shadow) is not an event."""
         first, last = event.segments[0], event.segments[-1]
+        if kind == "pulse" and first.sign < 0:
+            return
         plateau = float(np.median(np.concatenate([s.change[s.start:s.stop] for s in event.segments])))
         window = max(6, self.height // 40)
-        leading = _local_edge(_rising_crossing, first, plateau, window, kind)
-        trailing = (_local_edge(_falling_crossing, last, plateau, window, kind)
-                    if trailing_visible else None)
+        leading, leading_rise = _local_edge(_rising_crossing, first, plateau, window, kind)
+        trailing, trailing_rise = (_local_edge(_falling_crossing, last, plateau, window, kind)
+                                   if trailing_visible else (None, np.nan))
         flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
         flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
         flags |= {"leading_hidden"} if leading is None else set()
         flags |= {"trailing_hidden"} if trailing is None and kind == "pulse" else set()
-        for edge, segment, row in (("leading", first, leading), ("trailing", last, trailing)):
+        edges = (("leading", first, leading, leading_rise), ("trailing", last, trailing, trailing_rise))
+        for edge, segment, row, rise in edges:
             if row is None:
                 continue
             stored = self.height - 1 - row if self.settings.flipped else row
             self.events.append({
                 "camera": self.camera, "event": self._n_events, "frame": segment.frame,
                 "t_frame_ms": segment.t_frame_ms, "row": stored, "edge": edge, "band": kind,
-                "strength": first.sign * plateau, "quality": plateau / first.sigma,
+                "rise_rows": rise, "strength": first.sign * plateau, "quality": plateau / first.sigma,
                 "flags": "|".join(sorted(flags))})
         self._n_events += 1
 
@@ -212,23 +216,25 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
-def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: str) -> float | None:
-    """Sub-row edge of a band: its half-rise point for a pulse, the foot of its ramp for a step.
+def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
+                kind: str) -> tuple[float | None, float]:
+    """Sub-row edge of a band and its rise (rows from 25 % to 75 % of the local plateau).
 
+    The edge is the half-rise point for a pulse, the foot of the ramp for a step.
     Brightness, saturation and scene vary along a band, so the level is the band's local
     plateau: the median change of ``window`` rows that start where the ramp has settled, five
     times the 10 %-to-50 % rise length past the edge (an exponential ramp is then within 3 %
     of its plateau). A pulse's half-rise point marks the same instant in every camera. A step
     ramps linearly over one exposure, so its half-rise point moves with the exposure; its
     foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
-    switch.
+    switch. Returns (None, nan) where the edge is not visible.
     """
     level = plateau
     for _ in range(2):
         row = crossing(segment.change, 0.5 * level, segment.start, segment.stop)
         foot = crossing(segment.change, 0.1 * level, segment.start, segment.stop)
         if row is None or foot is None:
-            return row
+            return row, np.nan
         if row > foot:
             settle = min(int(np.ceil(row + 5 * (row - foot))), segment.stop - window)
             inside = segment.change[max(settle, int(row) + 1):settle + window]
@@ -238,13 +244,12 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
         if not np.isfinite(inside).any():
             break
         level = float(np.nanmedian(inside))
-    if kind == "pulse":
-        return row
     quarter = crossing(segment.change, 0.25 * level, segment.start, segment.stop)
     three_quarters = crossing(segment.change, 0.75 * level, segment.start, segment.stop)
     if quarter is None or three_quarters is None:
-        return None
-    return row - (three_quarters - quarter)
+        return (row if kind == "pulse" else None), np.nan
+    rise = abs(three_quarters - quarter)
+    return (row if kind == "pulse" else row - (three_quarters - quarter)), rise
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.
