@@ -19,6 +19,9 @@ from flashsync.errors import FlashsyncError
 
 #: Largest clock drift considered, as a fraction (100 ppm).
 MAX_DRIFT = 100e-6
+#: Another shift that explains this fraction of the best one's matches makes a pair
+#: ambiguous (a periodic strobe fits at every multiple of its period).
+RIVAL_FRACTION = 0.7
 
 
 @dataclass(frozen=True)
@@ -26,7 +29,7 @@ class PairAlignment:
     """Affine map ``t_a ≈ alpha * t_b + beta`` between two cameras' event times (ms).
 
     ``matches`` has shape (n, 2): indices into camera a's and camera b's events;
-    ``ambiguous`` is True when another shift explained as many events.
+    ``ambiguous`` is True when another shift explained nearly as many events.
     """
 
     alpha: float
@@ -67,7 +70,7 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
     if not results:
         return None
     best = results[0]
-    rivals = [r for r in results[1:] if len(r.matches) == len(best.matches)
+    rivals = [r for r in results[1:] if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches))
               and abs(r.beta - best.beta) > tolerance_ms]
     return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals))
 
@@ -101,7 +104,7 @@ def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms
         a, b = times_a[matches[:, 0]], times_b[matches[:, 1]]
         if np.ptp(b) > 0:
             slope, intercept = np.polyfit(b - b.mean(), a, 1)
-            if abs(slope - 1.0) <= MAX_DRIFT:
+            if abs(slope - 1.0) <= 1.5 * MAX_DRIFT:
                 alpha, beta = slope, intercept - slope * b.mean()
                 continue
         alpha, beta = 1.0, float(np.mean(a - b))

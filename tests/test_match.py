@@ -1,0 +1,96 @@
+"""Coarse alignment from event patterns alone, on the hard cases: missing and spurious
+events, different frame rates, drift up to 100 ppm, offsets of minutes."""
+
+import numpy as np
+import pytest
+
+from flashsync.match import align_pair, group_flashes
+
+TOLERANCE_MS = 10.0
+
+
+def flashes(rng, n=40, span_ms=20 * 60_000.0):
+    """Irregular flash instants (as a photographer fires them), ms."""
+    return np.sort(rng.uniform(0, span_ms, n))
+
+
+def seen_by(rng, tau, alpha, beta, frame_ms, miss=0.0, spurious=0):
+    """A camera's approximate event times on its own clock for true instants ``tau``:
+    global = alpha * t + beta, each time off by up to 10 % of a frame (the nominal time per
+    row is a few per cent off), some flashes missed and some spurious events added.
+    Returns (times, index of each true flash or -1)."""
+    keep = rng.uniform(size=len(tau)) >= miss
+    times = (tau[keep] - beta) / alpha + rng.uniform(-0.1, 0.1, keep.sum()) * frame_ms
+    extra = rng.uniform(times.min(), times.max(), spurious)
+    truth = np.concatenate([np.flatnonzero(keep), -np.ones(spurious, int)])
+    order = np.argsort(np.concatenate([times, extra]))
+    return np.concatenate([times, extra])[order], truth[order]
+
+
+def correct_fraction(alignment, truth_a, truth_b):
+    pairs = [(truth_a[i], truth_b[j]) for i, j in alignment.matches]
+    return np.mean([a == b and a >= 0 for a, b in pairs]), len(pairs)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_missing_and_spurious_events_on_both_sides(seed):
+    rng = np.random.default_rng(seed)
+    tau = flashes(rng)
+    a, truth_a = seen_by(rng, tau, 1.0, 0.0, 40.0, miss=0.2, spurious=8)
+    b, truth_b = seen_by(rng, tau, 1 + 35e-6, -183_456.0, 33.3, miss=0.2, spurious=8)
+    alignment = align_pair(a, b, TOLERANCE_MS)
+    fraction, n = correct_fraction(alignment, truth_a, truth_b)
+    assert fraction == 1.0 and n >= 0.5 * len(tau)
+    assert not alignment.ambiguous
+
+
+@pytest.mark.parametrize("drift", [-100e-6, 100e-6])
+def test_drift_of_100_ppm_over_20_minutes(drift):
+    rng = np.random.default_rng(7)
+    tau = flashes(rng, n=30)
+    a, truth_a = seen_by(rng, tau, 1.0, 0.0, 40.0)
+    b, truth_b = seen_by(rng, tau, 1 + drift, 300_000.0, 20.0)   # 5 minutes offset, 50 fps
+    alignment = align_pair(a, b, TOLERANCE_MS)
+    fraction, n = correct_fraction(alignment, truth_a, truth_b)
+    assert fraction == 1.0 and n == len(tau)
+    assert alignment.alpha == pytest.approx(1 + drift, abs=2e-6)
+
+
+def test_periodic_flashes_are_ambiguous_not_guessed():
+    tau = np.arange(10) * 2000.0 + 500.0                     # a strobe: every shift fits
+    alignment = align_pair(tau, tau - 10_000.0, TOLERANCE_MS)
+    assert alignment.ambiguous
+
+
+def test_anchor_picks_the_shift():
+    tau = np.arange(10) * 2000.0 + 500.0
+    alignment = align_pair(tau, tau - 10_000.0, TOLERANCE_MS, anchor=(3, 0))
+    assert alignment.beta == pytest.approx(10_000.0 + 3 * 2000.0)
+    assert not alignment.ambiguous
+
+
+def test_no_common_flashes():
+    rng = np.random.default_rng(3)
+    a = flashes(rng, 10, 60_000.0)
+    b = flashes(rng, 10, 60_000.0) + 1e6
+    alignment = align_pair(a, b, TOLERANCE_MS)
+    assert alignment is None or len(alignment.matches) <= 3
+
+
+def test_flashes_grouped_across_cameras_that_share_none_with_the_reference():
+    from flashsync.match import PairAlignment
+    # camera a sees flashes 0-4, c sees 5-9, b sees all: a and c are tied through b
+    ab = PairAlignment(1.0, 0.0, np.array([[i, i] for i in range(5)]), 0.0, False)
+    bc = PairAlignment(1.0, 0.0, np.array([[5 + i, i] for i in range(5)]), 0.0, False)
+    groups = group_flashes({"a": 5, "b": 10, "c": 5}, {("a", "b"): ab, ("b", "c"): bc})
+    assert groups[("a", 2)] == groups[("b", 2)]
+    assert groups[("c", 1)] == groups[("b", 6)]
+    assert len(set(groups.values())) == 10
+
+
+def test_a_bad_pair_cannot_chain_two_events_of_one_camera():
+    from flashsync.match import PairAlignment
+    good = PairAlignment(1.0, 0.0, np.array([[0, 0], [1, 1]]), 0.0, False)
+    bad = PairAlignment(1.0, 0.0, np.array([[0, 1]]), 0.0, False)     # a0 with b1: conflicts
+    groups = group_flashes({"a": 2, "b": 2}, {("a", "b"): good, ("b", "a"): bad})
+    assert groups[("a", 0)] == groups[("b", 0)] != groups[("b", 1)]
