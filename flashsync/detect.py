@@ -30,6 +30,9 @@ from flashsync.errors import FlashsyncError
 from flashsync.profiles import DEFAULT_COLUMN_STEP, iter_profiles, probe_video
 from flashsync.timestamps import check_timestamps
 
+#: Profile level (fraction of white) of a row whose pixels are clipped.
+SATURATED = 0.98
+
 EVENT_COLUMNS = ["camera", "event", "frame", "t_frame_ms", "row", "edge", "band", "rise_rows",
                  "strength", "quality", "flags"]
 
@@ -49,7 +52,8 @@ class DetectorSettings:
     min_rows : int
         Shortest band, rows; at least 1 % of the frame height is used.
     min_level : float
-        Darkest row (DN above black) whose relative change is measured; darker rows are blind.
+        Darkest row (fraction of white above black) whose relative change is measured;
+        darker rows are blind.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
     flipped : bool
@@ -60,7 +64,7 @@ class DetectorSettings:
     k_sigma: float = 8.0
     min_change: float = 0.03
     min_rows: int = 3
-    min_level: float = 8.0
+    min_level: float = 0.035
     step_frames: int = 2
     flipped: bool = False
 
@@ -112,15 +116,21 @@ class EventDetector:
         self.events: list[dict] = []
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
-        """Process one frame's row profile (shape (height,), stored rows)."""
-        profile = np.asarray(profile, dtype=np.float32)
+        """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
+
+        The relative change of a row is the median over its column blocks: a flash changes
+        every block alike, an object that fills one block changes only that one.
+        """
+        profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
         readout = profile[::-1] if self.settings.flipped else profile
         if not self._history:
             self._history.append(readout)
             return
         baseline = np.median(np.stack(self._history), axis=0)
         lit = baseline >= self.settings.min_level
-        change = np.where(lit, (readout - baseline) / np.where(lit, baseline, 1.0), np.nan)
+        blocks = np.where(lit, (readout - baseline) / np.where(lit, baseline, 1.0), np.nan)
+        with np.errstate(all="ignore"):
+            change = np.nanmedian(blocks, axis=1) if blocks.shape[1] > 1 else blocks[:, 0]
         self._noise.append(1.4826 * float(np.nanmedian(np.abs(np.diff(change)))) / np.sqrt(2.0))
         sigma = max(float(np.median(self._noise)), 1e-4)
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
@@ -130,7 +140,7 @@ class EventDetector:
             for start, stop in _runs(signed > threshold, gap=2):
                 if stop - start >= max(self.settings.min_rows, self.height // 100):
                     segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
-                                             bool(np.max(readout[start:stop]) >= 250), sigma))
+                                             bool(np.max(readout[start:stop]) >= SATURATED), sigma))
         self._history.append(readout)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
 

@@ -83,7 +83,7 @@ class Solution:
     """Result of :func:`solve_clocks`.
 
     ``residual_ms`` and ``inlier`` have one entry per event then one per duration;
-    ``flash_ms`` the global time of each flash index (NaN for an index no event names);
+    ``flash_ms`` the global time of each flash index (NaN for an index no inlier event names);
     ``sigma_ms`` is the robust residual scale.
     """
 
@@ -130,7 +130,9 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
     covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
-    flash_ms[system.flash_ids] = x[system.flash_columns]
+    seen = np.bincount(system.flash_index[inlier[: len(system.flash_index)]],
+                       minlength=len(system.flash_ids)) > 0
+    flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
     return Solution([system.camera_solution(x, covariance, c) for c in range(n_cameras)],
                     flash_ms, residual, inlier, sigma)
 
@@ -154,6 +156,7 @@ class _System:
         t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
         q = np.asarray(events.q, dtype=np.float64)
         self.flash_ids, flash = np.unique(np.asarray(events.flash, dtype=np.int64), return_inverse=True)
+        self.flash_index = flash
         self.mid_ms = np.array([np.median(t_frame[camera == c]) if np.any(camera == c) else 0.0
                                 for c in range(n_cameras)])
         self.param_columns = np.full((n_cameras, 3), -1)
@@ -205,9 +208,17 @@ class _System:
         self.matrix = matrix @ sparse.diags(self.column_scale)
 
     def _normal(self, weights: np.ndarray):
+        """Normal equations for equation ``weights``; a flash whose every observation has
+        weight 0 (all rejected) gets a unit diagonal, so it solves to 0 instead of making
+        the system singular (its time is reported as NaN)."""
         all_weights = np.concatenate([weights, np.ones(self.n_priors)])
         weighted = sparse.diags(all_weights) @ self.matrix
-        return (self.matrix.T @ weighted).tocsc(), self.matrix.T @ (all_weights * self.rhs)
+        normal = (self.matrix.T @ weighted).tocsc()
+        orphans = np.zeros(self.n_unknowns, dtype=bool)
+        orphans[self.flash_columns] = normal.diagonal()[self.flash_columns] == 0
+        if orphans.any():
+            normal = (normal + sparse.diags(orphans.astype(np.float64))).tocsc()
+        return normal, self.matrix.T @ (all_weights * self.rhs)
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
         normal, right = self._normal(weights)

@@ -1,0 +1,187 @@
+"""The catalogue of effects the discrepancy workflow can add to the time model.
+
+The plainest model (every effect off) predicts the time of each band edge of camera ``c``
+in frame ``f`` at readout row ``q`` as::
+
+    t0_c + f * P_c + q * P_c / H_c  =  tau_k - beta_c + [trailing] * E
+
+``P_c`` is the camera's median frame step (its nominal frame period), ``H_c`` its image
+height, ``tau_k`` the flash's global time, ``beta_c`` the camera's shift (0 for the
+reference) and ``E`` one exposure shared by all cameras (a trailing edge is the row whose
+exposure *starts* at the flash, DESIGN.md). Its frame clock ``t0_c + f * P_c`` also predicts
+the stamps.
+
+An effect either adds columns to this linear model (one parameter per camera it applies to)
+or changes how its quantities are computed (frame numbers, frame period, readout rows):
+
+======================  ==============================================  ============================
+effect                  residual structure it explains                  how the model changes
+======================  ==============================================  ============================
+dropped_frames          steps at the frame gaps (stamps and edges)      frame slots counted from the
+                                                                        stamp gaps, not the index
+frame_clock             stamps off the nominal grid: a sawtooth locked  frame clock fitted to all
+                        to the stamp grid or jitter, and the period     stamps (least squares), not
+                        error it leaves in the median step              the median step
+flipped                 band edges on the wrong side: a row trend of    readout rows reversed, edges
+                        twice the time per row                          swapped
+row_time                a trend against the readout row                 + time per row - nominal
+drift                   a trend against time                            + alpha - 1
+drift_rate              a curvature against time (implies drift)        + half the change of drift
+exposure                a constant gap between the leading and trailing + exposure - reference's
+                        edges' residuals: mid-exposure times differ
+======================  ==============================================  ============================
+
+Flash decay is not in the catalogue: the detector marks each edge at half of the band's
+own rise, the same instant of the flash in every camera whatever its decay, so the decay
+leaves no event residual, and the detections keep no band profiles to compare shapes with.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from flashsync.diagnose.fit import Fit
+
+DROPPED_FRAMES = "dropped_frames"
+FRAME_CLOCK = "frame_clock"
+FLIPPED = "flipped"
+ROW_TIME = "row_time"
+DRIFT = "drift"
+DRIFT_RATE = "drift_rate"
+EXPOSURE = "exposure"
+
+#: Scopes: an effect applies to every camera, or to every camera but the reference (whose
+#: clock and exposure define the global ones).
+EVERY_CAMERA = "every camera"
+OTHER_CAMERAS = "cameras but the reference"
+
+
+@dataclass(frozen=True)
+class Features:
+    """The model's quantities for each edge, arrays of shape (n_edges,).
+
+    Attributes
+    ----------
+    camera : int array
+        Camera index.
+    t_ms : float array
+        Model frame time minus the camera's mid time, ms.
+    q : float array
+        Readout row under the model's readout direction.
+    trailing : bool array
+        Trailing edge under the model's readout direction.
+    """
+
+    camera: np.ndarray
+    t_ms: np.ndarray
+    q: np.ndarray
+    trailing: np.ndarray
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One effect of the catalogue.
+
+    Attributes
+    ----------
+    name : str
+        Key, e.g. ``"drift"``.
+    title : str
+        Words for reports, e.g. ``"clock drift"``.
+    explains : str
+        The residual structure it explains.
+    changes : str
+        How it changes the model.
+    scope : str
+        :data:`EVERY_CAMERA` or :data:`OTHER_CAMERAS`.
+    describe : callable
+        ``describe(fit, camera)``: the effect's estimate in a fitted model, one phrase.
+    column : callable or None
+        ``column(features)``: the design column it adds for a camera (before restricting it
+        to that camera's edges), scaled so that its coefficient is the parameter; None for
+        an effect that changes how the model's quantities are computed.
+    implies : tuple of str
+        Effects added with it.
+    """
+
+    name: str
+    title: str
+    explains: str
+    changes: str
+    scope: str
+    describe: Callable[[Fit, int], str]
+    column: Callable[[Features], np.ndarray] | None = None
+    implies: tuple[str, ...] = ()
+
+
+def _describe_drops(fit: Fit, camera: int) -> str:
+    return f"{fit.clocks[camera].missing} frame slots without a frame"
+
+
+def _describe_frame_clock(fit: Fit, camera: int) -> str:
+    clock = fit.clocks[camera]
+    return (f"frame period {clock.period_ms:.4f} ms (median step {clock.median_step_ms:.4f}), "
+            f"stamps scatter {fit.stamp_rms_ms[camera]:.3f} ms RMS about it")
+
+
+def _describe_flip(fit: Fit, camera: int) -> str:
+    return "reads bottom-up" if fit.flipped[camera] else "reads top-down"
+
+
+def _describe_row_time(fit: Fit, camera: int) -> str:
+    nominal = fit.nominal_row_time_ms(camera)
+    return f"time per row {nominal + fit.coefficient(ROW_TIME, camera):.5f} ms (nominal {nominal:.5f})"
+
+
+def _describe_drift(fit: Fit, camera: int) -> str:
+    return f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm"
+
+
+def _describe_drift_rate(fit: Fit, camera: int) -> str:
+    return (f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm at mid time, changing "
+            f"{2e9 * fit.coefficient(DRIFT_RATE, camera):.3f} ppm/s")
+
+
+def _describe_exposure(fit: Fit, camera: int) -> str:
+    return (f"exposure {fit.exposure_ms(camera):.3f} ms vs {fit.exposure_ms(fit.reference):.3f} ms "
+            "on the reference")
+
+
+CATALOGUE: dict[str, Effect] = {effect.name: effect for effect in (
+    Effect(DROPPED_FRAMES, "dropped frames",
+           "steps of whole frame periods at the frame gaps, in stamps and edges",
+           "frame slots counted from the stamp gaps (round(gap / median step)) instead of the "
+           "frame index", EVERY_CAMERA, _describe_drops),
+    Effect(FRAME_CLOCK, "timestamp quantisation / jitter",
+           "stamps scattered about a steady clock (a sawtooth locked to the stamp grid, or "
+           "jitter) and the period error that leaves in the median step",
+           "frame clock offset and period from a least-squares fit to all stamps instead of the "
+           "median step", EVERY_CAMERA, _describe_frame_clock),
+    Effect(FLIPPED, "flipped readout",
+           "band edges on the wrong side: a trend against the row of twice the time per row "
+           "and a gap between leading and trailing edges",
+           "readout rows reversed (q = height - 1 - row), leading and trailing edges swapped",
+           EVERY_CAMERA, _describe_flip),
+    Effect(ROW_TIME, "time per row",
+           "a trend of the residuals against the readout row",
+           "adds the camera's time per row minus the nominal frame period / height, ms per row",
+           EVERY_CAMERA, _describe_row_time, column=lambda f: -f.q),
+    Effect(DRIFT, "clock drift",
+           "a trend of the residuals against time",
+           "adds the camera's clock rate minus one (alpha - 1) about its mid time",
+           OTHER_CAMERAS, _describe_drift, column=lambda f: -f.t_ms),
+    Effect(DRIFT_RATE, "drift-rate change",
+           "a curvature of the residuals against time",
+           "adds half the rate of change of the drift (per ms), with the drift itself",
+           OTHER_CAMERAS, _describe_drift_rate, column=lambda f: -f.t_ms**2, implies=(DRIFT,)),
+    Effect(EXPOSURE, "exposure",
+           "a constant gap between a camera's trailing and leading edges' residuals: its "
+           "mid-exposure times are off the reference's",
+           "adds the camera's exposure minus the reference's (on its trailing edges), ms",
+           OTHER_CAMERAS, _describe_exposure, column=lambda f: f.trailing.astype(np.float64)),
+)}

@@ -1,0 +1,234 @@
+"""What the videos measured: each camera's frame stamps and the band edges matched across cameras.
+
+A band (one detected pulse event with both edges visible and unsaturated) gives two edges:
+the leading edge is the row whose exposure *ends* at the flash, the trailing edge the row
+whose exposure *starts* there (DESIGN.md, time convention). Bands are paired across cameras
+by their approximate time on each camera's own clock (stamp + row x frame step / height)
+with :func:`flashsync.match.align_pair` and :func:`flashsync.match.group_flashes`, with a
+tolerance of one frame period: loose enough for every effect of the catalogue (an
+upside-down camera misplaces a band by less than a frame, a dropped frame or a clock drift
+does not move a stamp). Nothing here depends on the model under test.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from flashsync.detect import CameraDetection
+from flashsync.errors import FlashsyncError
+from flashsync.match import align_pair, group_flashes
+
+#: Fewest flashes two cameras must share for their pairing to count.
+MIN_SHARED_BANDS = 3
+
+
+@dataclass(frozen=True)
+class Camera:
+    """One camera as measured.
+
+    Attributes
+    ----------
+    name : str
+        Camera name (video file stem).
+    stamps_ms : ndarray of shape (n_frames,)
+        Container stamps of the decoded frames, ms.
+    height : int
+        Stored image height, rows.
+    flipped : bool
+        Readout direction the detection was told (True: bottom-up).
+    """
+
+    name: str
+    stamps_ms: np.ndarray
+    height: int
+    flipped: bool
+
+    @property
+    def median_step_ms(self) -> float:
+        """The most common frame interval, ms: the nominal frame period."""
+        return float(np.median(np.diff(self.stamps_ms)))
+
+
+@dataclass(frozen=True)
+class Edges:
+    """Matched band edges, arrays of shape (n_edges,).
+
+    Attributes
+    ----------
+    camera : int array
+        Index into :attr:`Measurement.cameras`.
+    flash : int array
+        Flash number, 0..n_flashes-1; every flash is seen by at least two cameras.
+    frame : int array
+        Decoded frame index of the edge.
+    row : float array
+        Stored-image row of the edge (sub-row).
+    trailing : bool array
+        Trailing edge in the readout direction the detection was told.
+    """
+
+    camera: np.ndarray
+    flash: np.ndarray
+    frame: np.ndarray
+    row: np.ndarray
+    trailing: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.camera)
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """Everything the workflow compares the model with.
+
+    Attributes
+    ----------
+    cameras : tuple of Camera
+        Cameras tied to the reference by shared flashes, in input order.
+    reference : int
+        Index of the reference camera (its clock is the global clock).
+    edges : Edges
+    noise_ms : float
+        Expected noise of one edge time, ms, from the scatter of band durations within each
+        camera (bands with both edges in one frame: their length in rows is the exposure
+        over the time per row, the same for every band, whatever the clocks); NaN without
+        such bands.
+    warnings : tuple of str
+        Cameras left out and why.
+    """
+
+    cameras: tuple[Camera, ...]
+    reference: int
+    edges: Edges
+    noise_ms: float
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def n_flashes(self) -> int:
+        return int(self.edges.flash.max()) + 1
+
+
+def measure(detections: Sequence[CameraDetection], reference: str | None = None) -> Measurement:
+    """Pair the bands of all cameras into flashes and collect their edges.
+
+    Parameters
+    ----------
+    detections : one per camera, from :func:`flashsync.pipeline.detect_videos`.
+    reference : camera whose clock is the global clock; default the first.
+
+    Raises
+    ------
+    FlashsyncError
+        Fewer than two cameras, an unknown reference, or no camera sharing at least
+        :data:`MIN_SHARED_BANDS` flashes with the reference.
+    """
+    names = [d.camera for d in detections]
+    if len(names) < 2:
+        raise FlashsyncError(f"diagnose needs videos of two or more cameras, got {len(names)}; "
+                             "give every camera's video")
+    reference = reference or names[0]
+    if reference not in names:
+        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
+    bands = {d.camera: _bands(d) for d in detections}
+    approximate = {d.camera: _band_times(d, bands[d.camera]) for d in detections}
+    tolerance = max(float(np.median(np.diff(d.frame_times_ms))) for d in detections)
+    alignments = {}
+    for i, name_a in enumerate(names):
+        for name_b in names[i + 1:]:
+            alignment = align_pair(approximate[name_a], approximate[name_b], tolerance)
+            if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
+                    and not alignment.ambiguous):
+                alignments[(name_a, name_b)] = alignment
+    flash_of = group_flashes({name: len(bands[name]) for name in names}, alignments)
+    tied = _tied_to(reference, flash_of)
+    if len(tied) < 2:
+        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_BANDS} clean flash bands with "
+                             f"{reference}; check that the videos overlap in time and saw the same flashes")
+    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} clean flash bands with the "
+                     f"other cameras; left out" for d in detections if d.camera not in tied)
+    kept = [d for d in detections if d.camera in tied]
+    cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
+                           d.flipped) for d in kept)
+    edges = _edges(kept, bands, flash_of)
+    return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
+                       _edge_noise_ms(cameras, [bands[c.name] for c in cameras]), warnings)
+
+
+def readout_rows(row: np.ndarray, height: int, flipped: bool) -> np.ndarray:
+    """Readout index (0 = read first) of stored-image rows."""
+    return height - 1 - row if flipped else row
+
+
+def _bands(detection: CameraDetection) -> pd.DataFrame:
+    """Pulse bands with both edges visible and unsaturated, one row per band:
+    ``frame_leading, row_leading, frame_trailing, row_trailing``."""
+    events = detection.events
+    clean = events[(events["band"] == "pulse")
+                   & ~events["flags"].str.contains("hidden|saturated", regex=True)]
+    leading = clean[clean["edge"] == "leading"].set_index("event")[["frame", "row"]]
+    trailing = clean[clean["edge"] == "trailing"].set_index("event")[["frame", "row"]]
+    both = leading.join(trailing, lsuffix="_leading", rsuffix="_trailing", how="inner")
+    return both.astype({"frame_leading": np.int64, "frame_trailing": np.int64}).reset_index(drop=True)
+
+
+def _band_times(detection: CameraDetection, bands: pd.DataFrame) -> np.ndarray:
+    """Approximate time of each band's middle on the camera's own clock, ms."""
+    stamps = np.asarray(detection.frame_times_ms, dtype=np.float64)
+    row_ms = float(np.median(np.diff(stamps))) / detection.height
+    times = [stamps[bands[f"frame_{edge}"].to_numpy()]
+             + readout_rows(bands[f"row_{edge}"].to_numpy(), detection.height, detection.flipped) * row_ms
+             for edge in ("leading", "trailing")]
+    return 0.5 * (times[0] + times[1])
+
+
+def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
+    """Cameras linked to the reference through chains of shared flashes."""
+    seen_by: dict[int, set[str]] = {}
+    for (camera, _), flash in flash_of.items():
+        seen_by.setdefault(flash, set()).add(camera)
+    tied, grew = {reference}, True
+    while grew:
+        grew = False
+        for group in seen_by.values():
+            if group & tied and not group <= tied:
+                tied |= group
+                grew = True
+    return tied
+
+
+def _edges(detections: list[CameraDetection], bands: dict[str, pd.DataFrame],
+           flash_of: dict[tuple[str, int], int]) -> Edges:
+    """Both edges of every band that belongs to a flash of two or more kept cameras."""
+    rows = []
+    for index, detection in enumerate(detections):
+        for band, values in bands[detection.camera].iterrows():
+            flash = flash_of.get((detection.camera, band))
+            if flash is None:
+                continue
+            for trailing, edge in ((False, "leading"), (True, "trailing")):
+                rows.append((index, flash, int(values[f"frame_{edge}"]), float(values[f"row_{edge}"]),
+                             trailing))
+    table = pd.DataFrame(rows, columns=["camera", "flash", "frame", "row", "trailing"])
+    cameras_seeing = table.groupby("flash")["camera"].transform("nunique")
+    table = table[cameras_seeing >= 2]
+    return Edges(table["camera"].to_numpy(), pd.factorize(table["flash"], sort=True)[0],
+                 table["frame"].to_numpy(), table["row"].to_numpy(dtype=np.float64),
+                 table["trailing"].to_numpy(dtype=bool))
+
+
+def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
+    """Robust std of one edge's time, ms, from the scatter of same-frame band lengths."""
+    deviations = []
+    for camera, camera_bands in zip(cameras, bands):
+        same_frame = camera_bands[camera_bands["frame_leading"] == camera_bands["frame_trailing"]]
+        if len(same_frame) < 3:
+            continue
+        rows = np.abs(same_frame["row_trailing"] - same_frame["row_leading"]).to_numpy()
+        deviations.append((rows - np.median(rows)) * camera.median_step_ms / camera.height)
+    if not deviations:
+        return float("nan")
+    return 1.4826 * float(np.median(np.abs(np.concatenate(deviations)))) / np.sqrt(2.0)
