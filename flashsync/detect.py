@@ -23,11 +23,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
+import numba
 import numpy as np
 import pandas as pd
 
 from flashsync.errors import FlashsyncError
-from flashsync.profiles import DEFAULT_COLUMN_STEP, iter_profiles, probe_video
+from flashsync.profiles import iter_profiles, probe_video
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
@@ -126,11 +127,7 @@ class EventDetector:
         if not self._history:
             self._history.append(readout)
             return
-        baseline = np.median(np.stack(self._history), axis=0)
-        lit = baseline >= self.settings.min_level
-        blocks = np.where(lit, (readout - baseline) / np.where(lit, baseline, 1.0), np.nan)
-        with np.errstate(all="ignore"):
-            change = np.nanmedian(blocks, axis=1) if blocks.shape[1] > 1 else blocks[:, 0]
+        change = _relative_change(np.stack(self._history), readout, self.settings.min_level)
         self._noise.append(1.4826 * float(np.nanmedian(np.abs(np.diff(change)))) / np.sqrt(2.0))
         sigma = max(float(np.median(self._noise)), 1e-4)
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
@@ -210,6 +207,34 @@ class EventDetector:
                 "rise_rows": rise, "strength": first.sign * plateau, "quality": plateau / first.sigma,
                 "flags": "|".join(sorted(flags))})
         self._n_events += 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _relative_change(history, current, min_level):  # pragma: no cover - compiled
+    """Per row: the median over column blocks of ``(current - baseline) / baseline``, with
+    the baseline the per-block median of ``history`` (shape (k, height, blocks)); NaN where
+    fewer than half the blocks are lit (baseline >= ``min_level``). Shape (height,)."""
+    k, height, blocks = history.shape
+    change = np.empty(height, np.float64)
+    column = np.empty(k, np.float64)
+    lit = np.empty(blocks, np.float64)
+    for r in range(height):
+        n_lit = 0
+        for b in range(blocks):
+            for i in range(k):
+                column[i] = history[i, r, b]
+            column.sort()
+            baseline = column[k // 2] if k % 2 else 0.5 * (column[k // 2 - 1] + column[k // 2])
+            if baseline >= min_level:
+                lit[n_lit] = (current[r, b] - baseline) / baseline
+                n_lit += 1
+        if 2 * n_lit < blocks or n_lit == 0:
+            change[r] = np.nan
+        else:
+            values = np.sort(lit[:n_lit])
+            middle = n_lit // 2
+            change[r] = values[middle] if n_lit % 2 else 0.5 * (values[middle - 1] + values[middle])
+    return change
 
 
 def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
@@ -321,7 +346,6 @@ class CameraDetection:
 
 def detect_video(path: str | Path, flipped: bool | None = False,
                  settings: DetectorSettings | None = None,
-                 column_step: int = DEFAULT_COLUMN_STEP,
                  progress: Callable[[int], None] | None = None) -> CameraDetection:
     """Decode a video once and detect its flash events.
 
@@ -331,7 +355,6 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     flipped : the camera reads bottom-up in stored rows (mounted upside down); None: not
         known, events are detected both ways (``events`` top-down, ``alternative`` bottom-up).
     settings : detector tuning; ``flipped`` overrides its field.
-    column_step : columns between samples of a row.
     progress : called with the number of frames decoded since the last call.
 
     Returns
@@ -344,7 +367,7 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction))
                  for direction in directions]
     times = []
-    for frame, (t_ms, profile) in enumerate(iter_profiles(info.path, column_step)):
+    for frame, (t_ms, profile) in enumerate(iter_profiles(info.path)):
         times.append(t_ms)
         for detector in detectors:
             detector.push(frame, t_ms, profile)

@@ -24,6 +24,9 @@ from flashsync.match import align_pair, group_flashes
 
 #: Fewest flashes two cameras must share for their pairing to count.
 MIN_SHARED_BANDS = 3
+#: Bands with an edge this close (rows) to the top or bottom of the image are left out: the
+#: detector sees only part of the edge's ramp and plateau there.
+EDGE_MARGIN_ROWS = 6
 
 
 @dataclass(frozen=True)
@@ -93,10 +96,10 @@ class Measurement:
         Index of the reference camera (its clock is the global clock).
     edges : Edges
     noise_ms : float
-        Expected noise of one edge time, ms, from the scatter of band durations within each
-        camera (bands with both edges in one frame: their length in rows is the exposure
-        over the time per row, the same for every band, whatever the clocks); NaN without
-        such bands.
+        Expected noise of one edge time, ms, from the scatter of band lengths in rows within
+        each camera, whatever the clocks: bands with both edges in one frame are all as long
+        (the exposure over the time per row), and so are bands split across two frames
+        (shorter by the hidden rows); NaN without three bands of a kind.
     warnings : tuple of str
         Cameras left out and why.
     """
@@ -133,29 +136,28 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     reference = reference or names[0]
     if reference not in names:
         raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
-    bands = {d.camera: _bands(d) for d in detections}
-    approximate = {d.camera: _band_times(d, bands[d.camera]) for d in detections}
+    pulses = {d.camera: _pulses(d) for d in detections}
     tolerance = max(float(np.median(np.diff(d.frame_times_ms))) for d in detections)
     alignments = {}
     for i, name_a in enumerate(names):
         for name_b in names[i + 1:]:
-            alignment = align_pair(approximate[name_a], approximate[name_b], tolerance)
+            alignment = align_pair(pulses[name_a]["time_ms"].to_numpy(), pulses[name_b]["time_ms"].to_numpy(),
+                                   tolerance)
             if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
                     and not alignment.ambiguous):
                 alignments[(name_a, name_b)] = alignment
-    flash_of = group_flashes({name: len(bands[name]) for name in names}, alignments)
-    tied = _tied_to(reference, flash_of)
-    if len(tied) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_BANDS} clean flash bands with "
-                             f"{reference}; check that the videos overlap in time and saw the same flashes")
-    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} clean flash bands with the "
-                     f"other cameras; left out" for d in detections if d.camera not in tied)
-    kept = [d for d in detections if d.camera in tied]
+    flash_of = group_flashes({name: len(pulses[name]) for name in names}, alignments)
+    kept = [d for d in detections if d.camera in _tied_to(reference, flash_of)]
+    if len(kept) < 2:
+        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
+                             "check that the videos overlap in time and saw the same flashes")
+    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other "
+                     "cameras; left out" for d in detections if d not in kept)
     cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
                            d.flipped) for d in kept)
-    edges = _edges(kept, bands, flash_of)
-    return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
-                       _edge_noise_ms(cameras, [bands[c.name] for c in cameras]), warnings)
+    bands = [pulses[d.camera][pulses[d.camera]["clean"]] for d in kept]
+    return Measurement(cameras, [c.name for c in cameras].index(reference), _edges(bands, flash_of, cameras),
+                       _edge_noise_ms(cameras, bands), warnings)
 
 
 def readout_rows(row: np.ndarray, height: int, flipped: bool) -> np.ndarray:
@@ -163,26 +165,24 @@ def readout_rows(row: np.ndarray, height: int, flipped: bool) -> np.ndarray:
     return height - 1 - row if flipped else row
 
 
-def _bands(detection: CameraDetection) -> pd.DataFrame:
-    """Pulse bands with both edges visible and unsaturated, one row per band:
-    ``frame_leading, row_leading, frame_trailing, row_trailing``."""
-    events = detection.events
-    clean = events[(events["band"] == "pulse")
-                   & ~events["flags"].str.contains("hidden|saturated", regex=True)]
-    leading = clean[clean["edge"] == "leading"].set_index("event")[["frame", "row"]]
-    trailing = clean[clean["edge"] == "trailing"].set_index("event")[["frame", "row"]]
-    both = leading.join(trailing, lsuffix="_leading", rsuffix="_trailing", how="inner")
-    return both.astype({"frame_leading": np.int64, "frame_trailing": np.int64}).reset_index(drop=True)
-
-
-def _band_times(detection: CameraDetection, bands: pd.DataFrame) -> np.ndarray:
-    """Approximate time of each band's middle on the camera's own clock, ms."""
+def _pulses(detection: CameraDetection) -> pd.DataFrame:
+    """The camera's pulse events, one row each: ``time_ms``, its approximate time on the
+    camera's own clock (mean of its visible edges' stamp + readout row x frame step /
+    height), ``frame_leading, row_leading, frame_trailing, row_trailing`` (NaN where hidden)
+    and ``clean``: both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image."""
+    events = detection.events[detection.events["band"] == "pulse"]
     stamps = np.asarray(detection.frame_times_ms, dtype=np.float64)
     row_ms = float(np.median(np.diff(stamps))) / detection.height
-    times = [stamps[bands[f"frame_{edge}"].to_numpy()]
-             + readout_rows(bands[f"row_{edge}"].to_numpy(), detection.height, detection.flipped) * row_ms
-             for edge in ("leading", "trailing")]
-    return 0.5 * (times[0] + times[1])
+    q = readout_rows(events["row"].to_numpy(dtype=np.float64), detection.height, detection.flipped)
+    time_ms = pd.Series(stamps[events["frame"].to_numpy(dtype=np.int64)] + q * row_ms, index=events.index)
+    pulses = events.pivot(index="event", columns="edge", values=["frame", "row"])
+    pulses.columns = [f"{value}_{edge}" for value, edge in pulses.columns]
+    pulses = pulses.reindex(columns=["frame_leading", "row_leading", "frame_trailing", "row_trailing"])
+    inside = events["row"].between(EDGE_MARGIN_ROWS, detection.height - 1 - EDGE_MARGIN_ROWS)
+    counts = inside.groupby(events["event"]).agg(["sum", "size"])
+    pulses["clean"] = (counts["sum"] == 2) & (counts["size"] == 2)
+    pulses["time_ms"] = time_ms.groupby(events["event"]).mean()
+    return pulses.reset_index(drop=True)
 
 
 def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
@@ -200,13 +200,13 @@ def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
     return tied
 
 
-def _edges(detections: list[CameraDetection], bands: dict[str, pd.DataFrame],
-           flash_of: dict[tuple[str, int], int]) -> Edges:
-    """Both edges of every band that belongs to a flash of two or more kept cameras."""
+def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
+           cameras: tuple[Camera, ...]) -> Edges:
+    """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
     rows = []
-    for index, detection in enumerate(detections):
-        for band, values in bands[detection.camera].iterrows():
-            flash = flash_of.get((detection.camera, band))
+    for index, (camera, camera_bands) in enumerate(zip(cameras, bands)):
+        for band, values in camera_bands.iterrows():
+            flash = flash_of.get((camera.name, band))
             if flash is None:
                 continue
             for trailing, edge in ((False, "leading"), (True, "trailing")):
@@ -221,14 +221,15 @@ def _edges(detections: list[CameraDetection], bands: dict[str, pd.DataFrame],
 
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
-    """Robust std of one edge's time, ms, from the scatter of same-frame band lengths."""
+    """Robust std of one edge's time, ms, from the scatter of band lengths (rows) among
+    the bands of one camera that span the same number of frames."""
     deviations = []
     for camera, camera_bands in zip(cameras, bands):
-        same_frame = camera_bands[camera_bands["frame_leading"] == camera_bands["frame_trailing"]]
-        if len(same_frame) < 3:
-            continue
-        rows = np.abs(same_frame["row_trailing"] - same_frame["row_leading"]).to_numpy()
-        deviations.append((rows - np.median(rows)) * camera.median_step_ms / camera.height)
+        frames = camera_bands["frame_trailing"] - camera_bands["frame_leading"]
+        for _, kind in camera_bands.groupby(frames):
+            if len(kind) >= 3:
+                rows = (kind["row_trailing"] - kind["row_leading"]).to_numpy()
+                deviations.append((rows - np.median(rows)) * camera.median_step_ms / camera.height)
     if not deviations:
         return float("nan")
     return 1.4826 * float(np.median(np.abs(np.concatenate(deviations)))) / np.sqrt(2.0)

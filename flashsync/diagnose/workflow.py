@@ -22,9 +22,10 @@ from flashsync.errors import FlashsyncError
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
-#: Residuals are consistent with noise when their RMS is within this factor of the expected.
+#: Residuals are consistent with noise when their robust std is within this factor of the
+#: edge noise the band lengths show.
 NOISE_FACTOR = 1.5
-#: Edges beyond this many robust sigmas are outliers, left out of the noise comparison.
+#: Edges beyond this many robust stds are counted as outliers.
 OUTLIER_SIGMA = 5.0
 
 
@@ -77,14 +78,16 @@ class Diagnosis:
         Effects added, in order.
     initial_rms_ms, final_rms_ms : float
         RMS of the edge residuals of the plain and the final model, ms.
-    inlier_rms_ms : float
-        Final RMS without the outlying edges, ms.
-    outliers : int
-        Final edges beyond :data:`OUTLIER_SIGMA` robust sigmas.
+    final_std_ms : float
+        Robust std of one edge's residual in the final model (1.4826 x median absolute
+        residual, corrected for the parameters fitted), ms.
     expected_ms : float
-        RMS the measurement noise alone would leave, ms (NaN when unknown).
+        Std of one edge's time from the band lengths alone (:attr:`Measurement.noise_ms`),
+        ms; NaN when unknown.
     consistent : bool
-        ``inlier_rms_ms <= NOISE_FACTOR * expected_ms``.
+        ``final_std_ms <= NOISE_FACTOR * expected_ms``.
+    outliers : int
+        Final edges beyond :data:`OUTLIER_SIGMA` robust stds.
     model : list of dict
         Final model per camera (readout, frame clock, drift, shift, time per row, exposure).
     residuals : dict
@@ -100,10 +103,10 @@ class Diagnosis:
     steps: list[Step]
     initial_rms_ms: float
     final_rms_ms: float
-    inlier_rms_ms: float
-    outliers: int
+    final_std_ms: float
     expected_ms: float
     consistent: bool
+    outliers: int
     model: list[dict]
     residuals: dict[str, list[dict]]
     warnings: list[str] = field(default_factory=list)
@@ -111,15 +114,15 @@ class Diagnosis:
     @property
     def verdict(self) -> str:
         """One line on the final residuals against the noise."""
-        left_out = f", {self.outliers} outlying edges left out" if self.outliers else ""
+        numbers = f"RMS {self.final_rms_ms:.4f} ms, robust std {self.final_std_ms:.4f} ms"
+        numbers += f", {self.outliers} outlying edges" if self.outliers else ""
         if not np.isfinite(self.expected_ms):
-            return (f"residuals RMS {self.inlier_rms_ms:.4f} ms{left_out}; noise unknown (no band "
-                    "with both edges in one frame)")
-        numbers = f"(RMS {self.inlier_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms{left_out})"
+            return f"residuals {numbers}; noise unknown (fewer than three bands of a kind per camera)"
+        numbers += f"; expected {self.expected_ms:.4f} ms"
         if self.consistent:
-            return f"residuals consistent with noise {numbers}"
-        return (f"residuals exceed the noise {numbers}: an effect outside the catalogue remains, "
-                "or the model cannot separate the ones it has")
+            return f"residuals consistent with noise ({numbers})"
+        return (f"residuals exceed the noise ({numbers}): an effect outside the catalogue "
+                "remains, or the measurement cannot separate the ones it has")
 
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence and the verdict."""
@@ -190,18 +193,15 @@ def _with_implied(term: Term) -> frozenset[Term]:
 
 def _diagnosis(measurement: Measurement, plain: Fit, final: Fit, steps: list[Step]) -> Diagnosis:
     residual = final.residual_ms
-    sigma = 1.4826 * float(np.median(np.abs(residual)))
-    inlier = np.abs(residual) <= OUTLIER_SIGMA * max(sigma, measurement.noise_ms if np.isfinite(measurement.noise_ms) else 0.0)
     n_parameters = measurement.n_flashes + len(final.coefficients)
-    expected = measurement.noise_ms * np.sqrt(max(len(residual) - n_parameters, 1) / len(residual))
-    inlier_rms = float(np.sqrt(np.mean(residual[inlier] ** 2)))
+    std = 1.4826 * float(np.median(np.abs(residual))) * np.sqrt(len(residual) / max(len(residual) - n_parameters, 1))
     return Diagnosis(
         cameras=[c.name for c in measurement.cameras],
         reference=measurement.cameras[measurement.reference].name,
         n_flashes=measurement.n_flashes, n_edges=len(measurement.edges), steps=steps,
-        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, inlier_rms_ms=inlier_rms,
-        outliers=int(np.count_nonzero(~inlier)), expected_ms=float(expected),
-        consistent=bool(inlier_rms <= NOISE_FACTOR * expected),
+        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, final_std_ms=std,
+        expected_ms=measurement.noise_ms, consistent=bool(std <= NOISE_FACTOR * measurement.noise_ms),
+        outliers=int(np.count_nonzero(np.abs(residual) > OUTLIER_SIGMA * std)),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         warnings=list(measurement.warnings))
