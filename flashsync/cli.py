@@ -66,6 +66,10 @@ def _parser() -> argparse.ArgumentParser:
     sync.add_argument("--anchor", action="append", default=[], metavar="CAMERA:EVENT",
                       help="events (0-based per camera) that are one flash; optional, repeatable")
     sync.add_argument("--events", type=Path, help="also write the detected events table here")
+    sync.add_argument("--pairwise", action="store_true",
+                      help="also solve every pair of cameras on its own and print that table")
+    sync.add_argument("--json", type=Path, metavar="OUT.json",
+                      help="also write the tables, rejected events and warnings as JSON")
     _detection_options(sync)
 
     restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
@@ -130,21 +134,40 @@ def _run_detect(args) -> None:
 
 
 def _run_sync(args) -> None:
+    import json
+
+    from flashsync.atomic import atomic_output
     from flashsync.model_file import save_model
-    from flashsync.pipeline import all_events, detect_videos, synchronize
-    from flashsync.report import sync_table
+    from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
+    from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
+                                  sync_table)
     from flashsync.tables import write_table
 
     detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress)
     if args.events:
         write_table(all_events(detections), args.events)
-    model, report = synchronize(detections, args.reference, _per_camera_ms("--row-time", args.row_time), args.anchor)
+    options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
+    model, report = synchronize(detections, args.reference, **options)
     for warning in report.warnings:
         print(f"flashsync sync: warning: {warning}", file=sys.stderr)
     for name in report.flipped_found:
         print(f"flashsync sync: {name} reads bottom-up (mounted upside down)", file=sys.stderr)
     save_model(model, args.output)
-    print(sync_table(model))
+    print(sync_table(model, report))
+    rejected = rejected_events(model)
+    for event in rejected.itertuples():
+        print(f"rejected: {event.camera} event {event.event} (frame {event.frame}, row {event.row:.1f}), "
+              f"residual {event.residual_ms:+.3f} ms")
+    pairwise = None
+    if args.pairwise:
+        pairwise = pairwise_table(solve_pairs([d.read_flipped(model.cameras[d.camera].flipped)
+                                               if d.camera in model.cameras else d for d in detections],
+                                              **options))
+        print()
+        print(pairwise_text(pairwise))
+    if args.json:
+        with atomic_output(args.json) as temporary:
+            temporary.write_text(json.dumps(sync_summary(model, report, pairwise), indent=1))
     print(f"model -> {args.output}", file=sys.stderr)
 
 

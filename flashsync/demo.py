@@ -49,7 +49,7 @@ def run_demo(samples: Path | None, output: Path,
     detection_error = stamp_errors(read_detections(output / "restamped.csv"), model, truth)
 
     lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "",
-             sync_table(model), ""]
+             sync_table(model, report), ""]
     lines += [f"warning: {w}" for w in report.warnings]
     lines.append("synchronisation error against ground truth, every frame and row:")
     for row in errors.itertuples():

@@ -14,6 +14,7 @@ direction of cameras where it is not given, and the joint robust solve.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from itertools import combinations
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -125,6 +126,22 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
     return best.model(reference), report
+
+
+def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[str, str, SyncModel | str]]:
+    """Every pair of cameras solved on its own, camera b on camera a's clock (the paper's
+    Table 2): ``(a, b, model)``, or ``(a, b, reason)`` where the pair cannot be solved or b
+    cannot be tied to a. ``options`` go to :func:`synchronize`."""
+    results = []
+    for a, b in combinations(detections, 2):
+        try:
+            model, _ = synchronize([a, b], reference=a.camera, **options)
+        except FlashsyncError as error:
+            results.append((a.camera, b.camera, str(error)))
+            continue
+        results.append((a.camera, b.camera, model if b.camera in model.cameras
+                        else f"{b.camera} could not be tied to {a.camera}"))
+    return results
 
 
 @dataclass

@@ -1,47 +1,146 @@
-"""Text reports of a solved model: the per-camera parameter table (paper's Table 1)."""
+"""Reports of a solve: the joint table (paper's Table 1), the pairwise table (Table 2),
+rejected events, as DataFrames, aligned text and JSON-able dicts."""
 
 from __future__ import annotations
+
+from typing import Sequence
 
 import numpy as np
 import pandas as pd
 
-from flashsync.model import SyncModel
+from flashsync.model import CameraClock, SyncModel
 
 
-def camera_table(model: SyncModel) -> pd.DataFrame:
+def sync_uncertainty_ms(camera: CameraClock) -> float:
+    """Largest predicted std (ms) of ``t_global_ms`` over the camera's frames and rows."""
+    frames = np.array([0, camera.n_frames // 2, camera.n_frames - 1])
+    frames, rows = np.meshgrid(frames, [0.0, camera.height - 1.0])
+    return float(np.max(camera.t_global_std_ms(frames, rows)))
+
+
+def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
     """One row per camera: drift (ppm and rows/s), shift (ms), time per row (ms), their
-    standard deviations, matched events and the residual std (ms) of inlier events."""
+    standard deviations, predicted sync uncertainty (ms), exposure (ms), inlier and rejected
+    events, the residual std (ms) of inliers, and (with a :class:`~flashsync.pipeline.SyncReport`)
+    what was found in the frame stamps."""
     rows = []
     for name, camera in model.cameras.items():
         std = np.sqrt(np.maximum(np.diag(camera.covariance), 0.0))
-        events = model.events[model.events["camera"] == name] if len(model.events) else model.events
-        inliers = events[events["inlier"]] if len(events) else events
-        rows.append({
+        events = model.events[model.events["camera"] == name]
+        inliers = events[events["inlier"].astype(bool)]
+        row = {
             "camera": name,
-            "alpha": camera.alpha,
+            "reference": name == model.reference,
+            "flipped": camera.flipped,
             "drift_ppm": (camera.alpha - 1.0) * 1e6,
+            "drift_ppm_std": std[0] * 1e6,
             "drift_rows_per_s": (camera.alpha - 1.0) * 1000.0 / camera.row_time_ms,
             "shift_ms": camera.beta_ms,
             "shift_std_ms": std[1],
             "row_time_ms": camera.row_time_ms,
             "row_time_std_ms": std[2],
+            "sync_std_ms": sync_uncertainty_ms(camera),
+            "exposure_ms": camera.exposure_ms,
             "events": len(inliers),
             "rejected": len(events) - len(inliers),
             "residual_std_ms": float(np.std(inliers["residual_ms"])) if len(inliers) else float("nan"),
-        })
+        }
+        if report is not None and name in report.frame_clocks:
+            clock = report.frame_clocks[name]
+            row |= {"frame_period_ms": clock.period_ms, "stamps_steady": clock.steady,
+                    "stamp_quantum_ms": clock.quantum_ms, "stamp_noise_ms": clock.stamp_noise_ms,
+                    "dropped_frames": clock.dropped}
+        rows.append(row)
     return pd.DataFrame(rows)
 
 
-def sync_table(model: SyncModel) -> str:
-    """The per-camera table as aligned text, reference camera marked with ``*``."""
-    table = camera_table(model)
-    lines = [f"{'camera':<12} {'drift ppm':>10} {'rows/s':>9} {'shift ms':>14} {'± ms':>8} "
-             f"{'T_row ms':>10} {'± %':>6} {'events':>6} {'rej':>4} {'res std ms':>10}"]
+def sync_table(model: SyncModel, report=None) -> str:
+    """The per-camera table as aligned text; ``*`` marks the reference, ``^`` a camera that
+    reads bottom-up."""
+    table = camera_table(model, report)
+    lines = [f"{'camera':<12} {'drift ppm':>10} {'rows/s':>8} {'shift ms':>14} {'± ms':>7} "
+             f"{'T_row ms':>10} {'± %':>5} {'sync ± ms':>9} {'exp ms':>6} {'events':>6} {'rej':>3} "
+             f"{'res std ms':>10}" + (f" {'stamps':>22}" if report is not None else "")]
     for row in table.itertuples():
-        name = row.camera + ("*" if row.camera == model.reference else "")
-        lines.append(
-            f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>9.4f} {row.shift_ms:>14.3f} "
-            f"{row.shift_std_ms:>8.4f} {row.row_time_ms:>10.6f} "
-            f"{100 * row.row_time_std_ms / row.row_time_ms:>6.2f} {row.events:>6d} {row.rejected:>4d} "
-            f"{row.residual_std_ms:>10.4f}")
+        name = row.camera + ("*" if row.reference else "") + ("^" if row.flipped else "")
+        exposure = f"{row.exposure_ms:>6.2f}" if row.exposure_ms is not None and np.isfinite(row.exposure_ms) else f"{'-':>6}"
+        line = (f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>8.4f} {row.shift_ms:>14.3f} "
+                f"{row.shift_std_ms:>7.4f} {row.row_time_ms:>10.6f} "
+                f"{100 * row.row_time_std_ms / row.row_time_ms:>5.2f} {row.sync_std_ms:>9.4f} {exposure} "
+                f"{row.events:>6d} {row.rejected:>3d} {row.residual_std_ms:>10.4f}")
+        if report is not None:
+            line += f" {_stamps(row):>22}"
+        lines.append(line)
     return "\n".join(lines)
+
+
+def _stamps(row) -> str:
+    """E.g. ``1 ms grid, 0.29 ms, 2 drops`` or ``variable``."""
+    if not row.stamps_steady:
+        return "variable rate"
+    grid = f"{row.stamp_quantum_ms:g} ms grid" if row.stamp_quantum_ms >= 0.05 else "fine"
+    return f"{grid}, ±{row.stamp_noise_ms:.2f} ms, {row.dropped_frames} drop{'s' * (row.dropped_frames != 1)}"
+
+
+def rejected_events(model: SyncModel) -> pd.DataFrame:
+    """Matched events the robust solve rejected, with their residuals (ms)."""
+    events = model.events
+    return events[~events["inlier"].astype(bool)].reset_index(drop=True)
+
+
+def pairwise_table(pairs: Sequence[tuple[str, str, SyncModel | str]]) -> pd.DataFrame:
+    """Paper's Table 2 from :func:`~flashsync.pipeline.solve_pairs`: per pair, camera b on
+    camera a's clock, or the reason the pair could not be solved."""
+    rows = []
+    for a, b, result in pairs:
+        row = {"camera_a": a, "camera_b": b}
+        if isinstance(result, str):
+            rows.append(row | {"error": result})
+            continue
+        table = camera_table(result).set_index("camera")
+        inliers = result.events["inlier"].astype(bool)
+        rows.append(row | {
+            "drift_ppm": table.loc[b, "drift_ppm"],
+            "shift_ms": table.loc[b, "shift_ms"],
+            "row_time_a_ms": table.loc[a, "row_time_ms"],
+            "row_time_b_ms": table.loc[b, "row_time_ms"],
+            "events": int(table.loc[b, "events"]),
+            "residual_std_ms": float(np.std(result.events.loc[inliers, "residual_ms"])),
+            "error": ""})
+    return pd.DataFrame(rows)
+
+
+def pairwise_text(table: pd.DataFrame) -> str:
+    """The pairwise table as aligned text."""
+    lines = [f"{'pair':<22} {'drift ppm':>10} {'shift ms':>14} {'T_row a ms':>11} {'T_row b ms':>11} "
+             f"{'events':>6} {'res std ms':>10}"]
+    for row in table.itertuples():
+        pair = f"{row.camera_a} -> {row.camera_b}"
+        if row.error:
+            lines.append(f"{pair:<22} {row.error}")
+            continue
+        lines.append(f"{pair:<22} {row.drift_ppm:>10.3f} {row.shift_ms:>14.3f} {row.row_time_a_ms:>11.6f} "
+                     f"{row.row_time_b_ms:>11.6f} {row.events:>6d} {row.residual_std_ms:>10.4f}")
+    return "\n".join(lines)
+
+
+def sync_summary(model: SyncModel, report=None, pairwise: pd.DataFrame | None = None) -> dict:
+    """Everything the reports show, as plain JSON-able data for scripts."""
+    summary = {
+        "reference": model.reference,
+        "cameras": _records(camera_table(model, report)),
+        "rejected_events": _records(rejected_events(model)),
+    }
+    if report is not None:
+        summary |= {"warnings": list(report.warnings), "flipped_found": list(report.flipped_found),
+                    "residual_sigma_ms": report.sigma_ms}
+    if pairwise is not None:
+        summary["pairwise"] = _records(pairwise)
+    return summary
+
+
+def _records(table: pd.DataFrame) -> list[dict]:
+    """Rows as dicts of plain Python values (NaN as None)."""
+    clean = table.astype(object).where(table.notna(), None)
+    return [{key: (value.item() if isinstance(value, np.generic) else value) for key, value in row.items()}
+            for row in clean.to_dict(orient="records")]

@@ -96,10 +96,11 @@ class Measurement:
         Index of the reference camera (its clock is the global clock).
     edges : Edges
     noise_ms : float
-        Expected noise of one edge time, ms, from the scatter of band lengths in rows within
-        each camera, whatever the clocks: bands with both edges in one frame are all as long
+        Std of one edge's time, ms, from the scatter of band lengths in rows within each
+        camera, whatever the clocks: bands with both edges in one frame are all as long
         (the exposure over the time per row), and so are bands split across two frames
-        (shorter by the hidden rows); NaN without three bands of a kind.
+        (shorter by the hidden rows); NaN without three bands of a kind. Errors common to
+        both edges of a band do not show in its length, so this is a lower bound.
     warnings : tuple of str
         Cameras left out and why.
     """
@@ -221,15 +222,14 @@ def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
 
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
-    """Robust std of one edge's time, ms, from the scatter of band lengths (rows) among
-    the bands of one camera that span the same number of frames."""
-    deviations = []
+    """Std of one edge's time, ms, from the scatter of band lengths (rows) among the bands
+    of one camera that span the same number of frames (a length holds two edges' errors)."""
+    squares, dof = 0.0, 0
     for camera, camera_bands in zip(cameras, bands):
         frames = camera_bands["frame_trailing"] - camera_bands["frame_leading"]
         for _, kind in camera_bands.groupby(frames):
             if len(kind) >= 3:
                 rows = (kind["row_trailing"] - kind["row_leading"]).to_numpy()
-                deviations.append((rows - np.median(rows)) * camera.median_step_ms / camera.height)
-    if not deviations:
-        return float("nan")
-    return 1.4826 * float(np.median(np.abs(np.concatenate(deviations)))) / np.sqrt(2.0)
+                squares += float(np.sum((rows - rows.mean()) ** 2)) * (camera.median_step_ms / camera.height) ** 2
+                dof += len(rows) - 1
+    return float(np.sqrt(squares / dof / 2.0)) if dof else float("nan")

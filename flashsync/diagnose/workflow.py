@@ -2,9 +2,10 @@
 
 Starting from the plainest model (see :mod:`flashsync.diagnose.effects`), each round fits
 every candidate (an effect of the catalogue on one camera, added to the current model) and
-keeps the one that lowers the Bayesian information criterion most, if it lowers it by more
-than :data:`THRESHOLD`; otherwise the residuals hold nothing the catalogue can explain and
-the loop stops. The data never say which effect is there: frame stamps and band edges only.
+keeps the one that lowers the Bayesian information criterion most, among those that lower
+it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals);
+without such a candidate the residuals hold nothing the catalogue can explain and the loop
+stops. The final residuals are then compared with the edge noise the band lengths show. The data never say which effect is there: frame stamps and band edges only.
 """
 
 from __future__ import annotations
@@ -22,11 +23,10 @@ from flashsync.errors import FlashsyncError
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
-#: Residuals are consistent with noise when their robust std is within this factor of the
-#: edge noise the band lengths show.
-NOISE_FACTOR = 1.5
-#: Edges beyond this many robust stds are counted as outliers.
-OUTLIER_SIGMA = 5.0
+#: Residuals are consistent with noise when their RMS is within this factor of what the edge
+#: noise seen in band lengths would leave (that noise misses errors common to both edges of
+#: a band, hence more than 1).
+NOISE_FACTOR = 2.0
 
 
 @dataclass(frozen=True)
@@ -78,16 +78,11 @@ class Diagnosis:
         Effects added, in order.
     initial_rms_ms, final_rms_ms : float
         RMS of the edge residuals of the plain and the final model, ms.
-    final_std_ms : float
-        Robust std of one edge's residual in the final model (1.4826 x median absolute
-        residual, corrected for the parameters fitted), ms.
     expected_ms : float
-        Std of one edge's time from the band lengths alone (:attr:`Measurement.noise_ms`),
-        ms; NaN when unknown.
+        RMS the edge noise seen in band lengths (:attr:`Measurement.noise_ms`) would leave
+        after fitting the final model's parameters, ms; NaN when unknown.
     consistent : bool
-        ``final_std_ms <= NOISE_FACTOR * expected_ms``.
-    outliers : int
-        Final edges beyond :data:`OUTLIER_SIGMA` robust stds.
+        ``final_rms_ms <= NOISE_FACTOR * expected_ms``.
     model : list of dict
         Final model per camera (readout, frame clock, drift, shift, time per row, exposure).
     residuals : dict
@@ -103,10 +98,8 @@ class Diagnosis:
     steps: list[Step]
     initial_rms_ms: float
     final_rms_ms: float
-    final_std_ms: float
     expected_ms: float
     consistent: bool
-    outliers: int
     model: list[dict]
     residuals: dict[str, list[dict]]
     warnings: list[str] = field(default_factory=list)
@@ -114,15 +107,14 @@ class Diagnosis:
     @property
     def verdict(self) -> str:
         """One line on the final residuals against the noise."""
-        numbers = f"RMS {self.final_rms_ms:.4f} ms, robust std {self.final_std_ms:.4f} ms"
-        numbers += f", {self.outliers} outlying edges" if self.outliers else ""
         if not np.isfinite(self.expected_ms):
-            return f"residuals {numbers}; noise unknown (fewer than three bands of a kind per camera)"
-        numbers += f"; expected {self.expected_ms:.4f} ms"
+            return (f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three "
+                    "bands of a kind per camera)")
+        numbers = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
         if self.consistent:
             return f"residuals consistent with noise ({numbers})"
-        return (f"residuals exceed the noise ({numbers}): an effect outside the catalogue "
-                "remains, or the measurement cannot separate the ones it has")
+        return (f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
+                "outside the catalogue remains, or the measurement cannot separate the ones it has")
 
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence and the verdict."""
@@ -166,9 +158,10 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
         best: tuple[Term, Fit] | None = None
         for term in _candidates(measurement, current.terms):
             trial = fit_model(measurement, current.terms | _with_implied(term))
-            if trial is not None and (best is None or trial.bic < best[1].bic):
+            if (trial is not None and current.bic - trial.bic > THRESHOLD and trial.rms_ms < current.rms_ms
+                    and (best is None or trial.bic < best[1].bic)):
                 best = (term, trial)
-        if best is None or current.bic - best[1].bic <= THRESHOLD:
+        if best is None:
             break
         term, better = best
         effect = CATALOGUE[term.effect]
@@ -192,16 +185,15 @@ def _with_implied(term: Term) -> frozenset[Term]:
 
 
 def _diagnosis(measurement: Measurement, plain: Fit, final: Fit, steps: list[Step]) -> Diagnosis:
-    residual = final.residual_ms
-    n_parameters = measurement.n_flashes + len(final.coefficients)
-    std = 1.4826 * float(np.median(np.abs(residual))) * np.sqrt(len(residual) / max(len(residual) - n_parameters, 1))
+    n_edges = len(measurement.edges)
+    dof = max(n_edges - measurement.n_flashes - len(final.coefficients), 1)
+    expected = measurement.noise_ms * np.sqrt(dof / n_edges)
     return Diagnosis(
         cameras=[c.name for c in measurement.cameras],
         reference=measurement.cameras[measurement.reference].name,
-        n_flashes=measurement.n_flashes, n_edges=len(measurement.edges), steps=steps,
-        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, final_std_ms=std,
-        expected_ms=measurement.noise_ms, consistent=bool(std <= NOISE_FACTOR * measurement.noise_ms),
-        outliers=int(np.count_nonzero(np.abs(residual) > OUTLIER_SIGMA * std)),
+        n_flashes=measurement.n_flashes, n_edges=n_edges, steps=steps,
+        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, expected_ms=float(expected),
+        consistent=bool(final.rms_ms <= NOISE_FACTOR * expected),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         warnings=list(measurement.warnings))
