@@ -113,15 +113,20 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: _on_frame_clock(d, report.frame_clocks[d.camera]) for d in detections}
     undecided = [name for name, d in cameras.items() if d.alternative is not None]
-    best = _attempt(cameras, reference, row_times, anchors)
-    for name in undecided:
-        trial = {**best.cameras, name: best.cameras[name].read_flipped(not best.cameras[name].flipped)}
+    best, failure = None, None
+    for flip in [None, *undecided, *undecided]:  # a second pass can undo a flip made too early
+        trial = dict(best.cameras if best else cameras)
+        if flip is not None:
+            trial[flip] = trial[flip].read_flipped(not trial[flip].flipped)
         try:
             attempt = _attempt(trial, reference, row_times, anchors)
-        except FlashsyncError:
+        except FlashsyncError as error:
+            failure = failure or error
             continue
-        if attempt.score > best.score:
+        if best is None or attempt.score > best.score:
             best = attempt
+    if best is None:
+        raise failure
     report.alignments, report.warnings = best.alignments, best.warnings
     report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms

@@ -1,0 +1,99 @@
+"""Synchronisation accuracy against simulation ground truth, over every frame and row,
+on the two scenarios of the matching-and-solving issue (scaled down to small frames and
+a shorter recording so that they render in seconds). Never measured on the fitted events."""
+
+import numpy as np
+import pytest
+
+from flashsync import detect_videos, synchronize
+from flashsync.evaluate import sync_errors
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+
+
+def irregular_flashes(rng, n, start_ms, stop_ms, min_gap_ms):
+    instants = np.sort(rng.uniform(start_ms, stop_ms - n * min_gap_ms, n)) + np.arange(n) * min_gap_ms
+    return tuple(FlashSpec(float(t), float(rng.uniform(0.35, 0.7))) for t in instants)
+
+
+def paper_like():
+    """Four cameras at 25 fps (two larger, two smaller), 1 ms stamps on two, drifts of
+    -10..+10 ppm, shifts of tens of seconds, 0.3 % dropped frames, flashes every few
+    seconds, H.264, mild mains flicker."""
+    rng = np.random.default_rng(2017)
+    common = dict(fps=25.0, noise_std=1.5, drop_fraction=0.003, crf=23)
+    cameras = (
+        CameraSpec("p1", 384, 216, r0=10, r1=8, exposure_ms=10.0, **common),
+        CameraSpec("p2", 384, 216, r0=12, r1=6, exposure_ms=12.0, start_ms=24306.0, offset_ms=-23456.0,
+                   drift_ppm=-10.0, container="mkv", position_m=(-7.0, 15.0, 14.0),
+                   look_at_m=(18.0, 15.0), hfov_deg=75.0, **common),
+        CameraSpec("p3", 320, 180, r0=8, r1=6, exposure_ms=8.0, start_ms=39800.5, offset_ms=-41000.5,
+                   drift_ppm=7.0, quantize_ms=1.0, position_m=(66.0, 33.0, 16.0),
+                   look_at_m=(44.0, 16.0), hfov_deg=75.0, **common),
+        CameraSpec("p4", 320, 180, r0=6, r1=8, exposure_ms=16.0, start_ms=12400.0, offset_ms=-12000.0,
+                   drift_ppm=4.0, position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0),
+                   hfov_deg=70.0, **common),
+    )
+    return Scenario("paper-like", cameras, duration_ms=20_000.0,
+                    flashes=irregular_flashes(rng, 7, 800.0, 19_200.0, 1500.0), n_players=6,
+                    flicker_depth=0.02, seed=17)
+
+
+def mixed():
+    """Three cameras at 25, 30 and 50 fps, 90 kHz and 1 ms stamps, one upside down, drifts
+    up to 40 ppm, each flash missed by a camera with probability 15 %."""
+    rng = np.random.default_rng(5)
+    cameras = (
+        CameraSpec("m1", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5),
+        CameraSpec("m2", 320, 180, 30.0, r0=6, r1=10, exposure_ms=8.0, start_ms=61000.0,
+                   offset_ms=-60700.0, drift_ppm=40.0, container="mkv", flipped=True,
+                   miss_probability=0.15, noise_std=1.5, position_m=(-7.0, 15.0, 14.0),
+                   look_at_m=(18.0, 15.0), hfov_deg=75.0),
+        CameraSpec("m3", 256, 144, 50.0, r0=6, r1=4, exposure_ms=6.0, start_ms=5000.0,
+                   offset_ms=-5210.0, drift_ppm=-25.0, quantize_ms=1.0, miss_probability=0.15,
+                   noise_std=1.5, position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0),
+                   hfov_deg=75.0),
+    )
+    return Scenario("mixed", cameras, duration_ms=15_000.0,
+                    flashes=irregular_flashes(rng, 10, 800.0, 14_200.0, 900.0), n_players=6, seed=9)
+
+
+@pytest.fixture(scope="module", params=[paper_like, mixed], ids=["paper-like", "mixed"])
+def solved(request, tmp_path_factory):
+    scenario = request.param()
+    folder = tmp_path_factory.mktemp(scenario.name)
+    truth = render_scenario(scenario, folder)
+    videos = sorted(p for p in folder.iterdir() if p.suffix in (".mp4", ".mkv"))
+    model, report = synchronize(detect_videos(videos, estimate_readout=True))
+    return scenario, truth, model, report, load_ground_truth(folder / "truth.json")
+
+
+def test_sub_tenth_of_a_millisecond_with_no_manual_input(solved):
+    scenario, _, model, report, truth = solved
+    assert list(model.cameras) == [c.name for c in scenario.cameras]
+    errors = sync_errors(model, truth, row_step=1)
+    assert np.sqrt(np.mean(errors["rms_ms"] ** 2)) <= 0.1, errors
+    assert errors["max_ms"].max() <= 0.3, errors
+
+
+def test_upside_down_camera_is_found(solved):
+    scenario, _, model, report, _ = solved
+    expected = sorted(c.name for c in scenario.cameras if c.flipped)
+    assert sorted(report.flipped_found) == expected
+    assert [name for name, clock in model.cameras.items() if clock.flipped] == expected
+
+
+def test_predicted_uncertainty_is_honest(solved):
+    from flashsync.report import sync_uncertainty_ms
+    _, _, model, _, truth = solved
+    errors = sync_errors(model, truth).set_index("camera")
+    for name, camera in model.cameras.items():
+        if name != model.reference:
+            assert errors.loc[name, "rms_ms"] <= 4 * sync_uncertainty_ms(camera) + 0.01, name
+
+
+def test_exposure_and_stamp_grid_are_found(solved):
+    scenario, _, model, report, _ = solved
+    for spec in scenario.cameras:
+        assert model.cameras[spec.name].exposure_ms == pytest.approx(spec.exposure_ms, abs=0.2)
+        if spec.container == "mkv" or spec.quantize_ms:
+            assert report.frame_clocks[spec.name].quantum_ms == 1.0
