@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sparse
-import scipy.sparse.linalg as sparse_linalg
+from scipy import linalg
+from threadpoolctl import threadpool_limits
 
 from flashsync.errors import FlashsyncError
 
@@ -115,8 +116,14 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
     FlashsyncError
         When the equations cannot determine every unknown.
     """
-    system = _System(events, n_cameras, reference, durations, priors or Priors({}, None),
-                     event_sigma_ms)
+    with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
+        return _solve(_System(events, n_cameras, reference, durations, priors or Priors({}, None),
+                              event_sigma_ms), n_cameras, reject_sigma, cauchy_k, iterations)
+
+
+def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float,
+           iterations: int) -> Solution:
+    """The robust iterations of :func:`solve_clocks` on a built system."""
     weights = np.ones(system.n_equations)
     for _ in range(iterations):
         x = system.solve(weights)
@@ -170,6 +177,7 @@ class _System:
         duration_cameras = np.unique(durations.camera)
         duration_column = {c: n_columns + i for i, c in enumerate(duration_cameras)}
         n_columns += len(duration_cameras)
+        self.n_camera_columns = n_columns
         self.flash_columns = n_columns + np.arange(len(self.flash_ids))
         self.n_unknowns = n_columns + len(self.flash_ids)
 
@@ -205,45 +213,64 @@ class _System:
             raise FlashsyncError("the matched events leave a camera parameter undetermined; "
                                  "each camera needs events on flashes shared with other cameras")
         self.column_scale = 1.0 / norms
-        self.matrix = matrix @ sparse.diags(self.column_scale)
+        self.matrix = (matrix @ sparse.diags(self.column_scale)).tocsc()
+        self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
+        self.flashes = self.matrix[:, self.n_camera_columns:].tocsr()
 
-    def _normal(self, weights: np.ndarray):
-        """Normal equations for equation ``weights``; a flash whose every observation has
-        weight 0 (all rejected) gets a unit diagonal, so it solves to 0 instead of making
-        the system singular (its time is reported as NaN)."""
-        all_weights = np.concatenate([weights, np.ones(self.n_priors)])
-        weighted = sparse.diags(all_weights) @ self.matrix
-        normal = (self.matrix.T @ weighted).tocsc()
-        orphans = np.zeros(self.n_unknowns, dtype=bool)
-        orphans[self.flash_columns] = normal.diagonal()[self.flash_columns] == 0
-        if orphans.any():
-            normal = (normal + sparse.diags(orphans.astype(np.float64))).tocsc()
-        return normal, self.matrix.T @ (all_weights * self.rhs)
+    def _reduced(self, weights: np.ndarray):
+        """The normal equations with the flash times eliminated.
+
+        Each equation names at most one flash, so the flash block of the normal matrix is
+        diagonal (``d``) and the camera block's Schur complement ``S`` is small (three to
+        four unknowns per camera, however many flashes). A flash whose every observation
+        has weight 0 (all rejected) gets ``d = 1``: it solves to 0 instead of making the
+        system singular (its time is reported as NaN).
+
+        Returns the Cholesky factor of ``S`` and what back-substitution needs.
+        """
+        w = np.concatenate([weights, np.ones(self.n_priors)])
+        weighted_cams = self.cams.multiply(w[:, None]).tocsr()
+        d = np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel()
+        d = np.where(d > 0, d, 1.0)
+        coupling = (weighted_cams.T @ self.flashes).toarray()
+        schur = (self.cams.T @ weighted_cams).toarray() - (coupling / d) @ coupling.T
+        right_cams = self.cams.T @ (w * self.rhs)
+        right_flashes = self.flashes.T @ (w * self.rhs)
+        try:
+            factor = linalg.cho_factor(schur, check_finite=False)
+        except linalg.LinAlgError:
+            factor = None
+        if factor is None or np.min(np.diag(factor[0])) ** 2 <= 1e-12 * np.max(np.diag(schur)):
+            raise FlashsyncError(
+                "the matched events cannot separate every camera's drift, shift and time per row "
+                "(too few flashes, or all at the same rows); record more flashes seen by several "
+                "cameras, or give --row-time")
+        return factor, coupling, d, right_cams, right_flashes
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
-        normal, right = self._normal(weights)
+        """Weighted least-squares solution (unscaled units); a clear error where the
+        equations are too few or (nearly) singular."""
         n_used = int(np.count_nonzero(weights)) + self.n_priors
         if n_used < self.n_unknowns:
             raise FlashsyncError(
                 f"the cameras share too few events: {n_used} equations for {self.n_unknowns} "
                 "unknowns; record more flashes seen by several cameras, or give --row-time")
-        eigenvalues = np.linalg.eigvalsh(normal.toarray())
-        if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
-            raise FlashsyncError(
-                "the matched events cannot separate every camera's drift, shift and time per row "
-                "(too few flashes, or all at the same rows); record more flashes seen by several "
-                "cameras, or give --row-time")
-        return sparse_linalg.spsolve(normal, right) * self.column_scale
+        factor, coupling, d, right_cams, right_flashes = self._reduced(weights)
+        x_cams = linalg.cho_solve(factor, right_cams - coupling @ (right_flashes / d))
+        x_flashes = (right_flashes - coupling.T @ x_cams) / d
+        return np.concatenate([x_cams, x_flashes]) * self.column_scale
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """Residuals of the events and durations, ms."""
         return ((self.matrix @ (x / self.column_scale)) - self.rhs)[: self.n_equations]
 
     def covariance(self, weights: np.ndarray, scale: float) -> np.ndarray:
-        """Covariance of the unknowns (unscaled units) for residual variance ``scale``."""
-        normal, _ = self._normal(weights)
-        inverse = np.linalg.inv(normal.toarray())
-        return scale * inverse * np.outer(self.column_scale, self.column_scale)
+        """Covariance of the camera unknowns (unscaled units) for residual variance ``scale``:
+        the inverse of the Schur complement."""
+        factor = self._reduced(weights)[0]
+        inverse = linalg.cho_solve(factor, np.eye(self.n_camera_columns))
+        column_scale = self.column_scale[: self.n_camera_columns]
+        return scale * inverse * np.outer(column_scale, column_scale)
 
     def camera_solution(self, x: np.ndarray, covariance: np.ndarray, c: int) -> CameraSolution:
         """Camera ``c``'s (alpha, beta, T_row) and covariance from (drift, shift at mid, T_row)."""
