@@ -46,6 +46,11 @@ class CameraClock:
         Exposure time, ms, where known.
     video : str
         The video file the camera came from.
+    drift_knots_ms, drift_warp_ms : ndarrays of shape (k + 2,), (k,)
+        A clock whose rate changes slowly: knots in camera time (ms, first and last at the
+        ends of the recording) and the piecewise-linear correction (ms) at the k interior
+        knots, added to the affine map; empty for an affine clock. ``covariance`` is then
+        (3 + k, 3 + k), the warp values last.
     """
 
     name: str
@@ -59,6 +64,8 @@ class CameraClock:
     covariance: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
     exposure_ms: float | None = None
     video: str = ""
+    drift_knots_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    drift_warp_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def n_frames(self) -> int:
@@ -80,14 +87,23 @@ class CameraClock:
             Stored-image rows (top = 0), sub-row precision allowed.
         """
         t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
-        return self.alpha * t_frame + self.beta_ms + self.readout_row(row) * self.row_time_ms
+        return self.frame_start_ms(t_frame) + self.readout_row(row) * self.row_time_ms
+
+    def frame_start_ms(self, t_frame_ms: np.ndarray) -> np.ndarray:
+        """Global time (ms) of readout row 0 of frames with container times ``t_frame_ms``."""
+        t = np.asarray(t_frame_ms, dtype=np.float64)
+        start = self.alpha * t + self.beta_ms
+        if self.drift_warp_ms.size:
+            start = start + hat_basis(self.drift_knots_ms, t) @ self.drift_warp_ms
+        return start
 
     def t_global_std_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
         """Standard deviation (ms) of :meth:`t_global_ms` from the solve's covariance."""
         t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
         q = self.readout_row(row)
         t_frame, q = np.broadcast_arrays(t_frame, q)
-        gradient = np.stack([t_frame, np.ones_like(t_frame), q], axis=-1)
+        gradient = np.concatenate([np.stack([t_frame, np.ones_like(t_frame), q], axis=-1),
+                                   hat_basis(self.drift_knots_ms, t_frame)], axis=-1)
         variance = np.einsum("...i,ij,...j->...", gradient, self.covariance, gradient)
         return np.sqrt(np.maximum(variance, 0.0))
 
@@ -104,13 +120,23 @@ class CameraClock:
             exposure at the instant (vertical blanking, a dropped frame, outside the video).
         """
         t = np.asarray(t_global_ms, dtype=np.float64)
-        starts = self.alpha * self.frame_times_ms + self.beta_ms
+        starts = self.frame_start_ms(self.frame_times_ms)
         frame = np.searchsorted(starts, t, side="right") - 1
         q = (t - starts[np.clip(frame, 0, None)]) / self.row_time_ms
         visible = (frame >= 0) & (q <= self.height - 1 + 1e-6)
         q = np.where(visible, q, np.nan)
         row = self.height - 1 - q if self.flipped else q
         return frame, row
+
+
+def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
+    """Piecewise-linear hat functions of the interior ``knots_ms`` (shape (k + 2,)) at
+    ``t_ms``: shape ``t_ms.shape + (k,)``; zero at and beyond the end knots."""
+    t = np.asarray(t_ms, dtype=np.float64)
+    interior = len(knots_ms) - 2
+    if interior <= 0:
+        return np.zeros(t.shape + (0,))
+    return np.stack([np.interp(t, knots_ms, np.eye(interior + 2)[j + 1]) for j in range(interior)], axis=-1)
 
 
 @dataclass

@@ -15,8 +15,10 @@ from flashsync.model import CameraClock, SyncModel
 FORMAT = "flashsync.sync"
 VERSION = 1
 TIME_CONVENTION = (
-    "t_global_ms = alpha * t_frame_ms + beta_ms + q * row_time_ms, the end-of-exposure instant "
-    "of stored row r (q = r, or height - 1 - r when flipped) on the reference camera's clock, ms")
+    "t_global_ms = alpha * t_frame_ms + beta_ms + warp(t_frame_ms) + q * row_time_ms, the "
+    "end-of-exposure instant of stored row r (q = r, or height - 1 - r when flipped) on the "
+    "reference camera's clock, ms; warp is piecewise linear through drift_warp_ms at the "
+    "interior drift_knots_ms (zero at the end knots), absent for an affine clock")
 
 
 def save_model(model: SyncModel, path: str | Path) -> None:
@@ -69,7 +71,9 @@ def _camera_to_dict(camera: CameraClock) -> dict:
         "beta_ms": camera.beta_ms,
         "row_time_ms": camera.row_time_ms,
         "std": dict(zip(["alpha", "beta_ms", "row_time_ms"],
-                        np.sqrt(np.diag(camera.covariance)).tolist())),
+                        np.sqrt(np.diag(camera.covariance))[:3].tolist())),
+        "drift_knots_ms": camera.drift_knots_ms.tolist(),
+        "drift_warp_ms": camera.drift_warp_ms.tolist(),
         "covariance": camera.covariance.tolist(),
         "exposure_ms": camera.exposure_ms,
         "frame_times_ms": camera.frame_times_ms.tolist(),
@@ -86,7 +90,9 @@ def _camera_from_dict(entry: dict) -> CameraClock:
         alpha=float(entry["alpha"]),
         beta_ms=float(entry["beta_ms"]),
         row_time_ms=float(entry["row_time_ms"]),
-        covariance=np.asarray(entry["covariance"], dtype=np.float64).reshape(3, 3),
+        covariance=np.asarray(entry["covariance"], dtype=np.float64),
+        drift_knots_ms=np.asarray(entry["drift_knots_ms"], dtype=np.float64),
+        drift_warp_ms=np.asarray(entry["drift_warp_ms"], dtype=np.float64),
         exposure_ms=entry["exposure_ms"],
         frame_times_ms=np.asarray(entry["frame_times_ms"], dtype=np.float64),
     )

@@ -27,7 +27,7 @@ from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.profiles import probe_video
-from flashsync.solve import Durations, Events, Priors, Solution, solve_clocks
+from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
@@ -173,7 +173,7 @@ class _Attempt:
             clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
                                        s.row_time_ms, d.flipped, s.covariance,
                                        _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
-                                       video=str(d.video))
+                                       str(d.video), s.knots_ms, s.warp_ms)
         n_events = len(self.observations)
         events = self.observations.assign(
             t_global_ms=self.solution.flash_ms[self.observations["flash"].to_numpy()],
@@ -206,7 +206,7 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
     observations = _observations(connected, sync_events, flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
-    solution = solve_clocks(
+    solution = solve_with_drift_model(
         Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
                observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
         len(connected), connected.index(reference), durations=durations, priors=Priors(priors))

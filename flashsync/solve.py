@@ -29,6 +29,7 @@ from scipy import linalg
 from threadpoolctl import threadpool_limits
 
 from flashsync.errors import FlashsyncError
+from flashsync.model import hat_basis
 
 #: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
 MIN_SIGMA_MS = 1e-3
@@ -70,13 +71,16 @@ class Priors:
 
 @dataclass(frozen=True)
 class CameraSolution:
-    """One camera's solved clock: ``alpha``, ``beta_ms``, ``row_time_ms`` and their
-    covariance (3, 3) in that order."""
+    """One camera's solved clock: ``alpha``, ``beta_ms``, ``row_time_ms``, the warp of a
+    clock whose rate changes (values ``warp_ms`` (k,) at the interior of ``knots_ms``
+    (k + 2,), both empty for an affine clock) and the covariance (3 + k, 3 + k) in that order."""
 
     alpha: float
     beta_ms: float
     row_time_ms: float
     covariance: np.ndarray
+    knots_ms: np.ndarray
+    warp_ms: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -93,10 +97,12 @@ class Solution:
     residual_ms: np.ndarray
     inlier: np.ndarray
     sigma_ms: float
+    n_unknowns: int
 
 
 def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
                  durations: Durations | None = None, priors: Priors | None = None,
+                 drift_knots: dict[int, np.ndarray] | None = None,
                  event_sigma_ms: float = 0.05, reject_sigma: float = 5.0,
                  cauchy_k: float = 2.385, iterations: int = 10) -> Solution:
     """Solve all cameras' clocks jointly and robustly.
@@ -110,6 +116,9 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
         (at least two different frame gaps, i.e. split and unsplit bands).
     priors : pseudo-observations, weighed against events of ``event_sigma_ms`` noise;
         None: the events alone.
+    drift_knots : per camera index (not the reference), knots in camera time (ms, shape
+        (k + 2,), the first and last at the ends of its events) of a piecewise-linear warp
+        added to its affine clock, for a rate that changes during the recording.
 
     Raises
     ------
@@ -118,7 +127,8 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
     """
     with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
         return _solve(_System(events, n_cameras, reference, durations, priors or Priors({}, None),
-                              event_sigma_ms), n_cameras, reject_sigma, cauchy_k, iterations)
+                              drift_knots or {}, event_sigma_ms),
+                      n_cameras, reject_sigma, cauchy_k, iterations)
 
 
 def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float,
@@ -141,7 +151,54 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
                        minlength=len(system.flash_ids)) > 0
     flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
     return Solution([system.camera_solution(x, covariance, c) for c in range(n_cameras)],
-                    flash_ms, residual, inlier, sigma)
+                    flash_ms, residual, inlier, sigma, system.n_unknowns)
+
+
+#: Segments per camera tried for a clock whose rate changes (1 = affine).
+DRIFT_SEGMENTS = (1, 2, 4, 8, 16)
+#: Fewest events per segment and camera for a segment to be fitted.
+MIN_EVENTS_PER_SEGMENT = 4
+#: BIC decrease that counts as strong evidence for a richer drift model.
+MIN_BIC_GAIN = 10.0
+
+
+def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0,
+                           **options) -> Solution:
+    """:func:`solve_clocks` with the drift model chosen by the data.
+
+    Each camera's clock is tried affine, then with its rate changing piecewise-linearly
+    over 2, 4, 8 and 16 equal segments of its recording (cameras with fewer than
+    :data:`MIN_EVENTS_PER_SEGMENT` events per segment stay at what they support). A richer
+    model is kept only if it lowers the Bayesian information criterion (on the inlier
+    equations) by :data:`MIN_BIC_GAIN`: strong evidence.
+    """
+    camera = np.asarray(events.camera)
+    t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
+    best = solve_clocks(events, n_cameras, reference, **options)
+    best_bic = _bic(best)
+    knots = {}
+    for segments in DRIFT_SEGMENTS[1:]:
+        for c in range(n_cameras):
+            times = t_frame[camera == c]
+            if c != reference and len(times) >= MIN_EVENTS_PER_SEGMENT * segments:
+                knots[c] = np.linspace(times.min(), times.max(), segments + 1)
+        if not knots:
+            break
+        try:
+            trial = solve_clocks(events, n_cameras, reference, drift_knots=dict(knots), **options)
+        except FlashsyncError:
+            break
+        bic = _bic(trial)
+        if bic < best_bic - MIN_BIC_GAIN:
+            best, best_bic = trial, bic
+    return best
+
+
+def _bic(solution: Solution) -> float:
+    """Bayesian information criterion of a solution on its inlier equations."""
+    residual = solution.residual_ms[solution.inlier]
+    n = len(residual)
+    return n * np.log(max(float(np.mean(residual**2)), 1e-18)) + solution.n_unknowns * np.log(n)
 
 
 def _robust_sigma(residual: np.ndarray) -> float:
@@ -153,12 +210,13 @@ class _System:
     """The sparse design of :func:`solve_clocks`, columns scaled to unit norm.
 
     Columns: per camera (drift about mid time, shift at mid time, row time), the
-    reference's first two left out; one band duration per camera that has informative
-    durations; one global time per flash. Rows: events, durations, then priors.
+    reference's first two left out; the warp values of cameras with drift knots; one band
+    duration per camera that has informative durations; one global time per flash. Rows:
+    events, durations, then priors.
     """
 
     def __init__(self, events: Events, n_cameras: int, reference: int, durations: Durations | None,
-                 priors: Priors, event_sigma_ms: float):
+                 priors: Priors, drift_knots: dict[int, np.ndarray], event_sigma_ms: float):
         camera = np.asarray(events.camera, dtype=np.int64)
         t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
         q = np.asarray(events.q, dtype=np.float64)
@@ -173,6 +231,11 @@ class _System:
                 if c != reference or k == 2:
                     self.param_columns[c, k] = n_columns
                     n_columns += 1
+        self.knots = {c: np.asarray(knots, dtype=np.float64) for c, knots in drift_knots.items()}
+        self.warp_columns = {}
+        for c, knots in self.knots.items():
+            self.warp_columns[c] = n_columns + np.arange(len(knots) - 2)
+            n_columns += len(knots) - 2
         durations = _informative(durations, n_cameras)
         duration_cameras = np.unique(durations.camera)
         duration_column = {c: n_columns + i for i, c in enumerate(duration_cameras)}
@@ -187,6 +250,11 @@ class _System:
         for k, value in enumerate([t_frame - self.mid_ms[camera], np.ones(n_events), q]):
             triplets.add(rows, self.param_columns[camera, k], value)
         triplets.add(rows, self.flash_columns[flash], -np.ones(n_events))
+        for c, knots in self.knots.items():
+            mine = np.flatnonzero(camera == c)
+            hats = hat_basis(knots, t_frame[mine])
+            for j, column in enumerate(self.warp_columns[c]):
+                triplets.add(mine, np.full(len(mine), column), hats[:, j])
         rhs = [-t_frame]
 
         rows = n_events + np.arange(len(durations.camera))
@@ -273,15 +341,19 @@ class _System:
         return scale * inverse * np.outer(column_scale, column_scale)
 
     def camera_solution(self, x: np.ndarray, covariance: np.ndarray, c: int) -> CameraSolution:
-        """Camera ``c``'s (alpha, beta, T_row) and covariance from (drift, shift at mid, T_row)."""
-        columns = self.param_columns[c]
+        """Camera ``c``'s (alpha, beta, T_row, warp) and their covariance, from the solved
+        (drift, shift at mid time, T_row, warp)."""
+        warp = self.warp_columns.get(c, np.zeros(0, dtype=np.int64))
+        columns = np.concatenate([self.param_columns[c], warp])
         used = columns >= 0
-        drift, shift, row_time = np.where(used, x[np.maximum(columns, 0)], 0.0)
-        local = np.zeros((3, 3))
+        values = np.where(used, x[np.maximum(columns, 0)], 0.0)
+        local = np.zeros((len(columns), len(columns)))
         local[np.ix_(used, used)] = covariance[np.ix_(columns[used], columns[used])]
-        jacobian = np.array([[1.0, 0.0, 0.0], [-self.mid_ms[c], 1.0, 0.0], [0.0, 0.0, 1.0]])
+        jacobian = np.eye(len(columns))
+        jacobian[1, 0] = -self.mid_ms[c]
+        drift, shift, row_time = values[:3]
         return CameraSolution(1.0 + drift, shift - drift * self.mid_ms[c], row_time,
-                              jacobian @ local @ jacobian.T)
+                              jacobian @ local @ jacobian.T, self.knots.get(c, np.zeros(0)), values[3:])
 
 
 def _informative(durations: Durations | None, n_cameras: int) -> Durations:
