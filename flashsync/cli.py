@@ -7,6 +7,7 @@ written atomically.
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 from pathlib import Path
 
@@ -117,10 +118,15 @@ def _detection_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _progress(camera: str, total: int):
+    """One progress bar per video (shown on a terminal only)."""
     from tqdm import tqdm
 
-    bar = tqdm(total=total or None, desc=camera, unit="frame", leave=False, disable=None)
+    bar = tqdm(total=total or None, desc=camera, unit="frame", leave=False, disable=None,
+               position=next(_BAR_POSITIONS))
     return bar.update
+
+
+_BAR_POSITIONS = itertools.count()
 
 
 def _run_detect(args) -> None:

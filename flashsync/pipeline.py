@@ -13,6 +13,8 @@ direction of cameras where it is not given, and the joint robust solve.
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from itertools import combinations
 from pathlib import Path
@@ -50,6 +52,9 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     estimate_readout : detect the other cameras' events both ways, so that
         :func:`synchronize` can find an upside-down camera.
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
+
+    Videos are decoded in parallel threads, one per core (decoding and the compiled row
+    kernel release the GIL).
     """
     paths = [Path(p) for p in paths]
     stems = [p.stem for p in paths]
@@ -60,12 +65,13 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     unknown = sorted(set(flipped) - set(stems))
     if unknown:
         raise FlashsyncError(f"--flipped {', '.join(unknown)}: no such camera among {', '.join(stems)}")
-    results = []
-    for path in paths:
+    def detect(path: Path) -> CameraDetection:
         callback = progress(path.stem, probe_video(path).n_frames_hint) if progress else None
         direction = True if path.stem in flipped else (None if estimate_readout else False)
-        results.append(detect_video(path, flipped=direction, settings=settings, progress=callback))
-    return results
+        return detect_video(path, flipped=direction, settings=settings, progress=callback)
+
+    with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
+        return list(pool.map(detect, paths))
 
 
 def all_events(detections: Sequence[CameraDetection]) -> pd.DataFrame:

@@ -222,14 +222,20 @@ def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
 
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
-    """Std of one edge's time, ms, from the scatter of band lengths (rows) among the bands
-    of one camera that span the same number of frames (a length holds two edges' errors)."""
-    squares, dof = 0.0, 0
+    """Std of one edge's time, ms, from the scatter of band lengths among the bands of one
+    camera that span the same number of frames (a length holds two edges' errors); lengths
+    beyond 5 robust stds (a misdetected band) are left out."""
+    deviations = []
     for camera, camera_bands in zip(cameras, bands):
         frames = camera_bands["frame_trailing"] - camera_bands["frame_leading"]
         for _, kind in camera_bands.groupby(frames):
             if len(kind) >= 3:
                 rows = (kind["row_trailing"] - kind["row_leading"]).to_numpy()
-                squares += float(np.sum((rows - rows.mean()) ** 2)) * (camera.median_step_ms / camera.height) ** 2
-                dof += len(rows) - 1
-    return float(np.sqrt(squares / dof / 2.0)) if dof else float("nan")
+                scale = camera.median_step_ms / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
+                deviations.append((rows - np.median(rows)) * scale)
+    if not deviations:
+        return float("nan")
+    deviations = np.concatenate(deviations)
+    robust = 1.4826 * np.median(np.abs(deviations))
+    kept = deviations[np.abs(deviations) <= 5.0 * robust]
+    return float(np.sqrt(np.mean(kept**2) / 2.0))
