@@ -71,6 +71,8 @@ def _parser() -> argparse.ArgumentParser:
                       help="also solve every pair of cameras on its own and print that table")
     sync.add_argument("--json", type=Path, metavar="OUT.json",
                       help="also write the tables, rejected events and warnings as JSON")
+    sync.add_argument("--rrd", type=Path, metavar="OUT.rrd",
+                      help="also write a Rerun recording of the result (events, residuals, videos)")
     _detection_options(sync)
 
     restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
@@ -99,6 +101,16 @@ def _parser() -> argparse.ArgumentParser:
                           help="exposure time of a camera in ms; repeatable")
     validate.add_argument("--json", type=Path, metavar="OUT.json", help="also write the report as JSON")
 
+    view = command("view", "Show a synchronisation in the Rerun viewer: events, residuals, "
+                   "videos in sync, trajectories, on one global timeline.", _run_view)
+    view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _view_inputs(view)
+    output = view.add_mutually_exclusive_group(required=True)
+    output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
+    output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
+    output.add_argument("--serve", action="store_true",
+                        help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C")
+
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
     simulate.add_argument("scenario", nargs="?", default="sample",
                           help="preset name or a YAML/JSON scenario file (default: sample)")
@@ -109,7 +121,18 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--samples", type=Path, help="sample folder (default: the shipped samples/)")
     demo.add_argument("-o", "--output", type=Path, default=Path("flashsync-demo"),
                       help="folder for the demo's outputs (default: flashsync-demo)")
+    demo.add_argument("--rrd", type=Path, metavar="OUT.rrd",
+                      help="also write a Rerun recording of the demo (videos, events, puck)")
     return parser
+
+
+def _view_inputs(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--videos", nargs="+", type=Path, default=[], metavar="VIDEO",
+                        help="videos to show in sync (camera = file stem)")
+    parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
+    parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
+    parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
+    parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
 
 
 def _detection_options(parser: argparse.ArgumentParser) -> None:
@@ -142,7 +165,7 @@ def _run_detect(args) -> None:
 def _run_sync(args) -> None:
     import json
 
-    from flashsync.atomic import atomic_output
+    from flashsync.atomic import write_text
     from flashsync.model_file import save_model
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
     from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
@@ -172,8 +195,12 @@ def _run_sync(args) -> None:
         print()
         print(pairwise_text(pairwise))
     if args.json:
-        with atomic_output(args.json) as temporary:
-            temporary.write_text(json.dumps(sync_summary(model, report, pairwise), indent=1))
+        write_text(args.json, json.dumps(sync_summary(model, report, pairwise), indent=1))
+    if args.rrd:
+        import viz
+
+        viz.save_recording(args.rrd, model, videos=args.videos, events=all_events(detections))
+        print(f"recording -> {args.rrd}", file=sys.stderr)
     print(f"model -> {args.output}", file=sys.stderr)
 
 
@@ -213,7 +240,7 @@ def _run_validate(args) -> None:
 
     import pandas as pd
 
-    from flashsync.atomic import atomic_output
+    from flashsync.atomic import write_text
     from flashsync.model_file import load_model
     from tracking_adapter.formats import load_homographies, read_detections
     from tracking_adapter.validate import format_report, validate
@@ -224,8 +251,37 @@ def _run_validate(args) -> None:
                       source=", ".join(map(str, args.detections)))
     print(format_report(report))
     if args.json:
-        with atomic_output(args.json) as temporary:
-            temporary.write_text(json.dumps(report.to_dict(), indent=1))
+        write_text(args.json, json.dumps(report.to_dict(), indent=1))
+
+
+def _run_view(args) -> None:
+    import json
+
+    import pandas as pd
+
+    import viz
+    from flashsync.model_file import load_model
+    from tracking_adapter.formats import load_homographies, read_detections
+
+    model = load_model(args.model)
+    data = {"videos": args.videos or None,
+            "events": read_detections(args.events) if args.events else None,
+            "detections": read_detections(args.detections) if args.detections else None,
+            "homographies": load_homographies(args.homographies) if args.homographies else None}
+    if args.validation:
+        try:
+            triples = json.loads(args.validation.read_text())["triples"]
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            raise FlashsyncError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
+                                 f"({type(error).__name__}: {error})") from None
+        data["validation"] = pd.DataFrame.from_records(triples)
+    if args.save:
+        viz.save_recording(args.save, model, **data)
+        print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
+    elif args.spawn:
+        viz.spawn(model, **data)
+    else:
+        viz.serve(model, **data)
 
 
 def _run_simulate(args) -> None:
@@ -238,4 +294,4 @@ def _run_simulate(args) -> None:
 def _run_demo(args) -> None:
     from flashsync.demo import run_demo
 
-    print(run_demo(args.samples, args.output, progress=_progress))
+    print(run_demo(args.samples, args.output, progress=_progress, recording=args.rrd))

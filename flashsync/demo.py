@@ -15,7 +15,7 @@ from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
 from flashsync.simulation import load_ground_truth
 from flashsync.tables import write_table
-from tracking_adapter.formats import read_detections
+from tracking_adapter.formats import load_homographies, read_detections
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -28,9 +28,11 @@ def default_samples() -> Path:
 
 
 def run_demo(samples: Path | None, output: Path,
-             progress: Callable[[str, int], Callable[[int], None]] | None = None) -> str:
+             progress: Callable[[str, int], Callable[[int], None]] | None = None,
+             recording: Path | None = None) -> str:
     """Run the chain on ``samples`` (videos, ``truth.json``, ``detections.csv``), write
-    ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output``; return the report."""
+    ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output`` (and a Rerun
+    recording to ``recording`` if given); return the report."""
     samples = samples or default_samples()
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
@@ -60,4 +62,11 @@ def run_demo(samples: Path | None, output: Path,
     lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms "
                  "against truth")
     lines.append(f"outputs in {output}/: events.csv sync.json restamped.csv")
+    if recording is not None:
+        import viz
+
+        viz.save_recording(recording, model, videos=videos, events=all_events(detections),
+                           detections=read_detections(output / "restamped.csv"),
+                           homographies=load_homographies(samples / "homographies.json"))
+        lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

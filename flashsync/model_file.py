@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flashsync.atomic import atomic_output
+from flashsync.atomic import write_text
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
 
@@ -31,8 +31,7 @@ def save_model(model: SyncModel, path: str | Path) -> None:
         "cameras": [_camera_to_dict(camera) for camera in model.cameras.values()],
         "events": json.loads(model.events.to_json(orient="records")),
     }
-    with atomic_output(path) as temporary:
-        temporary.write_text(json.dumps(document, indent=1))
+    write_text(path, json.dumps(document, indent=1))
 
 
 def load_model(path: str | Path) -> SyncModel:

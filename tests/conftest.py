@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-os.environ.setdefault("RERUN_DISABLE_ANALYTICS", "1")
+os.environ.setdefault("CI", "1")  # rerun-sdk sends no usage analytics where CI is set
 
 
 @pytest.fixture(scope="session")

@@ -24,6 +24,8 @@ known, else end of exposure (``t_global_ms``).
 
 from __future__ import annotations
 
+import json
+
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 
@@ -41,6 +43,8 @@ TIME_MODELS = {
     "no_drift": "no drift (alpha = 1)",
 }
 DEFAULT_GAP_FRAMES = 2.5
+TRIPLE_COLUMNS = ["camera_a", "camera_b", "object", "t_global_ms", "x_b", "y_b", "x_a", "y_a",
+                  "error_m"]
 OBJECT_COLUMNS = ("object", "id")
 
 
@@ -103,15 +107,22 @@ class ValidationReport:
     not_used : dict of str to int
         Detections left out, by reason (the restamp reasons, ``x missing or not a number``,
         ``object id missing``, ``camera without homography``).
+    triples : DataFrame
+        Every triple of the sub-frame model (:data:`TRIPLE_COLUMNS`): B's detection at its
+        instant (ms) and plane position (m), A's interpolated position there, the distance.
     """
 
     pairs: list[PairValidation]
     instant: str
     not_used: dict[str, int] = field(default_factory=dict)
+    triples: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=TRIPLE_COLUMNS))
 
     def to_dict(self) -> dict:
-        """Plain dicts, lists, numbers and strings, for ``json.dumps``."""
-        return asdict(self)
+        """Plain dicts, lists, numbers and strings, for ``json.dumps``; ``triples`` as a list
+        of records."""
+        return {"pairs": [asdict(pair) for pair in self.pairs], "instant": self.instant,
+                "not_used": self.not_used,
+                "triples": json.loads(self.triples.to_json(orient="records"))}
 
 
 def image_to_plane(x: np.ndarray, y: np.ndarray, homography: np.ndarray) -> np.ndarray:
@@ -201,6 +212,8 @@ def validate(detections: pd.DataFrame, model: SyncModel,
                                               y[mine]) - shift[mine])
 
     report = ValidationReport(pairs=[], instant=instant, not_used=not_used)
+    object_names = (pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"]))
+    triples = []
     for a in used:
         gap = max_gap_ms if max_gap_ms is not None else _default_gap_ms(model.camera(a))
         in_a = names == a
@@ -208,10 +221,19 @@ def validate(detections: pd.DataFrame, model: SyncModel,
             if a == b:
                 continue
             in_b = names == b
-            stats = {time_model: _pair_stats(objects[in_a], values[in_a], plane[in_a],
-                                             objects[in_b], values[in_b], plane[in_b], gap)
-                     for time_model, values in times.items()}
-            report.pairs.append(PairValidation(a, b, float(gap), stats))
+            results = {time_model: _pair_stats(objects[in_a], values[in_a], plane[in_a],
+                                               objects[in_b], values[in_b], plane[in_b], gap)
+                       for time_model, values in times.items()}
+            report.pairs.append(PairValidation(a, b, float(gap),
+                                               {name: result[0] for name, result in results.items()}))
+            found = results["subframe"][1]
+            triples.append(pd.DataFrame({
+                "camera_a": a, "camera_b": b, "object": object_names[found[:, 0].astype(np.int64)],
+                "t_global_ms": found[:, 1], "x_b": found[:, 2], "y_b": found[:, 3],
+                "x_a": found[:, 4], "y_a": found[:, 5],
+                "error_m": np.hypot(found[:, 4] - found[:, 2], found[:, 5] - found[:, 3])}))
+    if triples:
+        report.triples = pd.concat(triples, ignore_index=True)
     return report
 
 
@@ -255,9 +277,12 @@ def _times(clock: CameraClock, time_model: str, frames: np.ndarray, y: np.ndarra
 
 def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
                 object_b: np.ndarray, t_b: np.ndarray, plane_b: np.ndarray,
-                max_gap_ms: float) -> ErrorStats:
-    """Interpolate A's track (times ms, plane m) at B's detections and measure the distance."""
-    errors, skipped = [], {}
+                max_gap_ms: float) -> tuple[ErrorStats, np.ndarray]:
+    """Interpolate A's track (times ms, plane m) at B's detections and measure the distance.
+
+    Returns the statistics and the triples, shape (n, 6): object code, B's instant (ms),
+    B's plane position and A's interpolated position (m)."""
+    errors, skipped, found = [], {}, []
     for obj in np.unique(object_b):
         in_a, in_b = object_a == obj, object_b == obj
         order = np.argsort(t_a[in_a], kind="stable")
@@ -277,11 +302,13 @@ def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
         weight = ((instants - times[after - 1]) / gap)[:, None]
         interpolated = points[after - 1] + weight * (points[after] - points[after - 1])
         errors.append(np.linalg.norm(interpolated - observed, axis=1))
+        found.append(np.column_stack([np.full(len(instants), obj), instants, observed, interpolated]))
     errors = np.concatenate(errors) if errors else np.empty(0)
+    found = np.concatenate(found) if found else np.empty((0, 6))
     if not len(errors):
-        return ErrorStats(0, None, None, None, skipped)
+        return ErrorStats(0, None, None, None, skipped), found
     return ErrorStats(len(errors), float(np.median(errors)), float(np.percentile(errors, 95)),
-                      float(errors.max()), skipped)
+                      float(errors.max()), skipped), found
 
 
 def _default_gap_ms(clock: CameraClock) -> float:

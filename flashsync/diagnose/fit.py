@@ -177,7 +177,7 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     q = np.array([readout_rows(row, cameras[c].height, flipped[c]) for c, row in zip(edges.camera, edges.row)])
     row_ms = np.array([clock.period_ms / camera.height for clock, camera in zip(clocks, cameras)])
     features = Features(edges.camera, frame_ms - mid_ms[edges.camera], q,
-                        edges.trailing != np.asarray(reflected)[edges.camera])
+                        edges.trailing)
     observed = frame_ms + q * row_ms[edges.camera]
 
     keys, columns = [], []

@@ -1,13 +1,12 @@
 """Writing simulated frames as H.264 video with chosen container stamps, atomically."""
 
-import os
-import tempfile
 from fractions import Fraction
 from pathlib import Path
 
 import av
 import numpy as np
 
+from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
 
 MP4_TIME_BASE = Fraction(1, 90000)
@@ -46,32 +45,6 @@ def container_stamps(camera, t_true_ms, rng):
     return pts, time_base
 
 
-def _atomic_target(path):
-    """A temporary file next to `path` (same folder, so ``os.replace`` is atomic).
-
-    It gets the permissions a newly created file would get (``mkstemp`` makes it 0600).
-    """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    return tmp
-
-
-def write_text_atomic(path, text):
-    """Write `text` (UTF-8) to `path` through a temporary file and a rename."""
-    tmp = _atomic_target(path)
-    try:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-
-
 def write_video(path, frames, pts, time_base, crf=23, fps=None):
     """Encode frames with libx264 (yuv420p) and explicit presentation stamps.
 
@@ -105,10 +78,9 @@ def write_video(path, frames, pts, time_base, crf=23, fps=None):
     if fmt is None:
         raise FlashsyncError(f"{path}: cannot write '{path.suffix}' video; use .mp4 or .mkv")
     pts = [int(p) for p in pts]
-    tmp = _atomic_target(path)
     count = 0
-    try:
-        with av.open(tmp, "w", format=fmt) as container:
+    with atomic_output(path) as tmp:
+        with av.open(str(tmp), "w", format=fmt) as container:
             stream = None
             for image, stamp in zip(frames, pts, strict=True):
                 if stream is None:
@@ -127,8 +99,4 @@ def write_video(path, frames, pts, time_base, crf=23, fps=None):
             if stream is None:
                 raise FlashsyncError(f"{path}: no frames to write")
             container.mux(stream.encode())
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     return count

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flashsync.simulation.encode import container_stamps, write_text_atomic, write_video
+from flashsync.atomic import write_text
+from flashsync.simulation.encode import container_stamps, write_video
 from flashsync.simulation.scenario import CameraSpec, check_scenario
 from flashsync.simulation.scene import (apply_homography, camera_background, camera_homography, make_scene,
                                         rink_to_image)
@@ -419,7 +420,7 @@ def render_scenario(scenario, out_dir, progress=None):
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(["camera", "frame", "x", "y", "object"])
     writer.writerows(detections)
-    write_text_atomic(out / "detections.csv", buf.getvalue())
-    write_text_atomic(out / "homographies.json", json.dumps(homographies, indent=1))
+    write_text(out / "detections.csv", buf.getvalue())
+    write_text(out / "homographies.json", json.dumps(homographies, indent=1))
     truth.save(out / "truth.json")
     return truth

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from flashsync.errors import FlashsyncError
-from flashsync.simulation.encode import write_text_atomic
+from flashsync.atomic import write_text
 from flashsync.simulation.scenario import clock_world_ms
 
 FORMAT = "flashsync-truth"
@@ -202,7 +202,7 @@ class GroundTruth:
 
     def save(self, path):
         """Write ``truth.json`` atomically."""
-        write_text_atomic(path, json.dumps(self.to_dict(), indent=1))
+        write_text(path, json.dumps(self.to_dict(), indent=1))
 
 
 def ground_truth(scenario, cameras):
