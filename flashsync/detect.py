@@ -26,6 +26,7 @@ from typing import Callable
 import numba
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares
 
 from flashsync.errors import FlashsyncError
 from flashsync.profiles import iter_profiles, probe_video
@@ -284,7 +285,44 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
     if quarter is None or three_quarters is None:
         return (row if kind == "pulse" else None), np.nan
     rise = abs(three_quarters - quarter)
-    return (row if kind == "pulse" else row - (three_quarters - quarter)), rise
+    if kind != "pulse":
+        return row - (three_quarters - quarter), rise
+    return _fit_pulse_edge(segment.change, row, rise, level, rising=crossing is _rising_crossing), rise
+
+
+def _fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, rising: bool) -> float:
+    """Refine a pulse edge by fitting the flash's ramp to the rows around it.
+
+    The light a row integrates rises as ``1 - exp(-(r - r0) / k)`` after the first row
+    ``r0`` that saw the flash (``k`` rows: the flash's decay time over the time per row),
+    and falls the same way after the trailing edge. A robust least-squares fit of
+    ``(r0, k, plateau)`` over the ramp uses every row of it instead of the two around the
+    half level; its half point ``r0 + k ln 2`` replaces ``row`` unless the fit fails or
+    moves it by more than two rows.
+    """
+    k = max(rise / np.log(3.0), 0.3)            # 25 % -> 75 % of an exponential ramp: k ln 3
+    sign = 1.0 if rising else -1.0
+    lo = int(np.floor(row - sign * (2 + 2 * k) if rising else row - 2 - 5 * k))
+    hi = int(np.ceil(row + 2 + 5 * k if rising else row + 2 + 2 * k))
+    x = np.arange(max(lo, 0), min(hi, len(values) - 1) + 1, dtype=np.float64)
+    y = values[x.astype(np.int64)]
+    keep = np.isfinite(y)
+    if keep.sum() < 5:
+        return row
+    x, y = sign * x[keep], y[keep]
+
+    def ramp(p):
+        start, scale, plateau = p
+        return -plateau * np.expm1(-np.maximum(x - start, 0.0) / max(scale, 1e-3)) - y
+
+    start0 = sign * row - k * np.log(2.0)
+    try:
+        fit = least_squares(ramp, [start0, k, level], loss="soft_l1", f_scale=0.05 * level)
+    except ValueError:
+        return row
+    start, scale, _ = fit.x
+    refined = sign * (start + scale * np.log(2.0))
+    return float(refined) if fit.success and abs(refined - row) <= 2.0 else row
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.

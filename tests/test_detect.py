@@ -16,9 +16,10 @@ def flash_at(frame: int, readout_row: float, strength: float = 0.5) -> FlashSpec
     return FlashSpec(world_ms=frame * 1000.0 / FPS + (R0 + readout_row) * ROW_MS, strength=strength)
 
 
-def render(tmp_path, name="cam", flashes=(), switches=(), n_frames=30, exposure_ms=8.0, **camera):
+def render(tmp_path, name="cam", flashes=(), switches=(), n_frames=30, exposure_ms=8.0, crf=23,
+           **camera):
     spec = CameraSpec(name, 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=exposure_ms, n_frames=n_frames,
-                      noise_std=1.0, crf=23, **camera)
+                      noise_std=1.0, crf=crf, **camera)
     scenario = Scenario("test", (spec,), flashes=tuple(flashes), switches=tuple(switches),
                         n_players=4, seed=3)
     truth = render_scenario(scenario, tmp_path)
@@ -29,15 +30,21 @@ def leading(events):
     return events[events["edge"] == "leading"].reset_index(drop=True)
 
 
-def test_leading_edges_match_the_flash_instants(tmp_path):
-    rows = [40.3, 75.8, 110.5, 131.2]
-    video, truth = render(tmp_path, flashes=[flash_at(4 + 6 * i, row) for i, row in enumerate(rows)])
+@pytest.mark.parametrize("crf, rms_rows", [(0, 0.1), (23, 0.15)])
+def test_leading_edges_match_the_flash_instants(tmp_path, crf, rms_rows):
+    """Sub-row edges (fitted ramps) within a fraction of a row of the truth, with and
+    without H.264 compression; one flash straddles two frames."""
+    rows = [40.3, 75.8, 110.5, 131.2, 60.7, 95.1, 150.4, HEIGHT - 8.6]
+    strengths = [0.3, 0.35, 0.4, 0.3, 0.35, 0.4, 0.3, 0.35]        # unsaturated
+    video, truth = render(tmp_path, flashes=[flash_at(4 + 6 * i, row, strength)
+                                             for i, (row, strength) in enumerate(zip(rows, strengths))],
+                          n_frames=55, exposure_ms=16.0, crf=crf)
     events = leading(detect_video(video).events)
-    assert len(events) == len(rows)
+    assert len(events) == len(rows) and "split" in events["flags"].iloc[-1]
     edge_ms = truth.global_time_ms("cam", events["frame"].to_numpy(), events["row"].to_numpy())
     true_ms = np.array([f["half_rise_global_ms"] for f in truth.flashes])
     error_rows = (edge_ms - true_ms) / ROW_MS
-    assert np.sqrt(np.mean(error_rows**2)) < 0.5, error_rows
+    assert np.sqrt(np.mean(error_rows**2)) < rms_rows, error_rows
 
 
 def test_straddling_flash_is_one_event_with_its_leading_edge_in_the_first_frame(tmp_path):
