@@ -1,11 +1,13 @@
 """Flash events from row profiles: bands of rows that changed brightness, and their edges.
 
 Each frame's row profile is compared with a baseline (per-row median of the last few
-profiles, so one or two flashed frames do not move it) as a relative change ``(p - b) / b``: illumination is multiplicative, so a flash
-gives a flat plateau whatever the scene's texture. Rows over a noise-adaptive threshold form
-bands; a band's leading edge (first affected row in readout order) is the row where the
-change crosses half of the band's plateau, interpolated to a fraction of a row — the same
-instant of the flash in every camera, whatever its gain or scene.
+profiles, so one or two flashed frames do not move it) as a relative change
+``(p - b) / b``, the median over column blocks: illumination is multiplicative, so a flash
+gives a flat plateau whatever the scene's texture, and a player changes only a few blocks.
+Rows over a noise-adaptive threshold form bands. A band's leading edge (first affected row
+in readout order) is where the change reaches half of the band's local plateau, refined to
+a fraction of a row by fitting the flash's exponential ramp to the rows around it: the
+same instant of the flash in every camera, whatever its gain or scene.
 
 A band that reaches the last row continues in the next frame (one event, flagged
 ``split``); a band that starts at row 0 with nothing open before it had its leading edge in
