@@ -58,6 +58,8 @@ class DetectorSettings:
     min_level : float
         Darkest row (fraction of white above black) whose relative change is measured;
         darker rows are blind.
+    min_step : float
+        Smallest brightness step (fraction of white; 1.5 DN) that counts as a change.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
     flipped : bool
@@ -69,6 +71,7 @@ class DetectorSettings:
     min_change: float = 0.03
     min_rows: int = 3
     min_level: float = 0.035
+    min_step: float = 1.5 / 219.0
     step_frames: int = 2
     flipped: bool = False
 
@@ -115,6 +118,7 @@ class EventDetector:
         self._history: deque[np.ndarray] = deque(maxlen=settings.history)
         self._noise: deque[float] = deque(maxlen=25)
         self._open: _Event | None = None
+        self._lit_rows = (0, height)
         self._global_frames = 0
         self._n_events = 0
         self.events: list[dict] = []
@@ -130,10 +134,13 @@ class EventDetector:
         if not self._history:
             self._history.append(readout)
             return
-        change = _relative_change(np.stack(self._history), readout, self.settings.min_level)
+        change = _relative_change(np.stack(self._history), readout, self.settings.min_level,
+                                  self.settings.min_step)
         self._noise.append(1.4826 * float(np.nanmedian(np.abs(np.diff(change)))) / np.sqrt(2.0))
         sigma = max(float(np.median(self._noise)), 1e-4)
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
+        lit = np.flatnonzero(np.isfinite(change))
+        self._lit_rows = (int(lit[0]), int(lit[-1]) + 1) if lit.size else (0, self.height)
         segments = []
         for sign in (1, -1):
             signed = sign * change
@@ -152,9 +159,11 @@ class EventDetector:
         return pd.DataFrame(self.events, columns=EVENT_COLUMNS)
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
+        """Follow bands across frames. A band reaching the first (last) lit row of the frame
+        (rows above a dark sky are blind) continues from the previous (into the next) frame."""
         opened, self._open = self._open, None
         for segment in segments:
-            at_top, at_bottom = segment.start == 0, segment.stop == self.height
+            at_top, at_bottom = segment.start <= self._lit_rows[0], segment.stop >= self._lit_rows[1]
             if at_top and opened is not None and segment.sign == opened.segments[0].sign:
                 opened.segments.append(segment)
                 if not at_bottom:
@@ -213,10 +222,12 @@ class EventDetector:
 
 
 @numba.njit(cache=True, nogil=True)
-def _relative_change(history, current, min_level):  # pragma: no cover - compiled
+def _relative_change(history, current, min_level, min_step):  # pragma: no cover - compiled
     """Per row: the median over column blocks of ``(current - baseline) / baseline``, with
     the baseline the per-block median of ``history`` (shape (k, height, blocks)); NaN where
-    fewer than half the blocks are lit (baseline >= ``min_level``). Shape (height,)."""
+    fewer than half the blocks are lit (baseline >= ``min_level``). A block that moved by
+    less than ``min_step`` counts as unchanged (a one-DN jump of a dark flat area at an
+    H.264 key frame is a large relative change). Shape (height,)."""
     k, height, blocks = history.shape
     change = np.empty(height, np.float64)
     column = np.empty(k, np.float64)
@@ -229,7 +240,8 @@ def _relative_change(history, current, min_level):  # pragma: no cover - compile
             column.sort()
             baseline = column[k // 2] if k % 2 else 0.5 * (column[k // 2 - 1] + column[k // 2])
             if baseline >= min_level:
-                lit[n_lit] = (current[r, b] - baseline) / baseline
+                step = current[r, b] - baseline
+                lit[n_lit] = step / baseline if abs(step) >= min_step else 0.0
                 n_lit += 1
         if 2 * n_lit < blocks or n_lit == 0:
             change[r] = np.nan

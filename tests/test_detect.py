@@ -105,3 +105,17 @@ def test_no_events_in_flicker_only_clip(tmp_path):
 def test_no_events_for_an_auto_exposure_step(tmp_path):
     video, _ = render(tmp_path, gain_steps=((14 * 1000.0 / FPS + 3.0, 1.4),))
     assert detect_video(video).events.empty
+
+
+def test_no_events_in_half_a_minute_without_flashes(tmp_path):
+    """Players, puck, 3 % mains flicker, auto-exposure steps up and down, noise and H.264
+    key frames (every 250 frames, where dark flat areas jump by a DN): no event at all.
+    ``benchmarks/bench_false_events.py`` runs the same for 10 minutes."""
+    camera = CameraSpec("quiet", 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=10.0, noise_std=1.5,
+                        crf=26, gain_steps=((9_000.0, 1.15), (21_000.0, 1 / 1.15)))
+    scenario = Scenario("quiet", (camera,), duration_ms=30_000.0, flicker_depth=0.03,
+                        n_players=12, seed=21)
+    render_scenario(scenario, tmp_path)
+    detection = detect_video(tmp_path / "quiet.mp4")
+    assert len(detection.frame_times_ms) == 750
+    assert detection.events.empty, detection.events
