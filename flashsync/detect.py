@@ -31,7 +31,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from flashsync.errors import FlashsyncError
-from flashsync.profiles import iter_profiles, probe_video
+from flashsync.profiles import read_profiles
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
@@ -237,19 +237,27 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
         for b in range(blocks):
             for i in range(k):
                 column[i] = history[i, r, b]
-            column.sort()
-            baseline = column[k // 2] if k % 2 else 0.5 * (column[k // 2 - 1] + column[k // 2])
+            baseline = _median_in_place(column, k)
             if baseline >= min_level:
                 step = current[r, b] - baseline
                 lit[n_lit] = step / baseline if abs(step) >= min_step else 0.0
                 n_lit += 1
-        if 2 * n_lit < blocks or n_lit == 0:
-            change[r] = np.nan
-        else:
-            values = np.sort(lit[:n_lit])
-            middle = n_lit // 2
-            change[r] = values[middle] if n_lit % 2 else 0.5 * (values[middle - 1] + values[middle])
+        change[r] = _median_in_place(lit, n_lit) if 2 * n_lit >= blocks and n_lit > 0 else np.nan
     return change
+
+
+@numba.njit(cache=True, nogil=True)
+def _median_in_place(values, n):  # pragma: no cover - compiled
+    """Median of ``values[:n]`` by insertion sort (n is small); reorders them."""
+    for i in range(1, n):
+        value = values[i]
+        j = i - 1
+        while j >= 0 and values[j] > value:
+            values[j + 1] = values[j]
+            j -= 1
+        values[j + 1] = value
+    middle = n // 2
+    return values[middle] if n % 2 else 0.5 * (values[middle - 1] + values[middle])
 
 
 def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
@@ -398,7 +406,8 @@ class CameraDetection:
 
 def detect_video(path: str | Path, flipped: bool | None = False,
                  settings: DetectorSettings | None = None,
-                 progress: Callable[[int], None] | None = None) -> CameraDetection:
+                 progress: Callable[[str, int], Callable[[int], None] | None] | None = None,
+                 ) -> CameraDetection:
     """Decode a video once and detect its flash events.
 
     Parameters
@@ -407,24 +416,26 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     flipped : the camera reads bottom-up in stored rows (mounted upside down); None: not
         known, events are detected both ways (``events`` top-down, ``alternative`` bottom-up).
     settings : detector tuning; ``flipped`` overrides its field.
-    progress : called with the number of frames decoded since the last call.
+    progress : ``progress(camera, n_frames_hint)`` may return a callback taking the number
+        of frames decoded since its last call.
 
     Returns
     -------
     CameraDetection with ``events`` in EVENT_COLUMNS (rows are stored-image rows).
     """
-    info = probe_video(path)
+    info, profiles = read_profiles(path)
+    update = progress(info.camera, info.n_frames_hint) if progress else None
     directions = [False, True] if flipped is None else [flipped]
     base = settings or DetectorSettings()
     detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction))
                  for direction in directions]
     times = []
-    for frame, (t_ms, profile) in enumerate(iter_profiles(info.path)):
+    for frame, (t_ms, profile) in enumerate(profiles):
         times.append(t_ms)
         for detector in detectors:
             detector.push(frame, t_ms, profile)
-        if progress is not None:
-            progress(1)
+        if update is not None:
+            update(1)
     frame_times = check_timestamps(np.asarray(times), str(info.path))
     if len(frame_times) < 2:
         raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")

@@ -28,7 +28,6 @@ from flashsync.errors import FlashsyncError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
-from flashsync.profiles import probe_video
 from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
@@ -66,9 +65,8 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     if unknown:
         raise FlashsyncError(f"--flipped {', '.join(unknown)}: no such camera among {', '.join(stems)}")
     def detect(path: Path) -> CameraDetection:
-        callback = progress(path.stem, probe_video(path).n_frames_hint) if progress else None
         direction = True if path.stem in flipped else (None if estimate_readout else False)
-        return detect_video(path, flipped=direction, settings=settings, progress=callback)
+        return detect_video(path, flipped=direction, settings=settings, progress=progress)
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         return list(pool.map(detect, paths))

@@ -23,7 +23,7 @@ from flashsync.timestamps import open_video
 #: Samples per row aimed at: every ``width // ROW_SAMPLES``-th column is read.
 ROW_SAMPLES = 256
 #: Column blocks of a row profile.
-DEFAULT_BLOCKS = 16
+DEFAULT_BLOCKS = 8
 
 
 @dataclass(frozen=True)
@@ -40,15 +40,13 @@ class VideoInfo:
         return self.path.stem
 
 
-def probe_video(path: str | Path) -> VideoInfo:
-    """Size and approximate frame count of a video, or a one-line error."""
-    path = Path(path)
-    with open_video(path) as container:
-        stream = container.streams.video[0]
-        if not stream.width or not stream.height:
-            raise FlashsyncError(f"{path}: video stream has no frame size; is the file complete?")
-        hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
-        return VideoInfo(path, stream.width, stream.height, hint)
+def video_info(container: av.container.InputContainer, path: Path) -> VideoInfo:
+    """Size and approximate frame count of an open video, or a one-line error."""
+    stream = container.streams.video[0]
+    if not stream.width or not stream.height:
+        raise FlashsyncError(f"{path}: video stream has no frame size; is the file complete?")
+    hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
+    return VideoInfo(path, stream.width, stream.height, hint)
 
 
 def luma_plane(frame: av.VideoFrame) -> np.ndarray:
@@ -115,8 +113,10 @@ def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
-def iter_profiles(path: str | Path, step: int | None = None) -> Iterator[tuple[float, np.ndarray]]:
-    """Decode a video and yield ``(t_frame_ms, profile)`` per frame, presentation order.
+def read_profiles(path: str | Path, step: int | None = None,
+                  ) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray]]]:
+    """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile)``
+    per decoded frame, presentation order (the file closes when the iterator ends).
 
     ``step`` is the column step (default :func:`column_step` of the width).
 
@@ -126,7 +126,18 @@ def iter_profiles(path: str | Path, step: int | None = None) -> Iterator[tuple[f
     are an error naming the file.
     """
     path = Path(path)
-    with open_video(path) as container:
+    container = open_video(path)
+    try:
+        info = video_info(container, path)
+    except FlashsyncError:
+        container.close()
+        raise
+    return info, _profiles(container, path, step or column_step(info.width))
+
+
+def _profiles(container: av.container.InputContainer, path: Path, step: int,
+              ) -> Iterator[tuple[float, np.ndarray]]:
+    with container:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
         try:
@@ -135,8 +146,7 @@ def iter_profiles(path: str | Path, step: int | None = None) -> Iterator[tuple[f
                     raise FlashsyncError(f"{path}: a frame has no timestamp; remux the file "
                                          "(ffmpeg -i IN -c copy OUT.mkv)")
                 black, white = luma_range(frame)
-                luma = luma_plane(frame)
-                profile = (row_profile(luma, step or column_step(luma.shape[1])) - black) / (white - black)
+                profile = (row_profile(luma_plane(frame), step) - black) / (white - black)
                 yield float(frame.pts * frame.time_base) * 1000.0, profile
         except av.FFmpegError as error:
             raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None
