@@ -20,6 +20,7 @@ EXAMPLES = {
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
     "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
     "simulate": "flashsync simulate sample -o sim/",
+    "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
 }
 
@@ -115,6 +116,15 @@ def _parser() -> argparse.ArgumentParser:
     simulate.add_argument("scenario", nargs="?", default="sample",
                           help="preset name or a YAML/JSON scenario file (default: sample)")
     simulate.add_argument("-o", "--output", type=Path, required=True, help="output folder")
+
+    diagnose = command("diagnose", "Find where the plain time model and the measurement disagree, "
+                       "name the missing effects one by one and show the gap shrink.", _run_diagnose)
+    diagnose.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
+    diagnose.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
+    diagnose.add_argument("--json", type=Path, metavar="OUT.json", help="also write the steps as JSON")
+    diagnose.add_argument("--rrd", type=Path, metavar="OUT.rrd",
+                          help="also write a Rerun recording of the residuals after each step")
+    _detection_options(diagnose)
 
     demo = command("demo", "Run detect -> sync -> restamp on the shipped sample and compare "
                    "with its ground truth.", _run_demo)
@@ -289,6 +299,24 @@ def _run_simulate(args) -> None:
 
     truth = render_scenario(load_scenario(args.scenario), args.output)
     print(f"{len(truth.cameras)} cameras rendered -> {args.output}", file=sys.stderr)
+
+
+def _run_diagnose(args) -> None:
+    import json
+
+    from flashsync.atomic import write_text
+    from flashsync.diagnose import diagnose, format_diagnosis
+    from flashsync.pipeline import detect_videos
+
+    diagnosis = diagnose(detect_videos(args.videos, args.flipped, progress=_progress), args.reference)
+    print(format_diagnosis(diagnosis))
+    if args.json:
+        write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))
+    if args.rrd:
+        import viz
+
+        viz.save_diagnosis(args.rrd, diagnosis)
+        print(f"recording -> {args.rrd}", file=sys.stderr)
 
 
 def _run_demo(args) -> None:

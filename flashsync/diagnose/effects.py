@@ -11,25 +11,30 @@ reference) and ``E`` one exposure shared by all cameras (a trailing edge is the 
 exposure *starts* at the flash, DESIGN.md). Its frame clock ``t0_c + f * P_c`` also predicts
 the stamps.
 
-An effect either adds columns to this linear model (one parameter per camera it applies to)
-or changes how its quantities are computed (frame numbers, frame period, readout rows):
+An effect either adds a column to this linear model for one camera (``t`` is the model's
+frame time minus the camera's mid time, ``q`` the readout row) or changes how the model's
+quantities are computed (frame slots, frame period, readout rows). Effects marked "others"
+apply to every camera but the reference, whose clock and exposure define the global ones:
 
-======================  ==============================================  ============================
-effect                  residual structure it explains                  how the model changes
-======================  ==============================================  ============================
-dropped_frames          steps at the frame gaps (stamps and edges)      frame slots counted from the
-                                                                        stamp gaps, not the index
-frame_clock             stamps off the nominal grid: a sawtooth locked  frame clock fitted to all
-                        to the stamp grid or jitter, and the period     stamps (least squares), not
-                        error it leaves in the median step              the median step
-flipped                 band edges on the wrong side: a row trend of    readout rows reversed, edges
-                        twice the time per row                          swapped
-row_time                a trend against the readout row                 + time per row - nominal
-drift                   a trend against time                            + alpha - 1
-drift_rate              a curvature against time (implies drift)        + half the change of drift
-exposure                a constant gap between the leading and trailing + exposure - reference's
-                        edges' residuals: mid-exposure times differ
-======================  ==============================================  ============================
+==============  ==========================================  ======================================
+effect          residual structure it explains              how the model changes
+==============  ==========================================  ======================================
+dropped_frames  steps of whole frame periods at the frame   frame slots counted from the stamp
+                gaps, in stamps and edges                   gaps instead of the frame index
+frame_clock     stamps scattered about a steady clock (a    frame clock offset and period fitted
+                sawtooth locked to the stamp grid, or       to all stamps (least squares) instead
+                jitter) and the period error that leaves    of the median step
+                in the median step
+flipped         band edges on the wrong side: a trend       readout rows reversed, leading and
+                against the row of twice the time per row   trailing edges swapped
+row_time        a trend against the readout row             column ``-q``: time per row minus
+                                                            nominal, ms per row
+drift           a trend against time                        column ``-t`` (others): alpha - 1
+drift_rate      a curvature against time                    column ``-t**2`` (others), with drift:
+                                                            half the drift's change per ms
+exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
+                and leading edges' residuals                exposure minus the reference's, ms
+==============  ==========================================  ======================================
 
 Flash decay is not in the catalogue: the detector marks each edge at half of the band's
 own rise, the same instant of the flash in every camera whatever its decay, so the decay
@@ -120,7 +125,8 @@ class Effect:
 
 
 def _describe_drops(fit: Fit, camera: int) -> str:
-    return f"{fit.clocks[camera].missing} frame slots without a frame"
+    missing = fit.clocks[camera].missing
+    return f"{missing} missing frame{'s' if missing != 1 else ''} (stamp gaps of whole frame periods)"
 
 
 def _describe_frame_clock(fit: Fit, camera: int) -> str:

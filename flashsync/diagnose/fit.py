@@ -6,9 +6,8 @@ flashes' global times, the cameras' shifts, the shared exposure and the effects'
 It is solved by iteratively reweighted least squares under a Cauchy (Student-t, one degree
 of freedom) likelihood with a fitted scale, no smaller than the edge noise the band lengths
 show, so one bad edge neither moves the fit nor names an effect, while a step or a trend
-shared by many edges weighs in full. Each camera's
-stamps are a second stream: their residuals about the model's frame clock get a Cauchy
-likelihood of their own.
+shared by many edges weighs in full. Each camera's stamps are a second stream: their
+residuals about the model's frame clock get a Cauchy likelihood of their own.
 
 A model's score is its Bayesian information criterion over both streams::
 
@@ -168,32 +167,19 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     """Fit the model with the effects ``terms`` switched on; None when the measurement
     cannot determine its parameters."""
     cameras, edges = measurement.cameras, measurement.edges
-    reflected = [Term(FLIPPED, c) in terms for c in range(len(cameras))]
+    reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
     clocks = [frame_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
               for c, camera in enumerate(cameras)]
-    frame_ms = np.array([clocks[c].times_ms[f] for c, f in zip(edges.camera, edges.frame)])
-    mid_ms = np.array([0.5 * (clock.times_ms[0] + clock.times_ms[-1]) for clock in clocks])
-    q = np.array([readout_rows(row, cameras[c].height, flipped[c]) for c, row in zip(edges.camera, edges.row)])
-    row_ms = np.array([clock.period_ms / camera.height for clock, camera in zip(clocks, cameras)])
-    features = Features(edges.camera, frame_ms - mid_ms[edges.camera], q,
-                        edges.trailing)
-    observed = frame_ms + q * row_ms[edges.camera]
-
-    keys, columns = [], []
-    for c in range(len(cameras)):
-        if c != measurement.reference:
-            keys.append(("shift", c))
-            columns.append(-(edges.camera == c).astype(np.float64))
-    keys.append((EXPOSURE, -1))
-    columns.append(features.trailing.astype(np.float64))
-    for term in sorted(terms):
-        column = CATALOGUE[term.effect].column
-        if column is not None:
-            keys.append((term.effect, term.camera))
-            columns.append(np.where(edges.camera == term.camera, column(features), 0.0))
-    flashes = (edges.flash[:, None] == np.arange(measurement.n_flashes)[None, :]).astype(np.float64)
-    design = np.column_stack(columns + [flashes])
+    frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
+    for c, (camera, clock) in enumerate(zip(cameras, clocks)):
+        mine = edges.camera == c
+        frame_ms[mine] = clock.times_ms[edges.frame[mine]]
+        q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
+        observed[mine] = frame_ms[mine] + q[mine] * clock.period_ms / camera.height
+        frame_ms[mine] -= 0.5 * (clock.times_ms[0] + clock.times_ms[-1])
+    features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
+    keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
     solved = robust_fit(design, observed, noise if np.isfinite(noise) else MIN_SCALE_MS)
     if solved is None:
@@ -206,6 +192,27 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
     return Fit(measurement, terms, clocks, flipped, features, dict(zip(keys, parameters[:len(keys)].tolist())),
                residual, stamp_residuals, scale, float(bic))
+
+
+def _design(measurement: Measurement, terms: frozenset[Term],
+            features: Features) -> tuple[list[tuple[str, int]], np.ndarray]:
+    """Keys of the named columns and the design, shape (n_edges, n_columns): each other
+    camera's shift, the shared exposure, the effects' columns, then one per flash."""
+    keys, columns = [], []
+    for c in range(len(measurement.cameras)):
+        if c != measurement.reference:
+            keys.append(("shift", c))
+            columns.append(-(features.camera == c).astype(np.float64))
+    keys.append((EXPOSURE, -1))
+    columns.append(features.trailing.astype(np.float64))
+    for term in sorted(terms):
+        column = CATALOGUE[term.effect].column
+        if column is not None:
+            keys.append((term.effect, term.camera))
+            columns.append(np.where(features.camera == term.camera, column(features), 0.0))
+    flash = measurement.edges.flash
+    columns += list((flash[None, :] == np.arange(measurement.n_flashes)[:, None]).astype(np.float64))
+    return keys, np.column_stack(columns)
 
 
 def robust_fit(design: np.ndarray, observed: np.ndarray,

@@ -127,8 +127,8 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     Raises
     ------
     FlashsyncError
-        Fewer than two cameras, an unknown reference, or no camera sharing at least
-        :data:`MIN_SHARED_BANDS` flashes with the reference.
+        Fewer than two cameras, an unknown reference, no camera sharing at least
+        :data:`MIN_SHARED_BANDS` flashes with the reference, or no clean band shared.
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
@@ -157,7 +157,11 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
                            d.flipped) for d in kept)
     bands = [pulses[d.camera][pulses[d.camera]["clean"]] for d in kept]
-    return Measurement(cameras, [c.name for c in cameras].index(reference), _edges(bands, flash_of, cameras),
+    edges = _edges(bands, flash_of, cameras)
+    if len(edges) == 0:
+        raise FlashsyncError("no flash band with both edges inside the image is seen by two cameras; "
+                             "record more flashes, away from the top and bottom of the image")
+    return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
                        _edge_noise_ms(cameras, bands), warnings)
 
 

@@ -15,15 +15,18 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
     """
     d = diagnosis
     lines = [f"{len(d.cameras)} cameras (reference {d.reference}), {d.n_flashes} flashes, "
-             f"{d.n_edges} band edges; effects are added while the BIC falls by more than {THRESHOLD:g}",
+             f"{d.n_edges} band edges; an effect is added where it lowers the BIC by more than "
+             f"{THRESHOLD:g} and shrinks the RMS",
              f"{'step':>4}  {'effect':<32} {'camera':<10} {'RMS before ms':>13} {'after ms':>9}  evidence",
              f"{0:>4}  {'plain model':<32} {'':<10} {'':>13} {d.initial_rms_ms:>9.4f}  "
              "shift per camera, one exposure, time per row = period / height, frame index x median step"]
     for number, step in enumerate(d.steps, start=1):
-        lines.append(f"{number:>4}  {step.title:<32} {step.camera:<10} {step.rms_before_ms:>13.4f} "
+        title = f"out: {step.title}" if step.removed else step.title
+        lines.append(f"{number:>4}  {title:<32} {step.camera:<10} {step.rms_before_ms:>13.4f} "
                      f"{step.rms_after_ms:>9.4f}  {step.evidence}")
     if not d.steps:
-        lines.append("      no effect of the catalogue lowers the BIC by more than the threshold")
+        lines.append("      no effect of the catalogue, alone or paired on one camera, lowers the BIC by "
+                     "more than the threshold and shrinks the RMS")
     lines.append(d.verdict)
     lines.append(f"{'camera':<11} {'readout':<9} {'period ms':>10} {'missing':>7} {'drift ppm':>9} "
                  f"{'ppm/s':>7} {'T_row ms':>9} {'exposure ms':>11} {'RMS ms':>7}")

@@ -4,14 +4,19 @@ Starting from the plainest model (see :mod:`flashsync.diagnose.effects`), each r
 every candidate (an effect of the catalogue on one camera, added to the current model) and
 keeps the one that lowers the Bayesian information criterion most, among those that lower
 it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals);
-without such a candidate the residuals hold nothing the catalogue can explain and the loop
-stops. The final residuals are then compared with the edge noise the band lengths show. The data never say which effect is there: frame stamps and band edges only.
-"""
+without such a candidate, pairs of effects on one camera are tried the same way (a camera's
+time per row and exposure both change its band lengths, so one alone may not show), and
+without such a pair the residuals hold nothing the catalogue can explain and the loop
+stops. After each addition, an effect added earlier whose evidence has fallen to
+:data:`THRESHOLD` or less (a later one explains its structure better) is taken out again,
+for good. The final residuals are then compared with the edge noise the band lengths show.
+The data never say which effect is there: the workflow sees frame stamps and band edges."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
+from itertools import combinations
 
 import numpy as np
 
@@ -32,21 +37,24 @@ NOISE_FACTOR = 3.0
 
 @dataclass(frozen=True)
 class Step:
-    """One effect added to the model.
+    """One effect (or a pair on one camera) added to the model, or one taken out again.
 
     Attributes
     ----------
     effect, title : str
-        Catalogue key and words for it.
+        Catalogue key and words for it (a pair's joined by ``+``).
     camera : str
     delta_bic : float
-        How much the BIC fell, over edges and stamps.
+        How much the BIC fell, over edges and stamps (for a removal: how much the effect
+        still lowered it).
     estimate : str
         What the effect's parameter came out as (the structure it explains).
     rms_before_ms, rms_after_ms : float
         RMS of the edge residuals before and after, ms.
     stamp_rms_before_ms, stamp_rms_after_ms : float
         RMS of the camera's stamps about its frame clock before and after, ms.
+    removed : bool
+        The effect was taken out of the model.
     """
 
     effect: str
@@ -58,9 +66,12 @@ class Step:
     rms_after_ms: float
     stamp_rms_before_ms: float
     stamp_rms_after_ms: float
+    removed: bool = False
 
     @property
     def evidence(self) -> str:
+        if self.removed:
+            return f"ΔBIC {self.delta_bic:.1f} <= {THRESHOLD:g}, no longer needed: {self.estimate}"
         return f"ΔBIC {self.delta_bic:.1f} > {THRESHOLD:g}: {self.estimate}"
 
 
@@ -89,6 +100,9 @@ class Diagnosis:
     residuals : dict
         ``{"initial": [...], "final": [...]}``: per camera, the residual structure (RMS,
         trend against time and row, trailing-minus-leading gap, frame intervals).
+    edge_residuals : dict
+        Per edge (lists of n_edges): ``camera``, ``flash``, ``trailing``; ``residual_ms`` one
+        list per model: the plain one, then after each step.
     warnings : list of str
     """
 
@@ -103,6 +117,7 @@ class Diagnosis:
     consistent: bool
     model: list[dict]
     residuals: dict[str, list[dict]]
+    edge_residuals: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
 
     @property
@@ -118,11 +133,15 @@ class Diagnosis:
                 "outside the catalogue remains, or the measurement cannot separate the ones it has")
 
     def to_dict(self) -> dict:
-        """Plain dict (JSON-able) with every field, each step's evidence and the verdict."""
+        """Plain dict (JSON-able) with every field, each step's evidence, the verdict and the
+        catalogue the effects were chosen from."""
         data = asdict(self)
         for step, record in zip(self.steps, data["steps"]):
             record["evidence"] = step.evidence
-        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR)
+        catalogue = [{"effect": e.name, "title": e.title, "explains": e.explains, "changes": e.changes,
+                      "scope": e.scope, "implies": list(e.implies)} for e in CATALOGUE.values()]
+        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR,
+                    catalogue=catalogue)
         return _finite(data)
 
 
@@ -154,24 +173,62 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
         raise FlashsyncError(
             f"{measurement.n_flashes} flashes seen by several cameras cannot determine even the "
             "plain model; record more flashes")
-    current, steps = plain, []
-    while True:
-        best: tuple[Term, Fit] | None = None
-        for term in _candidates(measurement, current.terms):
-            trial = fit_model(measurement, current.terms | _with_implied(term))
+    current, steps, removed, fits = plain, [], set(), [plain]
+    while (addition := _best_addition(measurement, current, removed)) is not None:
+        terms, better = addition
+        steps.append(_step(terms, current, better, removed=False))
+        current = better
+        fits.append(current)
+        while (weakest := _weakest(measurement, current, terms)) is not None:
+            term, without = weakest
+            steps.append(_step((term,), without, current, removed=True))
+            removed.add(term)
+            current = without
+            fits.append(current)
+    return _diagnosis(measurement, fits, steps)
+
+
+def _best_addition(measurement: Measurement, current: Fit,
+                   removed: set[Term]) -> tuple[tuple[Term, ...], Fit] | None:
+    """The effect, else the pair of effects on one camera, whose model has the lowest BIC
+    among those that lower it by more than :data:`THRESHOLD` and shrink the RMS."""
+    singles = _candidates(measurement, current.terms | removed)
+    pairs = [(a, b) for a, b in combinations(singles, 2) if a.camera == b.camera
+             and b not in _with_implied(a) and a not in _with_implied(b)]
+    for groups in ([(term,) for term in singles], pairs):
+        best = None
+        for group in groups:
+            trial = fit_model(measurement, current.terms.union(*map(_with_implied, group)))
             if (trial is not None and current.bic - trial.bic > THRESHOLD and trial.rms_ms < current.rms_ms
                     and (best is None or trial.bic < best[1].bic)):
-                best = (term, trial)
-        if best is None:
-            break
-        term, better = best
-        effect = CATALOGUE[term.effect]
-        steps.append(Step(effect.name, effect.title, measurement.cameras[term.camera].name,
-                          current.bic - better.bic, effect.describe(better, term.camera),
-                          current.rms_ms, better.rms_ms, current.stamp_rms_ms[term.camera],
-                          better.stamp_rms_ms[term.camera]))
-        current = better
-    return _diagnosis(measurement, plain, current, steps)
+                best = (group, trial)
+        if best is not None:
+            return best
+    return None
+
+
+def _step(terms: tuple[Term, ...], without: Fit, with_terms: Fit, removed: bool) -> Step:
+    """The record of adding ``terms`` (``without`` -> ``with_terms``) or of taking one out."""
+    effects = [CATALOGUE[term.effect] for term in terms]
+    before, after = (with_terms, without) if removed else (without, with_terms)
+    camera = terms[0].camera
+    return Step("+".join(e.name for e in effects), " + ".join(e.title for e in effects),
+                with_terms.measurement.cameras[camera].name, without.bic - with_terms.bic,
+                "; ".join(e.describe(with_terms, camera) for e in effects),
+                before.rms_ms, after.rms_ms, before.stamp_rms_ms[camera], after.stamp_rms_ms[camera], removed)
+
+
+def _weakest(measurement: Measurement, current: Fit, newest: tuple[Term, ...]) -> tuple[Term, Fit] | None:
+    """The earlier effect with the least evidence left, and the model without it, if that
+    evidence is :data:`THRESHOLD` or less; effects another one implies stay."""
+    implied = {t for term in current.terms for t in _with_implied(term) if t != term}
+    weakest = None
+    for term in sorted(current.terms - implied - frozenset().union(*map(_with_implied, newest))):
+        without = fit_model(measurement, current.terms - {term})
+        if (without is not None and without.bic - current.bic <= THRESHOLD
+                and (weakest is None or without.bic < weakest[1].bic)):
+            weakest = (term, without)
+    return weakest
 
 
 def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
@@ -185,7 +242,8 @@ def _with_implied(term: Term) -> frozenset[Term]:
     return frozenset([term] + [Term(name, term.camera) for name in CATALOGUE[term.effect].implies])
 
 
-def _diagnosis(measurement: Measurement, plain: Fit, final: Fit, steps: list[Step]) -> Diagnosis:
+def _diagnosis(measurement: Measurement, fits: list[Fit], steps: list[Step]) -> Diagnosis:
+    plain, final = fits[0], fits[-1]
     n_edges = len(measurement.edges)
     dof = max(n_edges - measurement.n_flashes - len(final.coefficients), 1)
     expected = measurement.noise_ms * np.sqrt(dof / n_edges)
@@ -197,7 +255,17 @@ def _diagnosis(measurement: Measurement, plain: Fit, final: Fit, steps: list[Ste
         consistent=bool(final.rms_ms <= NOISE_FACTOR * expected),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
+        edge_residuals=_edge_residuals(measurement, fits),
         warnings=list(measurement.warnings))
+
+
+def _edge_residuals(measurement: Measurement, fits: list[Fit]) -> dict:
+    """Every edge's residual (ms) under the plain model and after each step, with its
+    camera, flash and kind: what ``flashsync diagnose --rrd`` plots."""
+    edges = measurement.edges
+    return {"camera": [measurement.cameras[c].name for c in edges.camera],
+            "flash": edges.flash.tolist(), "trailing": edges.trailing.tolist(),
+            "residual_ms": [fit.residual_ms.tolist() for fit in fits]}
 
 
 def _camera_models(fit: Fit) -> list[dict]:

@@ -1,0 +1,154 @@
+"""The discrepancy workflow on rendered clips in which one effect (or two, or none) is hidden:
+the model under test starts without it and nothing in the videos names it."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flashsync.diagnose import diagnose, format_diagnosis
+from flashsync.diagnose.workflow import NOISE_FACTOR
+from flashsync.errors import FlashsyncError
+from flashsync.pipeline import detect_videos
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+
+DURATION_MS = 6000.0
+
+#: Per case, the settings of the camera that hides it (everything not named is off); every
+#: case is a pair of that camera (30 fps, 3 s later on its own clock) and the reference
+#: (25 fps). All cameras film the same flashes in one scenario and have neutral names.
+HIDDEN = {
+    "drift": dict(drift_ppm=150.0),
+    "drift_rate": dict(drift_rate_ppm_per_s=100.0),
+    "row_time": dict(r0=8, r1=20),
+    "flipped": dict(flipped=True),
+    "dropped_frames": dict(dropped_frames=(40, 90)),
+    "frame_clock": dict(container="mkv", jitter_ms=0.2),
+    "exposure": dict(exposure_ms=14.0),
+    "two": dict(dropped_frames=(60,), drift_ppm=150.0),
+}
+CAMERA = {case: f"cam{i}" for i, case in enumerate(HIDDEN, start=1)}
+
+
+def flashes(seed: int) -> tuple[FlashSpec, ...]:
+    """Flashes at irregular instants (as fired by hand), 120 ms or more apart."""
+    rng = np.random.default_rng(seed)
+    instants = 300.0 + np.cumsum(120.0 + rng.exponential(150.0, 50))
+    return tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3))
+                 for t in instants[instants < DURATION_MS - 300.0])
+
+
+@pytest.fixture(scope="module")
+def detections(tmp_path_factory) -> dict:
+    """Every camera's detection (320x180), rendered and detected once; the upside-down
+    camera also as ``"<name>+declared"``, detected with its readout direction given."""
+    cameras = [CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0)]
+    cameras += [CameraSpec(CAMERA[case], 320, 180, 30.0, **(dict(exposure_ms=8.0, start_ms=3000.0,
+                                                                offset_ms=-2830.0) | settings))
+                for case, settings in HIDDEN.items()]
+    folder = tmp_path_factory.mktemp("hidden")
+    render_scenario(Scenario("hidden", tuple(cameras), duration_ms=DURATION_MS, flashes=flashes(1),
+                             n_players=0, seed=1), folder)
+    videos = [folder / f"{spec.name}.{spec.container}" for spec in cameras]
+    found = {d.camera: d for d in detect_videos(videos)}
+    flipped = CAMERA["flipped"]
+    found[f"{flipped}+declared"] = detect_videos([folder / f"{flipped}.mp4"], flipped=[flipped])[0]
+    return found
+
+
+def pair(detections: dict, name: str) -> list:
+    return [detections["cam0"], detections[name]]
+
+
+@pytest.mark.parametrize("effect", [case for case in HIDDEN if case != "two"])
+def test_a_hidden_effect_is_named_first_and_the_gap_closes(detections, effect):
+    d = diagnose(pair(detections, CAMERA[effect]))
+    step = d.steps[0]
+    assert (step.effect, step.camera) == (effect, CAMERA[effect]), format_diagnosis(d)
+    floor = NOISE_FACTOR * d.expected_ms
+    assert step.rms_before_ms > floor, "the hidden effect must show above the noise"
+    assert step.rms_after_ms <= max(step.rms_before_ms / 5.0, floor), format_diagnosis(d)
+    assert d.consistent, format_diagnosis(d)
+
+
+def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
+    d = diagnose(pair(detections, CAMERA["two"]))
+    assert [s.effect for s in d.steps] == ["dropped_frames", "drift"], format_diagnosis(d)
+    assert d.steps[0].rms_before_ms > 20 * d.steps[1].rms_before_ms    # a frame period vs 0.5 ms
+    assert d.consistent and d.final_rms_ms < d.initial_rms_ms / 100
+    assert d.model[1]["drift_ppm"] == pytest.approx(150.0, abs=15.0)
+    assert d.model[1]["missing_frames"] == 1
+    text = format_diagnosis(d)
+    lines = text.splitlines()
+    assert lines[3].split()[1:3] == ["dropped", "frames"] and "ΔBIC" in lines[3]
+    assert lines[4].split()[1:3] == ["clock", "drift"] and "ppm" in lines[4]
+    assert "residuals consistent with noise (RMS" in text
+    data = json.loads(json.dumps(d.to_dict()))
+    assert [s["effect"] for s in data["steps"]] == ["dropped_frames", "drift"]
+    assert data["steps"][1]["evidence"].startswith("ΔBIC") and data["verdict"] == d.verdict
+
+
+def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(detections):
+    d = diagnose(pair(detections, f"{CAMERA['flipped']}+declared"))
+    assert d.steps == [], format_diagnosis(d)
+    assert all(model["effects"] == [] for model in d.model)
+    assert d.final_rms_ms == d.initial_rms_ms and d.consistent
+    assert "no effect of the catalogue" in format_diagnosis(d)
+
+
+def test_one_bad_edge_names_nothing(detections):
+    ref, other = pair(detections, f"{CAMERA['flipped']}+declared")
+    events = ref.events.copy()
+    bad = events.index[events["edge"] == "trailing"][1]      # an edge a weak fit bends to
+    events.loc[bad, "row"] -= 15.0                            # 15 rows = 3.3 ms off
+    d = diagnose([replace(ref, events=events), other])
+    assert d.steps == [], format_diagnosis(d)
+
+
+def test_shipped_sample_needs_a_pair_on_one_camera_and_ends_at_the_truth():
+    """Four cameras, seven flashes, hidden rows and exposures everywhere: cam4's time per row
+    and exposure show only together."""
+    samples = Path(__file__).parent.parent / "samples"
+    d = diagnose(detect_videos(sorted(samples.glob("cam*.m*"))))
+    assert ("row_time+exposure", "cam4") in [(s.effect, s.camera) for s in d.steps], format_diagnosis(d)
+    assert d.consistent, format_diagnosis(d)
+    truth = load_ground_truth(samples / "truth.json")
+    for model in d.model:
+        camera = truth.cameras[model["camera"]]
+        assert model["row_time_ms"] == pytest.approx(camera.row_time_ms, rel=0.01)
+        assert model["exposure_ms"] == pytest.approx(camera.exposure_ms, abs=0.2)
+
+
+def test_too_few_cameras_or_shared_flashes_is_one_line_error(detections):
+    ref, other = pair(detections, CAMERA["drift"])
+    with pytest.raises(FlashsyncError, match="two or more cameras"):
+        diagnose([ref])
+    with pytest.raises(FlashsyncError, match="shares at least 3 flashes") as error:
+        diagnose([ref, replace(other, events=other.events.iloc[:4])])
+    assert "\n" not in str(error.value)
+
+
+def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsys):
+    """``flashsync diagnose`` on the shipped sample: a table, JSON with the steps, and a Rerun
+    recording whose residual series are one per step, camera and edge kind."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from flashsync.cli import main
+
+    samples = Path(__file__).resolve().parents[1] / "samples"
+    videos = sorted(str(p) for p in samples.iterdir() if p.suffix in (".mp4", ".mkv"))
+    assert main(["diagnose", *videos, "--json", str(tmp_path / "d.json"), "--rrd", str(tmp_path / "d.rrd")]) == 0
+    assert "residuals consistent with noise" in capsys.readouterr().out
+    data = json.loads((tmp_path / "d.json").read_text())
+    assert data["steps"] and len(data["edge_residuals"]["residual_ms"]) == len(data["steps"]) + 1
+    rerun = Path(sys.executable).with_name("rerun")
+    printed = subprocess.run([str(rerun), "rrd", "print", "-v", str(tmp_path / "d.rrd")],
+                             capture_output=True, text=True, check=True).stdout
+    first = data["steps"][0]
+    assert "/diagnose/0_plain/cam1/leading" in printed
+    assert f"/diagnose/1_{first['effect']}_{first['camera']}/" in printed
