@@ -43,8 +43,10 @@ class Term:
 
 
 @dataclass(frozen=True)
-class FrameClock:
-    """A camera's frame times under the model: ``offset + slot * period``.
+class ModelClock:
+    """A camera's frame times under a model of the ladder: ``offset + slot * period`` (the
+    pipeline's :class:`flashsync.frame_clock.FrameClock` is the full model; here each part
+    of it is an effect the workflow may or may not have added).
 
     Attributes
     ----------
@@ -71,7 +73,7 @@ class FrameClock:
         return int(self.slots[-1] + 1 - len(self.slots))
 
 
-def frame_clock(stamps_ms: np.ndarray, count_gaps: bool, least_squares: bool) -> FrameClock:
+def model_clock(stamps_ms: np.ndarray, count_gaps: bool, least_squares: bool) -> ModelClock:
     """The model's frame clock of one camera.
 
     Parameters
@@ -94,7 +96,7 @@ def frame_clock(stamps_ms: np.ndarray, count_gaps: bool, least_squares: bool) ->
         period, offset = np.polyfit(slots, stamps_ms, 1)
     else:
         period, offset = step, float(np.median(stamps_ms - slots * step))
-    return FrameClock(float(offset), float(period), slots, step)
+    return ModelClock(float(offset), float(period), slots, step)
 
 
 @dataclass(frozen=True)
@@ -106,7 +108,7 @@ class Fit:
     measurement : Measurement
     terms : frozenset of Term
         The effects switched on.
-    clocks : list of FrameClock
+    clocks : list of ModelClock
         Per camera.
     flipped : list of bool
         Per camera: reads bottom-up under the model.
@@ -127,7 +129,7 @@ class Fit:
 
     measurement: Measurement
     terms: frozenset[Term]
-    clocks: list[FrameClock]
+    clocks: list[ModelClock]
     flipped: list[bool]
     features: Features
     coefficients: dict[tuple[str, int], float]
@@ -169,7 +171,7 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
-    clocks = [frame_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
+    clocks = [model_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
               for c, camera in enumerate(cameras)]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, clock) in enumerate(zip(cameras, clocks)):
