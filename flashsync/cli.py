@@ -148,6 +148,20 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
 def _detection_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--flipped", action="append", default=[], metavar="CAMERA",
                         help="camera mounted upside down (reads bottom-up); repeatable")
+    parser.add_argument("--timestamps", action="append", default=[], metavar="CAMERA=FILE.csv",
+                        help="frame timestamps of a camera from a CSV (column t_ms, or rtp for 90 kHz "
+                        "RTP stamps; one row per frame) instead of the container's; repeatable")
+
+
+def _timestamp_files(values: list[str]) -> dict[str, Path]:
+    """``['cam1=cam1.csv']`` -> ``{'cam1': Path('cam1.csv')}``."""
+    result = {}
+    for text in values:
+        camera, _, path = text.partition("=")
+        if not camera or not path:
+            raise FlashsyncError(f"--timestamps {text}: expected CAMERA=FILE.csv")
+        result[camera] = Path(path)
+    return result
 
 
 def _progress(camera: str, total: int):
@@ -166,7 +180,8 @@ def _run_detect(args) -> None:
     from flashsync.pipeline import all_events, detect_videos
     from flashsync.tables import write_table
 
-    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress))
+    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress,
+                           timestamps=_timestamp_files(args.timestamps)))
     write_table(events, args.output)
     print(f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
           f"in {len(args.videos)} videos -> {args.output}", file=sys.stderr)
@@ -182,7 +197,8 @@ def _run_sync(args) -> None:
                                   sync_table)
     from flashsync.tables import write_table
 
-    detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress)
+    detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
+                               timestamps=_timestamp_files(args.timestamps))
     if args.events:
         write_table(all_events(detections), args.events)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
@@ -308,7 +324,8 @@ def _run_diagnose(args) -> None:
     from flashsync.diagnose import diagnose, format_diagnosis
     from flashsync.pipeline import detect_videos
 
-    diagnosis = diagnose(detect_videos(args.videos, args.flipped, progress=_progress), args.reference)
+    diagnosis = diagnose(detect_videos(args.videos, args.flipped, progress=_progress,
+                           timestamps=_timestamp_files(args.timestamps)), args.reference)
     print(format_diagnosis(diagnosis))
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))

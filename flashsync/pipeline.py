@@ -29,6 +29,7 @@ from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
+from flashsync.timestamps import csv_timestamps
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
@@ -41,7 +42,7 @@ MIN_SHARED_FLASHES = 3
 def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
                   estimate_readout: bool = False, settings: DetectorSettings | None = None,
                   progress: Callable[[str, int], Callable[[int], None]] | None = None,
-                  ) -> list[CameraDetection]:
+                  timestamps: dict[str, Path] | None = None) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
     Parameters
@@ -51,6 +52,8 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     estimate_readout : detect the other cameras' events both ways, so that
         :func:`synchronize` can find an upside-down camera.
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
+    timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
+        per decoded frame) used instead of the container's (see :func:`csv_timestamps`).
 
     Videos are decoded in parallel threads, one per core (decoding and the compiled row
     kernel release the GIL).
@@ -61,12 +64,23 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     if duplicates:
         raise FlashsyncError(f"camera names come from file stems and {', '.join(duplicates)} is "
                              "given twice; rename one of the videos")
-    unknown = sorted(set(flipped) - set(stems))
-    if unknown:
-        raise FlashsyncError(f"--flipped {', '.join(unknown)}: no such camera among {', '.join(stems)}")
+    timestamps = timestamps or {}
+    for option, names in (("--flipped", flipped), ("--timestamps", timestamps)):
+        unknown = sorted(set(names) - set(stems))
+        if unknown:
+            raise FlashsyncError(f"{option} {', '.join(unknown)}: no such camera among {', '.join(stems)}")
+    stamps = {camera: csv_timestamps(path) for camera, path in timestamps.items()}
+
     def detect(path: Path) -> CameraDetection:
         direction = True if path.stem in flipped else (None if estimate_readout else False)
-        return detect_video(path, flipped=direction, settings=settings, progress=progress)
+        detection = detect_video(path, flipped=direction, settings=settings, progress=progress)
+        if path.stem not in stamps:
+            return detection
+        if len(stamps[path.stem]) != len(detection.frame_times_ms):
+            raise FlashsyncError(
+                f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
+                f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame")
+        return with_frame_times(detection, stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         return list(pool.map(detect, paths))
@@ -115,7 +129,7 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     if reference not in names:
         raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
-    cameras = {d.camera: _on_frame_clock(d, report.frame_clocks[d.camera]) for d in detections}
+    cameras = {d.camera: with_frame_times(d, report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.alternative is not None]
     best, failure = None, None
     for flip in [None, *undecided, *undecided]:  # a second pass can undo a flip made too early
@@ -217,14 +231,15 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
     return _Attempt(cameras, connected, alignments, warnings, observations, durations, solution)
 
 
-def _on_frame_clock(detection: CameraDetection, clock: FrameClock) -> CameraDetection:
-    """The detection with frame times (and event frame times) from its steady frame clock."""
+def with_frame_times(detection: CameraDetection, times_ms: np.ndarray) -> CameraDetection:
+    """The detection with other frame times (ms, one per decoded frame), its events' frame
+    times too."""
     def retimed(events: pd.DataFrame | None) -> pd.DataFrame | None:
         if events is None:
             return None
-        return events.assign(t_frame_ms=clock.times_ms[events["frame"].to_numpy(dtype=np.int64)])
+        return events.assign(t_frame_ms=times_ms[events["frame"].to_numpy(dtype=np.int64)])
 
-    return replace(detection, frame_times_ms=clock.times_ms, events=retimed(detection.events),
+    return replace(detection, frame_times_ms=times_ms, events=retimed(detection.events),
                    alternative=retimed(detection.alternative))
 
 

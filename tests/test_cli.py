@@ -200,3 +200,28 @@ def test_bad_option_values(tiny_scenario, capsys):
                        "--row-time", "cam1=fast")
     assert code == 1
     one_error_line(err, "--row-time")
+
+
+def test_timestamps_from_an_rtp_csv(tiny_scenario, tmp_path, capsys):
+    """Frame times from a CSV of 90 kHz RTP stamps that wrap around replace the container's."""
+    from flashsync.timestamps import video_timestamps
+    stamps_ms = video_timestamps(tiny_scenario / "cam2.mkv")
+    rtp = (2**32 - 45_000 + np.round((stamps_ms - stamps_ms[0]) * 90).astype(np.int64)) % 2**32
+    pd.DataFrame({"rtp": rtp}).to_csv(tmp_path / "cam2.csv", index=False)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
+                       "--timestamps", f"cam2={tmp_path / 'cam2.csv'}", "-o", tmp_path / "sync.json")
+    assert code == 0, err
+    run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "own.json")
+    from_csv = load_model(tmp_path / "sync.json").camera("cam2")
+    from_container = load_model(tmp_path / "own.json").camera("cam2")
+    assert from_csv.frame_times_ms[0] == pytest.approx(0.0, abs=0.5)    # the CSV's clock starts at 0
+    np.testing.assert_allclose(from_csv.t_global_ms(np.arange(72), 90.0),
+                               from_container.t_global_ms(np.arange(72), 90.0), atol=0.05)
+    pd.DataFrame({"t_ms": stamps_ms[:-3]}).to_csv(tmp_path / "short.csv", index=False)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
+                       "--timestamps", f"cam2={tmp_path / 'short.csv'}", "-o", tmp_path / "bad.json")
+    assert code == 1
+    one_error_line(err, "short.csv", "timestamps for the")
+    code, _, err = run(capsys, "detect", tiny_scenario / "cam1.mp4", "--timestamps", "cam9=x.csv")
+    assert code == 1
+    one_error_line(err, "--timestamps cam9")
