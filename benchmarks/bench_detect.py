@@ -1,11 +1,16 @@
 """Detection throughput against the floor: decode-only, on generated 720p, 1080p and 4K H.264.
 
-Run: python benchmarks/bench_detect.py [--frames N] [--sizes 720p,1080p,2160p] [--dir DIR]
+Run: python benchmarks/bench_detect.py [--frames N] [--rounds N] [--sizes 720p,1080p,2160p] [--dir DIR]
 
 For each size it writes a clip (textured scene, moving blobs, a flash every ~40 frames,
-libx264 crf 23), then times in one run on this machine: decoding every frame with PyAV
-(threading AUTO, no pixel conversion: the floor) and ``flashsync.detect_video`` on the same
-file. Prints frames per second of both and their ratio (1.0 = as fast as decoding).
+libx264 crf 23), then times on this machine, in alternating rounds on the same file:
+decoding every frame with PyAV (threading AUTO, the fastest setting here; no pixel
+conversion: the floor) and ``flashsync.detect_video``, which is what ``flashsync detect``
+runs for each video. Prints the best frames per second of each, their ratio (1.0 = as fast
+as decoding) and the spread of the per-round ratios: a shared virtual machine's speed
+drifts by tens of percent between seconds, so only rounds run side by side compare.
+Last, the fixed start-up of the ``flashsync detect`` command (imports, compiled-kernel
+cache), which a long video amortises.
 """
 
 from __future__ import annotations
@@ -13,6 +18,8 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import subprocess
+import sys
 import tempfile
 import time
 from fractions import Fraction
@@ -60,37 +67,49 @@ def decode_only(path: Path) -> int:
         return sum(1 for _ in container.decode(stream))
 
 
-def timed(function, path: Path) -> float:
-    """Frames per second of ``function(path)``, best of two runs."""
-    best = 0.0
-    for _ in range(2):
-        start = time.perf_counter()
-        result = function(path)
-        n_frames = result if isinstance(result, int) else len(result.frame_times_ms)
-        best = max(best, n_frames / (time.perf_counter() - start))
-    return best
+def fps(function, path: Path) -> float:
+    """Frames per second of one run of ``function(path)``."""
+    start = time.perf_counter()
+    result = function(path)
+    n_frames = result if isinstance(result, int) else len(result.frame_times_ms)
+    return n_frames / (time.perf_counter() - start)
+
+
+def startup_seconds() -> float:
+    """Wall time of ``flashsync detect --help``: interpreter, imports, nothing decoded."""
+    start = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "flashsync", "detect", "--help"], check=True,
+                   capture_output=True)
+    return time.perf_counter() - start
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=200)
+    parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--sizes", default="720p,1080p,2160p")
     parser.add_argument("--dir", type=Path, help="where to write the clips (default: a temp dir)")
     args = parser.parse_args()
     folder = args.dir or Path(tempfile.mkdtemp(prefix="flashsync-bench-"))
     folder.mkdir(parents=True, exist_ok=True)
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"PyAV {av.__version__}, {args.frames} frames per clip")
-    print(f"{'size':<7} {'decode fps':>11} {'detect fps':>11} {'ratio':>6}")
+          f"PyAV {av.__version__}, {args.frames} frames per clip, best of {args.rounds} rounds")
+    print(f"{'size':<7} {'decode fps':>11} {'detect fps':>11} {'ratio':>6}   per-round ratios")
     for name in args.sizes.split(","):
         width, height = SIZES[name]
-        path = folder / f"bench_{name}.mp4"
+        path = folder / f"bench_{name}_{args.frames}.mp4"
         if not path.exists():
             make_clip(path, width, height, args.frames)
-        detect_video(path)  # warm-up: compiles the row kernel, fills the file cache
-        decode_fps = timed(decode_only, path)
-        detect_fps = timed(detect_video, path)
-        print(f"{name:<7} {decode_fps:>11.1f} {detect_fps:>11.1f} {detect_fps / decode_fps:>6.2f}")
+        detect_video(path)  # warm-up: loads the compiled kernels, fills the file cache
+        decode, detect = [], []
+        for round_ in range(args.rounds):
+            pair = [(decode, decode_only), (detect, detect_video)]
+            for results, function in pair[::1 if round_ % 2 else -1]:
+                results.append(fps(function, path))
+        ratios = np.array(detect) / np.array(decode)
+        print(f"{name:<7} {max(decode):>11.1f} {max(detect):>11.1f} {max(detect) / max(decode):>6.2f}"
+              f"   median {np.median(ratios):.2f}, {ratios.min():.2f}-{ratios.max():.2f}")
+    print(f"start-up of `flashsync detect`: {startup_seconds():.1f} s once per command")
 
 
 if __name__ == "__main__":

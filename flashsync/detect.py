@@ -20,6 +20,7 @@ The detector is streaming: :class:`EventDetector` keeps a few profiles, not the 
 
 from __future__ import annotations
 
+import statistics
 from collections import deque
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -28,7 +29,6 @@ from typing import Callable
 import numba
 import numpy as np
 import pandas as pd
-from scipy.optimize import least_squares
 
 from flashsync.errors import FlashsyncError
 from flashsync.profiles import read_profiles
@@ -115,7 +115,8 @@ class EventDetector:
         self.camera = camera
         self.height = height
         self.settings = settings
-        self._history: deque[np.ndarray] = deque(maxlen=settings.history)
+        self._history: np.ndarray | None = None      # (history, height, blocks) ring of profiles
+        self._n_history = self._next = 0
         self._noise: deque[float] = deque(maxlen=25)
         self._open: _Event | None = None
         self._lit_rows = (0, height)
@@ -127,29 +128,38 @@ class EventDetector:
         """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
 
         The relative change of a row is the median over its column blocks: a flash changes
-        every block alike, an object that fills one block changes only that one.
+        every block alike, an object that fills one block changes only that one. Frames
+        where no row passes the threshold (nearly all) cost one compiled call.
         """
         profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
         readout = profile[::-1] if self.settings.flipped else profile
-        if not self._history:
-            self._history.append(readout)
+        if self._history is None:
+            self._history = np.empty((self.settings.history, *readout.shape), np.float32)
+        if self._n_history == 0:
+            self._remember(readout)
             return
-        change = _relative_change(np.stack(self._history), readout, self.settings.min_level,
-                                  self.settings.min_step)
-        self._noise.append(1.4826 * float(np.nanmedian(np.abs(np.diff(change)))) / np.sqrt(2.0))
-        sigma = max(float(np.median(self._noise)), 1e-4)
+        change, noise, peak, lit_start, lit_stop = _relative_change(
+            self._history[:self._n_history], readout, self.settings.min_level, self.settings.min_step)
+        if np.isfinite(noise):
+            self._noise.append(noise)
+        sigma = max(statistics.median(self._noise), 1e-4) if self._noise else 1e-4
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
-        lit = np.flatnonzero(np.isfinite(change))
-        self._lit_rows = (int(lit[0]), int(lit[-1]) + 1) if lit.size else (0, self.height)
+        self._lit_rows = (lit_start, lit_stop)
         segments = []
-        for sign in (1, -1):
+        for sign in (1, -1) if peak > threshold else ():
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
                 if stop - start >= max(self.settings.min_rows, self.height // 100):
                     segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
                                              bool(np.max(readout[start:stop]) >= SATURATED), sigma))
-        self._history.append(readout)
+        self._remember(readout)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
+
+    def _remember(self, readout: np.ndarray) -> None:
+        """Put a profile into the baseline's ring (the oldest one leaves once it is full)."""
+        self._history[self._next] = readout
+        self._next = (self._next + 1) % len(self._history)
+        self._n_history = min(self._n_history + 1, len(self._history))
 
     def finish(self) -> pd.DataFrame:
         """Close a band still open at the end of the video; return all events (EVENT_COLUMNS)."""
@@ -189,8 +199,8 @@ class EventDetector:
         self._global_frames = 0
 
     def _reset_baseline(self, readout: np.ndarray) -> None:
-        self._history.clear()
-        self._history.append(readout)
+        self._n_history = self._next = 0
+        self._remember(readout)
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
@@ -223,11 +233,18 @@ class EventDetector:
 
 @numba.njit(cache=True, nogil=True)
 def _relative_change(history, current, min_level, min_step):  # pragma: no cover - compiled
-    """Per row: the median over column blocks of ``(current - baseline) / baseline``, with
-    the baseline the per-block median of ``history`` (shape (k, height, blocks)); NaN where
+    """One frame's relative change against the baseline, with what the detector needs of it.
+
+    Per row: the median over column blocks of ``(current - baseline) / baseline``, with the
+    baseline the per-block median of ``history`` (shape (k, height, blocks)); NaN where
     fewer than half the blocks are lit (baseline >= ``min_level``). A block that moved by
     less than ``min_step`` counts as unchanged (a one-DN jump of a dark flat area at an
-    H.264 key frame is a large relative change). Shape (height,)."""
+    H.264 key frame is a large relative change).
+
+    Returns (change, noise, peak, lit_start, lit_stop): change of shape (height,); the
+    robust sigma of its row-to-row noise (NaN if nothing is lit); the largest ``|change|``;
+    and the first and past-the-last lit rows ((0, height) if none).
+    """
     k, height, blocks = history.shape
     change = np.empty(height, np.float64)
     column = np.empty(k, np.float64)
@@ -235,15 +252,39 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     for r in range(height):
         n_lit = 0
         for b in range(blocks):
-            for i in range(k):
-                column[i] = history[i, r, b]
-            baseline = _median_in_place(column, k)
+            if k == 5:
+                baseline = _median5(history[0, r, b], history[1, r, b], history[2, r, b],
+                                    history[3, r, b], history[4, r, b])
+            else:
+                for i in range(k):
+                    column[i] = history[i, r, b]
+                baseline = _median_in_place(column, k)
             if baseline >= min_level:
                 step = current[r, b] - baseline
                 lit[n_lit] = step / baseline if abs(step) >= min_step else 0.0
                 n_lit += 1
         change[r] = _median_in_place(lit, n_lit) if 2 * n_lit >= blocks and n_lit > 0 else np.nan
-    return change
+    steps = np.empty(height, np.float64)
+    n_steps, peak, lit_start, lit_stop = 0, 0.0, height, 0
+    for r in range(height):
+        if np.isnan(change[r]):
+            continue
+        peak = max(peak, abs(change[r]))
+        lit_start, lit_stop = min(lit_start, r), r + 1
+        if r > 0 and not np.isnan(change[r - 1]):
+            steps[n_steps] = abs(change[r] - change[r - 1])
+            n_steps += 1
+    noise = 1.4826 / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
+    if lit_stop == 0:
+        lit_start, lit_stop = 0, height
+    return change, noise, peak, lit_start, lit_stop
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _median5(a, b, c, d, e):  # pragma: no cover - compiled
+    """Median of five values by eight comparisons (no sorting)."""
+    low, high = max(min(a, b), min(c, d)), min(max(a, b), max(c, d))
+    return max(min(e, low), min(max(e, low), high))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -324,27 +365,79 @@ def _fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, r
     """
     k = max(rise / np.log(3.0), 0.3)            # 25 % -> 75 % of an exponential ramp: k ln 3
     sign = 1.0 if rising else -1.0
-    lo = int(np.floor(row - sign * (2 + 2 * k) if rising else row - 2 - 5 * k))
+    lo = int(np.floor(row - 2 - 2 * k if rising else row - 2 - 5 * k))
     hi = int(np.ceil(row + 2 + 5 * k if rising else row + 2 + 2 * k))
     x = np.arange(max(lo, 0), min(hi, len(values) - 1) + 1, dtype=np.float64)
     y = values[x.astype(np.int64)]
     keep = np.isfinite(y)
     if keep.sum() < 5:
         return row
-    x, y = sign * x[keep], y[keep]
-
-    def ramp(p):
-        start, scale, plateau = p
-        return -plateau * np.expm1(-np.maximum(x - start, 0.0) / max(scale, 1e-3)) - y
-
-    start0 = sign * row - k * np.log(2.0)
-    try:
-        fit = least_squares(ramp, [start0, k, level], loss="soft_l1", f_scale=0.05 * level)
-    except ValueError:
-        return row
-    start, scale, _ = fit.x
+    start, scale, converged = _fit_ramp(sign * x[keep], y[keep], sign * row - k * np.log(2.0), k,
+                                        level, 0.05 * level)
     refined = sign * (start + scale * np.log(2.0))
-    return float(refined) if fit.success and abs(refined - row) <= 2.0 else row
+    return float(refined) if converged and abs(refined - row) <= 2.0 else row
+
+
+@numba.njit(cache=True, nogil=True)
+def _fit_ramp(x, y, start, scale, plateau, f_scale):  # pragma: no cover - compiled
+    """Robust fit of ``y = plateau * (1 - exp(-max(x - start, 0) / scale))`` (x, y: shape (n,)).
+
+    Levenberg-Marquardt on the soft-L1 cost ``sum 2 f^2 (sqrt(1 + (r / f)^2) - 1)`` (``f`` =
+    ``f_scale``), its normal equations weighted by the loss's derivative (iteratively
+    reweighted): rows hit by a player or a compression artefact barely count. Compiled, as
+    each event needs two fits. Returns (start, scale, converged).
+    """
+    p = np.array([start, max(scale, 1e-3), plateau])
+    cost = _ramp_cost(x, y, p, f_scale)
+    damping = 1e-3
+    for _ in range(100):
+        normal, gradient = np.zeros((3, 3)), np.zeros(3)
+        for i in range(x.size):
+            reach = max(x[i] - p[0], 0.0)
+            decay = np.exp(-reach / p[1])
+            residual = p[2] * (1.0 - decay) - y[i]
+            weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
+            jacobian = np.array([-p[2] / p[1] * decay if reach > 0 else 0.0,
+                                 -p[2] * decay * reach / p[1] ** 2, 1.0 - decay])
+            normal += weight * np.outer(jacobian, jacobian)
+            gradient += weight * residual * jacobian
+        for _ in range(20):
+            damped = normal + damping * np.diag(np.diag(normal) + 1e-12)
+            trial = p - _solve3(damped, gradient)
+            trial[1] = max(trial[1], 1e-3)
+            trial_cost = _ramp_cost(x, y, trial, f_scale)
+            if trial_cost <= cost:
+                break
+            damping *= 10.0
+        else:
+            return p[0], p[1], True          # no step lowers the cost: at the minimum
+        moved = np.max(np.abs(trial - p))
+        p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
+        if moved < 1e-7 * (1.0 + np.max(np.abs(p))):
+            return p[0], p[1], True
+    return p[0], p[1], False
+
+
+@numba.njit(cache=True, nogil=True)
+def _ramp_cost(x, y, p, f_scale):  # pragma: no cover - compiled
+    """Soft-L1 cost of the ramp ``p = (start, scale, plateau)`` against ``y``."""
+    total = 0.0
+    for i in range(x.size):
+        residual = p[2] * (1.0 - np.exp(-max(x[i] - p[0], 0.0) / p[1])) - y[i]
+        total += 2.0 * f_scale**2 * (np.sqrt(1.0 + (residual / f_scale) ** 2) - 1.0)
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
+def _solve3(a, b):  # pragma: no cover - compiled
+    """``a^-1 b`` for a 3x3 system by cofactors (zeros if ``a`` is singular)."""
+    cofactor = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            r0, r1, c0, c1 = (i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3
+            cofactor[i, j] = a[r0, c0] * a[r1, c1] - a[r0, c1] * a[r1, c0]
+    det = a[0, 0] * cofactor[0, 0] + a[0, 1] * cofactor[0, 1] + a[0, 2] * cofactor[0, 2]
+    return cofactor.T @ b / det if det != 0.0 else np.zeros(3)
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.

@@ -1,9 +1,9 @@
 """Row profiles: the mean luma of each image row in column blocks, one per decoded frame.
 
 A flash changes whole rows; the detector takes the median of the blocks' changes, which
-ignores moving players and bright spots, so only rows that integrated flash light count. Profiles are computed
-on the decoder's luma plane directly (no colour conversion) from about
-:data:`ROW_SAMPLES` columns per row, streaming, so memory stays flat whatever the video's
+ignores moving players and bright spots, so only rows that integrated flash light count.
+Profiles are computed on the decoder's luma plane directly (no colour conversion, every
+pixel, a SIMD row reduction), streaming, so memory stays flat whatever the video's
 length.
 """
 
@@ -14,14 +14,12 @@ from pathlib import Path
 from typing import Iterator
 
 import av
-import numba
+import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError
 from flashsync.timestamps import open_video
 
-#: Samples per row aimed at: every ``width // ROW_SAMPLES``-th column is read.
-ROW_SAMPLES = 256
 #: Column blocks of a row profile.
 DEFAULT_BLOCKS = 8
 
@@ -63,47 +61,39 @@ _PLANAR_LUMA = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj44
                 "nv21", "gray"}
 
 
-def column_step(width: int) -> int:
-    """Columns between samples so that a row gives about :data:`ROW_SAMPLES` samples."""
-    return max(1, width // ROW_SAMPLES)
-
-
-def row_profile(luma: np.ndarray, column_step: int = 1, blocks: int = DEFAULT_BLOCKS) -> np.ndarray:
-    """Mean luma of each row in ``blocks`` column blocks (every ``column_step``-th column).
+def row_profile(luma: np.ndarray, black: float = 0.0, white: float = 255.0,
+                blocks: int = DEFAULT_BLOCKS) -> np.ndarray:
+    """Mean luma of each row in ``blocks`` equal column blocks, as a fraction of the way
+    from ``black`` to ``white`` (DN); the ``width % blocks`` rightmost columns are left out.
 
     A flash scales every block of a row alike; a player, a bright spot or anything else
     that covers a few blocks changes only those, and the detector's median over blocks
     ignores them. A block mean is linear in the light (no clipping, no jumps between the
-    two populations of a row that is half rink, half crowd) and cheap: a compiled loop over
-    about :data:`ROW_SAMPLES` samples per row, a fraction of the cost of decoding.
+    two populations of a row that is half rink, half crowd) and cheap: OpenCV's SIMD row
+    reduction over every pixel, each block a row of its own, two to three times faster
+    than a compiled loop and a tenth of the cost of decoding the frame.
 
     Parameters
     ----------
     luma : uint8 array of shape (height, width)
-    column_step : int
-        Columns between samples.
+    black, white : float
+        Luma of black and of white, DN (:func:`luma_range`).
     blocks : int
         Column blocks, left to right.
 
     Returns
     -------
-    float32 array of shape (height, blocks), DN.
+    float32 array of shape (height, blocks): 0 black, 1 white.
     """
-    return _block_means(luma, column_step, blocks)
-
-
-@numba.njit(cache=True, nogil=True)
-def _block_means(luma, column_step, blocks):  # pragma: no cover - compiled
     height, width = luma.shape
-    out = np.empty((height, blocks), np.float32)
-    for r in range(height):
-        for b in range(blocks):
-            total, n = 0, 0
-            for c in range(b * width // blocks, (b + 1) * width // blocks, column_step):
-                total += luma[r, c]
-                n += 1
-            out[r, b] = total / max(n, 1)
-    return out
+    blocks = min(blocks, width)
+    block = width // blocks
+    pixels = np.ascontiguousarray(luma[:, :block * blocks])      # a view for a plain frame
+    sums = cv2.reduce(pixels.reshape(height * blocks, block), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
+    profile = sums.reshape(height, blocks).astype(np.float32)
+    profile *= 1.0 / (block * (white - black))
+    profile -= black / (white - black)
+    return profile
 
 
 def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
@@ -113,12 +103,9 @@ def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
-def read_profiles(path: str | Path, step: int | None = None,
-                  ) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray]]]:
+def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray]]]:
     """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile)``
     per decoded frame, presentation order (the file closes when the iterator ends).
-
-    ``step`` is the column step (default :func:`column_step` of the width).
 
     ``profile`` is the float32 mean luma per row and column block, shape (height, blocks),
     as a fraction of the way from black (0) to white (1), so that light scales it: a flash
@@ -132,11 +119,10 @@ def read_profiles(path: str | Path, step: int | None = None,
     except FlashsyncError:
         container.close()
         raise
-    return info, _profiles(container, path, step or column_step(info.width))
+    return info, _profiles(container, path)
 
 
-def _profiles(container: av.container.InputContainer, path: Path, step: int,
-              ) -> Iterator[tuple[float, np.ndarray]]:
+def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tuple[float, np.ndarray]]:
     with container:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
@@ -145,8 +131,7 @@ def _profiles(container: av.container.InputContainer, path: Path, step: int,
                 if frame.pts is None:
                     raise FlashsyncError(f"{path}: a frame has no timestamp; remux the file "
                                          "(ffmpeg -i IN -c copy OUT.mkv)")
-                black, white = luma_range(frame)
-                profile = (row_profile(luma_plane(frame), step) - black) / (white - black)
-                yield float(frame.pts * frame.time_base) * 1000.0, profile
+                yield float(frame.pts * frame.time_base) * 1000.0, row_profile(luma_plane(frame),
+                                                                               *luma_range(frame))
         except av.FFmpegError as error:
             raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None
