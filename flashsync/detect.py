@@ -6,8 +6,9 @@ profiles, so one or two flashed frames do not move it) as a relative change
 gives a flat plateau whatever the scene's texture, and a player changes only a few blocks.
 Rows over a noise-adaptive threshold form bands. A band's leading edge (first affected row
 in readout order) is where the change reaches half of the band's local plateau, refined to
-a fraction of a row by fitting the flash's exponential ramp to the rows around it: the
-same instant of the flash in every camera, whatever its gain or scene.
+a fraction of a row by fitting the flash's ramp, blurred by the codec, to the rows around
+it (:mod:`flashsync.ramp`): the same instant of the flash in every camera, whatever its
+gain or scene.
 
 A band that reaches the last row continues in the next frame (one event, flagged
 ``split``); a band that starts at row 0 with nothing open before it had its leading edge in
@@ -32,6 +33,7 @@ import pandas as pd
 
 from flashsync.errors import FlashsyncError
 from flashsync.profiles import read_profiles
+from flashsync.ramp import fit_pulse_edge
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
@@ -350,94 +352,7 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
     rise = abs(three_quarters - quarter)
     if kind != "pulse":
         return row - (three_quarters - quarter), rise
-    return _fit_pulse_edge(segment.change, row, rise, level, rising=crossing is _rising_crossing), rise
-
-
-def _fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, rising: bool) -> float:
-    """Refine a pulse edge by fitting the flash's ramp to the rows around it.
-
-    The light a row integrates rises as ``1 - exp(-(r - r0) / k)`` after the first row
-    ``r0`` that saw the flash (``k`` rows: the flash's decay time over the time per row),
-    and falls the same way after the trailing edge. A robust least-squares fit of
-    ``(r0, k, plateau)`` over the ramp uses every row of it instead of the two around the
-    half level; its half point ``r0 + k ln 2`` replaces ``row`` unless the fit fails or
-    moves it by more than two rows.
-    """
-    k = max(rise / np.log(3.0), 0.3)            # 25 % -> 75 % of an exponential ramp: k ln 3
-    sign = 1.0 if rising else -1.0
-    lo = int(np.floor(row - 2 - 2 * k if rising else row - 2 - 5 * k))
-    hi = int(np.ceil(row + 2 + 5 * k if rising else row + 2 + 2 * k))
-    x = np.arange(max(lo, 0), min(hi, len(values) - 1) + 1, dtype=np.float64)
-    y = values[x.astype(np.int64)]
-    keep = np.isfinite(y)
-    if keep.sum() < 5:
-        return row
-    start, scale, converged = _fit_ramp(sign * x[keep], y[keep], sign * row - k * np.log(2.0), k,
-                                        level, 0.05 * level)
-    refined = sign * (start + scale * np.log(2.0))
-    return float(refined) if converged and abs(refined - row) <= 2.0 else row
-
-
-@numba.njit(cache=True, nogil=True)
-def _fit_ramp(x, y, start, scale, plateau, f_scale):  # pragma: no cover - compiled
-    """Robust fit of ``y = plateau * (1 - exp(-max(x - start, 0) / scale))`` (x, y: shape (n,)).
-
-    Levenberg-Marquardt on the soft-L1 cost ``sum 2 f^2 (sqrt(1 + (r / f)^2) - 1)`` (``f`` =
-    ``f_scale``), its normal equations weighted by the loss's derivative (iteratively
-    reweighted): rows hit by a player or a compression artefact barely count. Compiled, as
-    each event needs two fits. Returns (start, scale, converged).
-    """
-    p = np.array([start, max(scale, 1e-3), plateau])
-    cost = _ramp_cost(x, y, p, f_scale)
-    damping = 1e-3
-    for _ in range(100):
-        normal, gradient = np.zeros((3, 3)), np.zeros(3)
-        for i in range(x.size):
-            reach = max(x[i] - p[0], 0.0)
-            decay = np.exp(-reach / p[1])
-            residual = p[2] * (1.0 - decay) - y[i]
-            weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
-            jacobian = np.array([-p[2] / p[1] * decay if reach > 0 else 0.0,
-                                 -p[2] * decay * reach / p[1] ** 2, 1.0 - decay])
-            normal += weight * np.outer(jacobian, jacobian)
-            gradient += weight * residual * jacobian
-        for _ in range(20):
-            damped = normal + damping * np.diag(np.diag(normal) + 1e-12)
-            trial = p - _solve3(damped, gradient)
-            trial[1] = max(trial[1], 1e-3)
-            trial_cost = _ramp_cost(x, y, trial, f_scale)
-            if trial_cost <= cost:
-                break
-            damping *= 10.0
-        else:
-            return p[0], p[1], True          # no step lowers the cost: at the minimum
-        moved = np.max(np.abs(trial - p))
-        p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
-        if moved < 1e-7 * (1.0 + np.max(np.abs(p))):
-            return p[0], p[1], True
-    return p[0], p[1], False
-
-
-@numba.njit(cache=True, nogil=True)
-def _ramp_cost(x, y, p, f_scale):  # pragma: no cover - compiled
-    """Soft-L1 cost of the ramp ``p = (start, scale, plateau)`` against ``y``."""
-    total = 0.0
-    for i in range(x.size):
-        residual = p[2] * (1.0 - np.exp(-max(x[i] - p[0], 0.0) / p[1])) - y[i]
-        total += 2.0 * f_scale**2 * (np.sqrt(1.0 + (residual / f_scale) ** 2) - 1.0)
-    return total
-
-
-@numba.njit(cache=True, nogil=True)
-def _solve3(a, b):  # pragma: no cover - compiled
-    """``a^-1 b`` for a 3x3 system by cofactors (zeros if ``a`` is singular)."""
-    cofactor = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            r0, r1, c0, c1 = (i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3
-            cofactor[i, j] = a[r0, c0] * a[r1, c1] - a[r0, c1] * a[r1, c0]
-    det = a[0, 0] * cofactor[0, 0] + a[0, 1] * cofactor[0, 1] + a[0, 2] * cofactor[0, 2]
-    return cofactor.T @ b / det if det != 0.0 else np.zeros(3)
+    return fit_pulse_edge(segment.change, row, rise, level, rising=crossing is _rising_crossing), rise
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.

@@ -30,7 +30,7 @@ def leading(events):
     return events[events["edge"] == "leading"].reset_index(drop=True)
 
 
-@pytest.mark.parametrize("crf, rms_rows", [(0, 0.1), (23, 0.15)])
+@pytest.mark.parametrize("crf, rms_rows", [(0, 0.05), (23, 0.15)])
 def test_leading_edges_match_the_flash_instants(tmp_path, crf, rms_rows):
     """Sub-row edges (fitted ramps) within a fraction of a row of the truth, with and
     without H.264 compression; one flash straddles two frames."""

@@ -227,8 +227,9 @@ def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
     """Std of one edge's time, ms, from the scatter of band lengths among the bands of one
-    camera that span the same number of frames (a length holds two edges' errors); lengths
-    beyond 5 robust stds (a misdetected band) are left out."""
+    camera that span the same number of frames (a length holds two edges' errors). Every
+    band counts, one whose edge a codec artefact moved too: the edge residuals this is
+    compared with hold that edge as well."""
     deviations = []
     for camera, camera_bands in zip(cameras, bands):
         frames = camera_bands["frame_trailing"] - camera_bands["frame_leading"]
@@ -240,6 +241,4 @@ def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> fl
     if not deviations:
         return float("nan")
     deviations = np.concatenate(deviations)
-    robust = 1.4826 * np.median(np.abs(deviations))
-    kept = deviations[np.abs(deviations) <= 5.0 * robust]
-    return float(np.sqrt(np.mean(kept**2) / 2.0))
+    return float(np.sqrt(np.mean(deviations**2) / 2.0))
