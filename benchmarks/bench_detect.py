@@ -86,7 +86,7 @@ def startup_seconds() -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=200)
-    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--rounds", type=int, default=9)
     parser.add_argument("--sizes", default="720p,1080p,2160p")
     parser.add_argument("--dir", type=Path, help="where to write the clips (default: a temp dir)")
     args = parser.parse_args()
