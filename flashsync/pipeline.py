@@ -131,24 +131,37 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: with_frame_times(d, report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.alternative is not None]
-    best, failure = None, None
-    for flip in [None, *undecided, *undecided]:  # a second pass can undo a flip made too early
-        trial = dict(best.cameras if best else cameras)
-        if flip is not None:
-            trial[flip] = trial[flip].read_flipped(not trial[flip].flipped)
-        try:
-            attempt = _attempt(trial, reference, row_times, anchors)
-        except FlashsyncError as error:
-            failure = failure or error
-            continue
-        if best is None or attempt.score > best.score:
-            best = attempt
-    if best is None:
-        raise failure
+    best = _best_readout(cameras, undecided, lambda trial: _attempt(trial, reference, row_times, anchors))
     report.alignments, report.warnings = best.alignments, best.warnings
     report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
     return best.model(reference), report
+
+
+def _best_readout(cameras: dict[str, CameraDetection], undecided: list[str],
+                  attempt: Callable[[dict[str, CameraDetection]], _Attempt]) -> _Attempt:
+    """The readout directions of the ``undecided`` cameras that explain the events best
+    (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
+    best of all single flips, until none helps. Raises the first failure if nothing solves."""
+    best, failure, start = None, None, cameras
+    while True:
+        improved = False
+        for flip in [None, *undecided] if best is None else undecided:
+            trial = dict(start)
+            if flip is not None:
+                trial[flip] = trial[flip].read_flipped(not trial[flip].flipped)
+            try:
+                result = attempt(trial)
+            except FlashsyncError as error:
+                failure = failure or error
+                continue
+            if best is None or result.score > best.score:
+                best, improved = result, True
+        if best is None:
+            raise failure
+        if not improved:
+            return best
+        start = best.cameras
 
 
 def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[str, str, SyncModel | str]]:
@@ -180,9 +193,18 @@ class _Attempt:
     solution: Solution
 
     @property
-    def score(self) -> tuple[int, float]:
-        """More inlier events first, then a smaller residual scale."""
-        return int(self.solution.inlier[: len(self.observations)].sum()), -self.solution.sigma_ms
+    def score(self) -> float:
+        """Log-likelihood of all the cameras' sync events under these readout directions:
+        inliers Gaussian with the solve's residual scale, every other event (rejected, or
+        matched to nothing) uniform over a frame period. Counting inliers alone would
+        prefer a wrong direction whose loose fit (a scale ten times larger) lets one more
+        event in."""
+        n_inliers = int(self.solution.inlier[: len(self.observations)].sum())
+        n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
+        sigma = max(self.solution.sigma_ms, 1e-4)
+        period = max(_frame_period(d) for d in self.cameras.values())
+        return (n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5)
+                - (n_events - n_inliers) * np.log(period))
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}
