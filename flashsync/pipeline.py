@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from itertools import combinations
 from pathlib import Path
 from typing import Callable, Sequence
@@ -192,7 +193,7 @@ class _Attempt:
     durations: Durations
     solution: Solution
 
-    @property
+    @cached_property
     def score(self) -> float:
         """Log-likelihood of all the cameras' sync events under these readout directions:
         inliers Gaussian with the solve's residual scale, every other event (rejected, or
