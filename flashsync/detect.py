@@ -32,8 +32,10 @@ import numpy as np
 import pandas as pd
 
 from flashsync.errors import FlashsyncError
+from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.profiles import read_profiles
 from flashsync.ramp import fit_pulse_edge
+from flashsync.recurrence import Band, RecurrenceFilter
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
@@ -91,6 +93,7 @@ class _Segment:
     sign: int
     saturated: bool
     sigma: float
+    band: Band | None = None
 
 
 @dataclass
@@ -124,6 +127,7 @@ class EventDetector:
         self._lit_rows = (0, height)
         self._global_frames = 0
         self._n_events = 0
+        self._recurrence = RecurrenceFilter()
         self.events: list[dict] = []
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
@@ -152,10 +156,15 @@ class EventDetector:
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
                 if stop - start >= max(self.settings.min_rows, self.height // 100):
+                    band = Band(frame, int(start), int(stop), sign * float(np.median(signed[start:stop])),
+                                start <= lit_start, stop >= lit_stop)
                     segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
-                                             bool(np.max(readout[start:stop]) >= SATURATED), sigma))
+                                             bool(np.max(readout[start:stop]) >= SATURATED), sigma, band))
         self._remember(readout)
+        for segment in segments:
+            self._recurrence.see(segment.band)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
+        self._record(self._recurrence.release(frame))
 
     def _remember(self, readout: np.ndarray) -> None:
         """Put a profile into the baseline's ring (the oldest one leaves once it is full)."""
@@ -168,7 +177,20 @@ class EventDetector:
         if self._open is not None:
             self._emit(self._open, "pulse", trailing_visible=False)
             self._open = None
+        self._record(self._recurrence.release())
         return pd.DataFrame(self.events, columns=EVENT_COLUMNS)
+
+    @property
+    def n_recurring(self) -> int:
+        """Bands dropped because they recur at the same rows (:mod:`flashsync.recurrence`)."""
+        return self._recurrence.dropped
+
+    def _record(self, released: list[list[dict]]) -> None:
+        """Number the edges of the events that passed the recurrence filter and keep them."""
+        for edges in released:
+            for edge in edges:
+                self.events.append({**edge, "event": self._n_events})
+            self._n_events += 1
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
         """Follow bands across frames. A band reaching the first (last) lit row of the frame
@@ -221,16 +243,18 @@ class EventDetector:
         flags |= {"leading_hidden"} if leading is None else set()
         flags |= {"trailing_hidden"} if trailing is None and kind == "pulse" else set()
         edges = (("leading", first, leading, leading_rise), ("trailing", last, trailing, trailing_rise))
+        rows = []
         for edge, segment, row, rise in edges:
             if row is None:
                 continue
             stored = self.height - 1 - row if self.settings.flipped else row
-            self.events.append({
-                "camera": self.camera, "event": self._n_events, "frame": segment.frame,
+            rows.append({
+                "camera": self.camera, "frame": segment.frame,
                 "t_frame_ms": segment.t_frame_ms, "row": stored, "edge": edge, "band": kind,
                 "rise_rows": rise, "strength": first.sign * plateau, "quality": plateau / first.sigma,
                 "flags": "|".join(sorted(flags))})
-        self._n_events += 1
+        self._recurrence.hold([s.band for s in event.segments], first.sign * plateau, rows,
+                              checked=kind == "pulse")
 
 
 @numba.njit(cache=True, nogil=True)
@@ -404,6 +428,7 @@ class CameraDetection:
     events: pd.DataFrame
     flipped: bool = False
     alternative: pd.DataFrame | None = None
+    flicker: Flicker | None = None
 
     def read_flipped(self, flipped: bool) -> CameraDetection:
         """This detection with the readout direction ``flipped`` (needs ``alternative``)."""
@@ -438,7 +463,8 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction))
                  for direction in directions]
     times = []
-    for frame, (t_ms, profile) in enumerate(profiles):
+    remove_flicker = FlickerRemover(info.height)
+    for frame, (t_ms, profile) in enumerate(remove_flicker(profiles)):
         times.append(t_ms)
         for detector in detectors:
             detector.push(frame, t_ms, profile)
@@ -449,4 +475,5 @@ def detect_video(path: str | Path, flipped: bool | None = False,
         raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
     events = [detector.finish() for detector in detectors]
     return CameraDetection(info.camera, info.path, info.width, info.height, frame_times, events[0],
-                           directions[0], events[1] if len(events) > 1 else None)
+                           directions[0], events[1] if len(events) > 1 else None,
+                           remove_flicker.estimate())

@@ -1,0 +1,647 @@
+"""Mains flicker: estimated from the row profiles, removed before change detection, kept.
+
+Lamps on mains power flicker at twice the mains frequency (100 or 120 Hz). A rolling-shutter
+row integrates the light over its own exposure window, so each frame shows the flicker as a
+periodic pattern down its rows: one period is ``1000 / hz`` ms of readout, i.e.
+``period_rows = (1000 / hz) / T_row`` readout rows, the same in every frame. From frame to
+frame the pattern moves by ``hz`` times the frame step (mod one period): it stands still when
+the frame period holds a whole number of flicker periods (25 fps under 50 Hz mains), rolls
+fast otherwise (30 fps under 50 Hz: a third of a period per frame) and slowly at 29.97 fps
+under 60 Hz. Short exposures make it deep (a row integrates less than one period).
+
+The model of a frame's profile is ``scene(row) * gain * (1 + flicker(row))`` with
+``log(1 + flicker) = sum_h Re(A_h exp(2 pi i h nu row))``: ``nu = 1 / period_rows``
+(cycles per stored row; the sign of the readout direction does not change it), a few
+harmonics ``h`` (a lamp is not a pure sine), and complex amplitudes ``A_h`` free in every
+frame (the phase moves, the depth is the same). :class:`FlickerRemover` learns ``nu`` from
+the first frames (a periodogram over rows, combined over frames by a median, so a flashed
+frame does not count, refined by least squares), then fits ``A_h`` of every frame against a
+slow running mean of the raw profiles and divides the fitted pattern out before change
+detection. The fit is robust (a flash band or a player is an outlier to it), and only the
+periodic part is removed, never the frame's mean level: a flash, an auto-exposure step or a
+light switched on keeps its change.
+
+What is kept (:class:`Flicker`) measures the time per row with no flash at all: the solve
+can tie ``period_rows * T_row`` of every camera in one hall to one shared flicker period.
+Standing flicker is invisible against the scene (and harmless: it cancels in the frame
+differences); it is neither removed nor reported.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Iterable, Iterator
+
+import numba
+import numpy as np
+
+#: Flicker frequencies of 50 Hz and 60 Hz mains, Hz.
+MAINS_FLICKER_HZ = (100.0, 120.0)
+
+
+@dataclass(frozen=True)
+class Flicker:
+    """One camera's mains flicker, as its rows saw it.
+
+    Attributes
+    ----------
+    hz : float or None
+        100.0 or 120.0 (twice the mains frequency), identified from how far the pattern moves
+        between frames; None where that does not tell (a non-mains light, or too few frames).
+    period_rows : float
+        Flicker period in readout rows (``(1000 / hz) / T_row``).
+    period_rows_std : float
+        Its standard deviation, rows (from the spread of estimates over parts of the video).
+    depth : float
+        Amplitude of the fundamental as the rows saw it (0.03: rows swing by ±3 %; the
+        exposure averages the lamp's own depth down); NaN where the pattern moved too little
+        to tell it from the scene.
+    n_frames : int
+        Frames it was measured on.
+    phase : ndarray of float, shape (frames,)
+        Phase of the fundamental at stored row 0 in each decoded frame, radians (NaN where not
+        measured).
+    """
+
+    hz: float | None
+    period_rows: float
+    period_rows_std: float
+    depth: float
+    n_frames: int
+    phase: np.ndarray
+
+
+@dataclass(frozen=True)
+class FlickerSettings:
+    """Tuning of :class:`FlickerRemover`.
+
+    Attributes
+    ----------
+    lookahead : int
+        Frames held back before change detection: the flicker is learned on them first.
+    reservoir : int
+        Older frames kept (one every ``reservoir_step``) for learning a slowly rolling flicker.
+    reservoir_step : int
+    harmonics : int
+        Harmonics of the flicker fitted in every frame (below half a cycle per row).
+    min_snr : float
+        Amplitude of the fundamental over its noise (median over the learning frames) that
+        counts as flicker.
+    min_depth : float
+        Smallest amplitude of the fundamental that counts (0.001: rows swing by ±0.1 %).
+    min_periods, max_periods : float
+        Flicker periods per frame height searched (a period is 0.2 to 1.5 frame heights at
+        25-60 fps; a sensor that reads out faster than its frame period has longer ones).
+    memory_frames : float
+        Time constant of the running mean the flicker is measured against, frames.
+    min_level : float
+        Darkest block (fraction of white) that is measured.
+    """
+
+    lookahead: int = 32
+    reservoir: int = 32
+    reservoir_step: int = 8
+    harmonics: int = 3
+    min_snr: float = 8.0
+    min_depth: float = 0.001
+    min_periods: float = 0.75
+    max_periods: float = 6.0
+    memory_frames: float = 256.0
+    min_level: float = 0.035
+
+
+#: Frames per chunk: the frequency is updated after each, and the chunks' estimates are compared.
+CHUNK_FRAMES = 64
+#: Bands of rows whose estimates are compared (leave-one-out) for the standard deviation.
+STRIPS = 6
+#: Largest relative step a frame makes in the running mean (a flash or a player moves it little).
+MEAN_CLIP = 0.2
+#: A frame's fitted fundamental larger than this many times the learned one (plus noise) is
+#: not flicker (a scene change); the frame keeps the predicted pattern instead.
+MAX_AMPLITUDE_FACTOR = 2.5
+#: Time constant of each row's own gain on the pattern, frames, and its largest size.
+ROW_GAIN_FRAMES = 32.0
+MAX_ROW_GAIN = 1.5
+#: Gauss-Newton steps on the learning frames.
+LEARNING_STEPS = 4
+
+
+class FlickerRemover:
+    """Streaming estimator and remover of one camera's rolling mains flicker.
+
+    Call it on an iterable of ``(t_frame_ms, profile)`` (profile: float array (height, blocks),
+    stored rows, light-linear as :func:`flashsync.profiles.row_profile` gives it); it yields
+    the same pairs with the flicker divided out, ``settings.lookahead`` frames later (memory
+    stays constant). :meth:`estimate` gives what it found once the iterator is exhausted.
+
+    Examples
+    --------
+    >>> remover = FlickerRemover(height=240)                 # doctest: +SKIP
+    >>> for t_ms, profile in remover(profiles): ...          # doctest: +SKIP
+    >>> remover.estimate()                                   # doctest: +SKIP
+    """
+
+    def __init__(self, height: int, settings: FlickerSettings = FlickerSettings()):
+        self.height = height
+        self.settings = settings
+        self._queue: deque[tuple[float, np.ndarray]] = deque()
+        self._reservoir: deque[tuple[float, np.ndarray]] = deque(maxlen=settings.reservoir)
+        self._n_seen = self._n_out = self._attempts = 0
+        self._next_attempt = settings.lookahead
+        self._lock: _Lock | None = None
+        self._fits: list[tuple[int, float, complex]] = []     # (frame, t_ms, fundamental)
+        self._evidence = _Evidence()
+        self._mean_phasor = 0j
+
+    def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
+        settings = self.settings
+        for t_ms, profile in frames:
+            profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
+            self._queue.append((t_ms, profile))
+            if self._n_seen % settings.reservoir_step == 0:
+                self._reservoir.append((t_ms, profile))
+            self._n_seen += 1
+            if self._lock is None and self._n_seen >= self._next_attempt:
+                self._learn()
+            if len(self._queue) > settings.lookahead:
+                yield self._correct(*self._queue.popleft())
+        if self._lock is None and self._attempts == 0 and len(self._queue) >= 8:
+            self._learn()
+        while self._queue:
+            yield self._correct(*self._queue.popleft())
+
+    def _learn(self) -> None:
+        """Look for a rolling flicker in the held-back and reservoir frames; lock onto it.
+
+        Attempts are made when the lookahead first fills, then at doubling intervals (a light
+        switched on later, a roll too slow to see at first), then every 1024 frames."""
+        self._attempts += 1
+        self._next_attempt = self._n_seen + min(self.settings.lookahead * 2 ** self._attempts, 1024)
+        dense = list(self._queue)
+        frames = [item for item in self._reservoir if item[0] < dense[0][0]] + dense
+        profiles = np.stack([p for _, p in frames])
+        logs = np.stack([_row_log_ratio(p, np.median(profiles, axis=0), self.settings.min_level)
+                         for p in profiles])
+        found = _learn_frequency(logs, self.settings)
+        if found is None:
+            return
+        nu, amplitude = found
+        basis = _basis(self.height, nu, self.settings.harmonics)
+        fundamentals = np.array([_fit_frame(row, basis, np.zeros(basis.shape[1]), 1)[0][1:3]
+                                 for row in logs[-len(dense):]])
+        recent = np.median(np.stack([p for _, p in dense]), axis=0).astype(np.float32)
+        lock = _Lock(nu, basis, recent, amplitude,
+                     _rotation_per_ms(fundamentals[:, 0] - 1j * fundamentals[:, 1],
+                                      np.array([t for t, _ in dense])))
+        for _, profile in dense:                 # the rows' gains learn before the first frame
+            y = _row_log_ratio(profile, recent, self.settings.min_level)
+            coef, scale, *_ = _fit_frame(y, basis, np.zeros(basis.shape[1]), 1)
+            _row_pattern(y, basis, coef, max(3.0 * scale, 0.75 * amplitude), lock.gains,
+                         1.0 / ROW_GAIN_FRAMES, 2.0 * amplitude**2)
+        self._lock = lock
+
+    def _correct(self, t_ms: float, profile: np.ndarray) -> tuple[float, np.ndarray]:
+        """Fit the frame's pattern against the running mean, divide it out, learn from it."""
+        frame = self._n_out
+        self._n_out += 1
+        lock = self._lock
+        if lock is None:
+            return t_ms, profile
+        y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
+        init = lock.predict(t_ms)
+        coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS)
+        noise = scale * math.sqrt(2.0 / max(int(np.isfinite(y).sum()), 1))
+        if ok and abs(complex(coef[1], coef[2])) <= MAX_AMPLITUDE_FACTOR * lock.amplitude + 6.0 * noise:
+            self._fits.append((frame, t_ms, complex(coef[1], -coef[2]) + self._mean_phasor))
+            if self._evidence.add(lock.nu, num / scale**2, den / scale**2):
+                lock.retune(self._evidence.latest, self.settings.harmonics)
+        else:
+            coef = init
+        lock.last = (t_ms, coef.copy())
+        pattern = _row_pattern(y, lock.basis, coef, max(3.0 * scale, 0.75 * lock.amplitude), lock.gains,
+                               1.0 / ROW_GAIN_FRAMES, 2.0 * lock.amplitude**2)
+        _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
+        self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
+        return t_ms, profile / np.exp(pattern).astype(np.float32)[:, None]
+
+    def estimate(self) -> Flicker | None:
+        """The flicker found (None: no rolling flicker), once the frames are all through.
+
+        The fundamentals are measured against a running mean that holds part of the pattern
+        itself (its share is added back as it builds up, but not what it held at the start):
+        the points lie on a circle about an unknown centre whose radius is the depth and along
+        which the phase advances; :func:`_circle` finds both."""
+        if self._lock is None or len(self._fits) < 2:
+            return None
+        nu, nu_std = self._evidence.frequency()
+        frames = np.array([f for f, _, _ in self._fits])
+        times = np.array([t for _, t, _ in self._fits])
+        points = np.array([z for _, _, z in self._fits])
+        centre, radius = _circle(points)
+        phase = np.full(self._n_out, np.nan)
+        hz = None
+        if np.isfinite(radius):
+            phase[frames] = np.angle(points - centre)
+            hz = _identify_hz(phase[frames], times)
+        return Flicker(hz, float(1.0 / nu), float(nu_std / nu**2), float(radius), len(frames), phase)
+
+
+@dataclass
+class _Lock:
+    """A learned flicker: frequency ``nu`` (cycles per row), the frame basis, the running mean
+    profile it is measured against, the fundamental's typical amplitude, its roll (radians per
+    ms, aliased to one frame step) and the last frame's coefficients."""
+
+    nu: float
+    basis: np.ndarray
+    mean: np.ndarray
+    amplitude: float
+    radians_per_ms: float
+    last: tuple[float, np.ndarray] | None = None
+    gains: np.ndarray = None
+
+    def __post_init__(self):
+        self.gains = np.zeros((len(self.basis), 5))
+
+    def predict(self, t_ms: float) -> np.ndarray:
+        """The previous frame's coefficients rotated by the roll since it (the fit's start)."""
+        n = self.basis.shape[1]
+        if self.last is None:
+            return np.zeros(n)
+        t_last, coef = self.last
+        out = coef.copy()
+        for h in range(1, (n - 1) // 2 + 1):
+            z = complex(coef[2 * h - 1], -coef[2 * h]) * np.exp(1j * h * self.radians_per_ms * (t_ms - t_last))
+            out[2 * h - 1], out[2 * h] = z.real, -z.imag
+        return out
+
+    def retune(self, nu: float, harmonics: int) -> None:
+        """Follow a refined frequency (its basis too)."""
+        self.nu = nu
+        self.basis = _basis(len(self.basis), nu, harmonics)
+        if self.last is not None and len(self.last[1]) != self.basis.shape[1]:
+            self.last = None
+
+
+class _Evidence:
+    """The frames' Gauss-Newton sums for the frequency, per chunk of frames (each chunk's
+    estimate retunes the lock) and per band of rows over the whole video."""
+
+    def __init__(self):
+        self.chunks: list[tuple[float, float]] = []    # (estimate, information)
+        self.strip_sums = np.zeros(STRIPS)             # sum of information x estimate
+        self.strip_information = np.zeros(STRIPS)
+        self._num = np.zeros(STRIPS)
+        self._den = np.zeros(STRIPS)
+        self._n = 0
+        self._nu = 0.0
+        self.latest = float("nan")
+
+    def add(self, nu: float, num: np.ndarray, den: np.ndarray) -> bool:
+        """One frame's sums at frequency ``nu``; True when a chunk closed (see ``latest``)."""
+        self._nu = nu
+        self._num += num
+        self._den += den
+        self._n += 1
+        if self._n < CHUNK_FRAMES:
+            return False
+        return self._close()
+
+    def _close(self) -> bool:
+        information = self._den.sum()
+        closed = information > 0
+        if closed:
+            self.latest = self._nu + self._num.sum() / information
+            self.chunks.append((self.latest, information))
+            strip = self._den > 0
+            self.strip_sums[strip] += self._den[strip] * self._nu + self._num[strip]
+            self.strip_information += self._den
+        self._num[:] = 0.0
+        self._den[:] = 0.0
+        self._n = 0
+        return closed
+
+    def frequency(self) -> tuple[float, float]:
+        """Frequency (cycles per row) and its standard deviation: the largest of the formal
+        error, the spread of the chunks' estimates (a wandering mains frequency) and the
+        leave-one-band-out spread of the rows' estimates (a codec or a scene that bends the
+        pattern in some rows)."""
+        if self._n:
+            self._close()
+        if not self.chunks:
+            return self._nu, float("nan")
+        estimates = np.array([e for e, _ in self.chunks])
+        weights = np.array([w for _, w in self.chunks])
+        total = weights.sum()
+        nu = float(np.sum(weights * estimates) / total)
+        spreads = [1.0 / math.sqrt(total)]
+        if len(estimates) >= 3:
+            spreads.append(math.sqrt(np.sum(weights * (estimates - nu) ** 2) / total / (len(estimates) - 1)))
+        used = self.strip_information > 0
+        if used.sum() >= 3:
+            sums, information = self.strip_sums[used], self.strip_information[used]
+            left_out = (sums.sum() - sums) / (information.sum() - information)
+            k = len(left_out)
+            spreads.append(math.sqrt((k - 1) / k * np.sum((left_out - left_out.mean()) ** 2)))
+        return nu, max(spreads)
+
+
+def _basis(height: int, nu: float, harmonics: int) -> np.ndarray:
+    """Columns 1, cos(2 pi h nu r), sin(2 pi h nu r) for the harmonics h below 0.45 cycles per
+    row; shape (height, 1 + 2 H)."""
+    rows = np.arange(height, dtype=np.float64)
+    columns = [np.ones(height)]
+    for h in range(1, harmonics + 1):
+        if h * nu >= 0.45:
+            break
+        columns += [np.cos(2 * np.pi * h * nu * rows), np.sin(2 * np.pi * h * nu * rows)]
+    return np.stack(columns, axis=1)
+
+
+def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float, float] | None:
+    """The flicker's frequency (cycles per row) and the median amplitude of its fundamental
+    over frames, or None where no periodic pattern stands out of the noise.
+
+    ``logs`` (frames, height): each frame's log ratio to the frames' median profile. A
+    periodogram of each frame's rows (mean removed, Hann taper, zero-padded), combined over
+    frames by the median (a flashed frame does not count), gives the peak; Gauss-Newton steps
+    of the robust fit of every frame (harmonics included) refine it, and the fitted
+    amplitudes over their noise decide."""
+    valid = np.isfinite(logs)
+    logs = logs[valid.sum(axis=1) >= logs.shape[1] // 2]
+    if len(logs) < 4:
+        return None
+    frames, height = logs.shape
+    valid = np.isfinite(logs)
+    centred = np.where(valid, logs - np.nanmean(logs, axis=1, keepdims=True), 0.0)
+    pad = 8 * (1 << int(np.ceil(np.log2(height))))
+    power = np.median(np.abs(np.fft.rfft(centred * np.hanning(height), n=pad, axis=1)) ** 2, axis=0)
+    grid = np.fft.rfftfreq(pad)
+    search = np.flatnonzero((grid >= settings.min_periods / height) & (grid <= settings.max_periods / height))
+    if not search.size:
+        return None
+    nu = float(grid[search[np.argmax(power[search])]])
+    for _ in range(LEARNING_STEPS):
+        basis = _basis(height, nu, settings.harmonics)
+        fits = [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1) for row in logs]
+        num = sum(f[2][0] / f[1] ** 2 for f in fits if f[4])
+        den = sum(f[3][0] / f[1] ** 2 for f in fits if f[4])
+        if not den > 0:
+            return None
+        nu += float(np.clip(num / den, -1.0 / pad, 1.0 / pad))
+    amplitude = [math.hypot(f[0][1], f[0][2]) for f in fits if f[4]]
+    noise = [f[1] * math.sqrt(2.0 / np.isfinite(row).sum()) for f, row in zip(fits, logs) if f[4]]
+    if (not amplitude or np.median(amplitude) < settings.min_depth
+            or np.median(np.divide(amplitude, noise)) < settings.min_snr):
+        return None
+    return nu, float(np.median(amplitude))
+
+
+def _rotation_per_ms(fundamentals: np.ndarray, times: np.ndarray) -> float:
+    """How fast the pattern rolls, radians per ms, from consecutive frames' fundamentals:
+    the angle between successive differences (the differences cancel any pattern frozen in
+    the reference), over the median frame step; aliased to one frame step, which is all a
+    prediction of the next frame needs."""
+    if len(fundamentals) < 3:
+        return 0.0
+    steps = np.diff(fundamentals)
+    turn = np.sum(steps[1:] * np.conj(steps[:-1]))
+    return float(np.angle(turn) / np.median(np.diff(times))) if abs(turn) > 0 else 0.0
+
+
+def _circle(points: np.ndarray) -> tuple[complex, float]:
+    """Centre and radius of the circle through complex ``points`` (algebraic least squares);
+    NaN radius where they do not spread around enough of it to tell (standing flicker)."""
+    if len(points) < 3:
+        return 0j, float("nan")
+    x, y = points.real, points.imag
+    design = np.stack([x, y, np.ones_like(x)], axis=1)
+    coef, *_ = np.linalg.lstsq(design, -(x**2 + y**2), rcond=None)
+    centre = complex(-coef[0] / 2.0, -coef[1] / 2.0)
+    radius_sq = abs(centre) ** 2 - coef[2]
+    if not np.isfinite(radius_sq) or radius_sq <= 0:
+        return centre, float("nan")
+    radius = math.sqrt(radius_sq)
+    if np.sqrt(np.var(x) + np.var(y)) < 0.2 * radius:
+        return centre, float("nan")
+    return centre, radius
+
+
+def _identify_hz(phase: np.ndarray, times: np.ndarray) -> float | None:
+    """100 or 120 Hz: the one whose advance over each frame step (``hz`` times the step,
+    in either readout direction, mod one period) the measured phases follow; None where both
+    do (a frame period that holds whole periods of both) or neither (not mains)."""
+    steps = np.diff(phase)
+    dt = np.diff(times)
+    if len(steps) < 3:
+        return None
+    scores = {}
+    for hz in MAINS_FLICKER_HZ:
+        for sign in (1.0, -1.0):
+            scores[(hz, sign)] = float(np.mean(np.cos(steps - sign * 2 * np.pi * hz * dt / 1000.0)))
+    best = max(scores, key=scores.get)
+    other = max(v for (hz, _), v in scores.items() if hz != best[0])
+    return best[0] if scores[best] >= 0.8 and other < 0.5 else None
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _row_log_ratio(profile, reference, min_level):  # pragma: no cover - compiled
+    """Per row, the log of the median over blocks of ``profile / reference`` where the
+    reference is lit (>= ``min_level``); NaN where fewer than half the blocks are. Shape (height,)."""
+    height, blocks = profile.shape
+    out = np.empty(height, np.float64)
+    ratios = np.empty(blocks, np.float64)
+    for r in range(height):
+        n = 0
+        for b in range(blocks):
+            if reference[r, b] >= min_level:
+                ratios[n] = max(profile[r, b] / reference[r, b], 1e-3)
+                n += 1
+        if n == 0 or 2 * n < blocks:
+            out[r] = np.nan
+            continue
+        for i in range(1, n):                       # insertion sort: n is small
+            value = ratios[i]
+            j = i - 1
+            while j >= 0 and ratios[j] > value:
+                ratios[j + 1] = ratios[j]
+                j -= 1
+            ratios[j + 1] = value
+        middle = n // 2
+        out[r] = math.log(ratios[middle] if n % 2 else 0.5 * (ratios[middle - 1] + ratios[middle]))
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _fit_frame(y, basis, init, strips):  # pragma: no cover - compiled
+    """Robust fit of ``y ≈ basis @ coef`` (:func:`_basis`) over the finite rows (iteratively
+    reweighted least squares, Cauchy weights at 2.385 robust sigmas), started from ``init``;
+    a flash band or a player is an outlier.
+
+    Returns (coef, scale, gn_num, gn_den, ok): the robust residual scale; the Gauss-Newton
+    sums (``sum w d e``, ``sum w d^2``) of the residual ``e`` against ``d``, the pattern's
+    derivative with respect to nu less what the basis explains of it, in each of ``strips``
+    equal bands of rows (shape (strips,)): their totals' ratio is this frame's correction to
+    nu; ok False where too few rows are finite or the system is singular.
+    """
+    height, p = basis.shape
+    coef = init.copy()
+    rows = np.empty(height, np.int64)
+    n = 0
+    for r in range(height):
+        if np.isfinite(y[r]):
+            rows[n] = r
+            n += 1
+    residual = np.empty(n)
+    weight = np.empty(n)
+    scale = 1.0
+    gn_num = np.zeros(strips)
+    gn_den = np.zeros(strips)
+    if n < 2 * p + 4:
+        return coef, scale, gn_num, gn_den, False
+    offset = np.empty(n)
+    for i in range(n):                               # the start's level: the median offset
+        r = rows[i]
+        fitted = 0.0
+        for j in range(1, p):
+            fitted += basis[r, j] * coef[j]
+        offset[i] = y[r] - fitted
+    coef[0] = np.median(offset)
+    for _ in range(8):
+        for i in range(n):
+            r = rows[i]
+            fitted = 0.0
+            for j in range(p):
+                fitted += basis[r, j] * coef[j]
+            residual[i] = y[r] - fitted
+        scale = max(1.4826 * np.median(np.abs(residual)), 1e-5)
+        for i in range(n):
+            weight[i] = 1.0 / (1.0 + (residual[i] / (2.385 * scale)) ** 2)
+        normal = np.zeros((p, p))
+        right = np.zeros(p)
+        for i in range(n):
+            r = rows[i]
+            for j in range(p):
+                right[j] += weight[i] * basis[r, j] * y[r]
+                for k in range(j + 1):
+                    normal[j, k] += weight[i] * basis[r, j] * basis[r, k]
+        for j in range(p):
+            for k in range(j + 1, p):
+                normal[j, k] = normal[k, j]
+        solved, ok = _cholesky_solve(normal, right)
+        if not ok:
+            return coef, scale, gn_num, gn_den, False
+        coef = solved
+    slope = np.empty(n)
+    projection = np.zeros(p)
+    for i in range(n):                               # the pattern's derivative in nu
+        r = rows[i]
+        total = 0.0
+        for h in range(1, (p - 1) // 2 + 1):
+            total += h * r * (-coef[2 * h - 1] * basis[r, 2 * h] + coef[2 * h] * basis[r, 2 * h - 1])
+        slope[i] = 2.0 * math.pi * total
+        for j in range(p):
+            projection[j] += weight[i] * basis[rows[i], j] * slope[i]
+    along, ok = _cholesky_solve(normal, projection)  # what the other unknowns absorb of it
+    if not ok:
+        return coef, scale, gn_num, gn_den, False
+    for i in range(n):
+        r = rows[i]
+        fitted = 0.0
+        for j in range(p):
+            slope[i] -= basis[r, j] * along[j]
+            fitted += basis[r, j] * coef[j]
+        strip = r * strips // height
+        gn_num[strip] += weight[i] * slope[i] * (y[r] - fitted)
+        gn_den[strip] += weight[i] * slope[i] * slope[i]
+    return coef, scale, gn_num, gn_den, True
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cholesky_solve(a, b):  # pragma: no cover - compiled
+    """``a^-1 b`` for a small symmetric positive definite ``a``; (zeros, False) if it is not."""
+    n = b.size
+    low = np.zeros((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            total = a[i, j]
+            for m in range(j):
+                total -= low[i, m] * low[j, m]
+            if i != j:
+                low[i, j] = total / low[j, j]
+            elif total > 1e-300 and np.isfinite(total):
+                low[i, i] = math.sqrt(total)
+            else:
+                return np.zeros(n), False
+    out = b.copy()
+    for i in range(n):
+        for m in range(i):
+            out[i] -= low[i, m] * out[m]
+        out[i] /= low[i, i]
+    for i in range(n - 1, -1, -1):
+        for m in range(i + 1, n):
+            out[i] -= low[m, i] * out[m]
+        out[i] /= low[i, i]
+    ok = True
+    for i in range(n):
+        if not np.isfinite(out[i]):
+            ok = False
+    return out, ok
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover - compiled
+    """The log flicker to divide out of each row: the frame's fitted pattern ``z(r)``
+    (complex: its value and its quadrature) times the row's own complex gain ``G(r)``.
+
+    The codec does not keep the pattern alike in every row: it freezes flat areas (skipped
+    blocks keep an old phase or none) and delays others. Each row's gain is the least-squares
+    regression of its observed log ratio (less the frame's level) on ``Re z`` and ``-Im z``
+    over the recent frames (exponential memory at ``rate``; ``sums`` (height, 5) holds the
+    running normal equations and is updated), Huber-weighted at ``clip`` from the row's
+    current model so that a flash barely counts, with a weak prior ``prior`` at ``G = 1``.
+    """
+    height, p = basis.shape
+    out = np.zeros(height)
+    for r in range(height):
+        re = 0.0
+        im = 0.0
+        for h in range(1, (p - 1) // 2 + 1):
+            a, b = coef[2 * h - 1], coef[2 * h]
+            c, s = basis[r, 2 * h - 1], basis[r, 2 * h]
+            re += a * c + b * s
+            im += a * s - b * c
+        n00, n01, n11 = sums[r, 0] + prior, sums[r, 1], sums[r, 2] + prior
+        r0, r1 = sums[r, 3] + prior, sums[r, 4]
+        det = n00 * n11 - n01 * n01
+        g_re, g_im = (n11 * r0 - n01 * r1) / det, (n00 * r1 - n01 * r0) / det
+        size = math.hypot(g_re, g_im)
+        if size > MAX_ROW_GAIN:                  # a codec attenuates or delays, never amplifies
+            g_re, g_im = g_re * MAX_ROW_GAIN / size, g_im * MAX_ROW_GAIN / size
+        if np.isfinite(y[r]):
+            e = y[r] - coef[0]
+            miss = abs(e - (g_re * re - g_im * im))
+            w = 1.0 if miss <= clip else clip / miss
+            for k in range(5):
+                sums[r, k] *= 1.0 - rate
+            sums[r, 0] += w * re * re
+            sums[r, 1] -= w * re * im
+            sums[r, 2] += w * im * im
+            sums[r, 3] += w * re * e
+            sums[r, 4] -= w * im * e
+        out[r] = g_re * re - g_im * im
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _update_mean(mean, profile, rate, clip):  # pragma: no cover - compiled
+    """``mean += rate * (profile - mean)``, each step clipped to ``clip`` times the mean (a
+    flash or a player that passes moves it little)."""
+    height, blocks = mean.shape
+    for r in range(height):
+        for b in range(blocks):
+            step = profile[r, b] - mean[r, b]
+            bound = clip * max(abs(mean[r, b]), 1e-3)
+            mean[r, b] += rate * min(max(step, -bound), bound)
