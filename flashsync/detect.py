@@ -38,6 +38,12 @@ from flashsync.ramp import fit_pulse_edge
 from flashsync.recurrence import Band, RecurrenceFilter
 from flashsync.timestamps import check_timestamps
 
+#: Fewest profiles in the baseline before a frame is searched for bands (the first frames of
+#: a video, or after a light switch, compare with one or two frames only: codec and flicker
+#: differences between two frames are not averaged out).
+MIN_BASELINE = 3
+#: Recent frames whose largest change gives the clutter level (:attr:`DetectorSettings.clutter_factor`).
+CLUTTER_FRAMES = 101
 #: Profile level (fraction of white) of a row whose pixels are clipped.
 SATURATED = 0.98
 
@@ -66,6 +72,10 @@ class DetectorSettings:
         Smallest brightness step (fraction of white; 1.5 DN) that counts as a change.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
+    clutter_factor : float
+        Threshold in units of the video's clutter: the median over recent frames of each
+        frame's largest change (what players, leftover flicker and the codec leave in frames
+        without a flash; a flash is in few frames and does not move the median).
     flipped : bool
         The sensor reads bottom-up in stored rows (camera mounted upside down).
     """
@@ -77,6 +87,7 @@ class DetectorSettings:
     min_level: float = 0.035
     min_step: float = 1.5 / 219.0
     step_frames: int = 2
+    clutter_factor: float = 2.5
     flipped: bool = False
 
 
@@ -123,12 +134,14 @@ class EventDetector:
         self._history: np.ndarray | None = None      # (history, height, blocks) ring of profiles
         self._n_history = self._next = 0
         self._noise: deque[float] = deque(maxlen=25)
+        self._peaks: deque[float] = deque(maxlen=CLUTTER_FRAMES)
         self._open: _Event | None = None
         self._lit_rows = (0, height)
         self._global_frames = 0
         self._n_events = 0
         self._recurrence = RecurrenceFilter()
         self.events: list[dict] = []
+        self.n_degenerate = 0
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
         """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
@@ -149,10 +162,13 @@ class EventDetector:
         if np.isfinite(noise):
             self._noise.append(noise)
         sigma = max(statistics.median(self._noise), 1e-4) if self._noise else 1e-4
-        threshold = max(self.settings.min_change, self.settings.k_sigma * sigma)
+        self._peaks.append(peak)
+        clutter = statistics.median(self._peaks) if len(self._peaks) >= 3 else 0.0
+        threshold = max(self.settings.min_change, self.settings.k_sigma * sigma,
+                        self.settings.clutter_factor * clutter)
         self._lit_rows = (lit_start, lit_stop)
         segments = []
-        for sign in (1, -1) if peak > threshold else ():
+        for sign in (1, -1) if peak > threshold and self._n_history >= MIN_BASELINE else ():
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
                 if stop - start >= max(self.settings.min_rows, self.height // 100):
@@ -228,8 +244,10 @@ class EventDetector:
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
-        """Locate the edges of a finished band (:func:`_local_edge`) and record them; a band
-        that darkens rows without staying dark (a passing shadow) is not an event."""
+        """Locate the edges of a finished band (:func:`_local_edge`) and hold them for the
+        recurrence filter; a band that darkens rows without staying dark (a passing shadow)
+        is not an event, and a degenerate one (no positive plateau to fit an edge on) is
+        dropped and counted in :attr:`n_degenerate`."""
         first, last = event.segments[0], event.segments[-1]
         if kind == "pulse" and first.sign < 0:
             return
@@ -238,6 +256,9 @@ class EventDetector:
         leading, leading_rise = _local_edge(_rising_crossing, first, plateau, window, kind)
         trailing, trailing_rise = (_local_edge(_falling_crossing, last, plateau, window, kind)
                                    if trailing_visible else (None, np.nan))
+        if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
+            self.n_degenerate += 1
+            return
         flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
         flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
         flags |= {"leading_hidden"} if leading is None else set()
@@ -257,7 +278,7 @@ class EventDetector:
                               checked=kind == "pulse")
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _relative_change(history, current, min_level, min_step):  # pragma: no cover - compiled
     """One frame's relative change against the baseline, with what the detector needs of it.
 
@@ -306,14 +327,14 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     return change, noise, peak, lit_start, lit_stop
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True, inline="always", error_model="numpy")
 def _median5(a, b, c, d, e):  # pragma: no cover - compiled
     """Median of five values by eight comparisons (no sorting)."""
     low, high = max(min(a, b), min(c, d)), min(max(a, b), max(c, d))
     return max(min(e, low), min(max(e, low), high))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _median_in_place(values, n):  # pragma: no cover - compiled
     """Median of ``values[:n]`` by insertion sort (n is small); reorders them."""
     for i in range(1, n):
@@ -352,10 +373,13 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
     of its plateau). A pulse's half-rise point marks the same instant in every camera. A step
     ramps linearly over one exposure, so its half-rise point moves with the exposure; its
     foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
-    switch. Returns (None, nan) where the edge is not visible.
+    switch. Returns (None, nan) where the edge is not visible, (nan, nan) where the band is
+    degenerate (its local plateau is not positive: nothing to locate an edge on).
     """
     level = plateau
     for _ in range(2):
+        if not level > 0:
+            return np.nan, np.nan
         row = crossing(segment.change, 0.5 * level, segment.start, segment.stop)
         foot = crossing(segment.change, 0.1 * level, segment.start, segment.stop)
         if row is None or foot is None:

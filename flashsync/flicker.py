@@ -118,8 +118,12 @@ CHUNK_FRAMES = 64
 STRIPS = 6
 #: Largest relative step a frame makes in the running mean (a flash or a player moves it little).
 MEAN_CLIP = 0.2
-#: A frame's fitted fundamental larger than this many times the learned one (plus noise) is
-#: not flicker (a scene change); the frame keeps the predicted pattern instead.
+#: A frame's fitted pattern farther than this many times the typical distance from the one
+#: predicted by the frame before (its running mean over ``DEVIATION_FRAMES``), or without a
+#: prediction a fundamental this many times the learned one, is not flicker (a flash band, a
+#: scene change): the frame keeps the predicted pattern instead.
+MAX_DEVIATION = 4.0
+DEVIATION_FRAMES = 32.0
 MAX_AMPLITUDE_FACTOR = 2.5
 #: Time constant of each row's own gain on the pattern, frames, and its largest size.
 ROW_GAIN_FRAMES = 32.0
@@ -189,7 +193,7 @@ class FlickerRemover:
             return
         nu, amplitude = found
         basis = _basis(self.height, nu, self.settings.harmonics)
-        fundamentals = np.array([_fit_frame(row, basis, np.zeros(basis.shape[1]), 1)[0][1:3]
+        fundamentals = np.array([_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0)[0][1:3]
                                  for row in logs[-len(dense):]])
         recent = np.median(np.stack([p for _, p in dense]), axis=0).astype(np.float32)
         lock = _Lock(nu, basis, recent, amplitude,
@@ -197,7 +201,7 @@ class FlickerRemover:
                                       np.array([t for t, _ in dense])))
         for _, profile in dense:                 # the rows' gains learn before the first frame
             y = _row_log_ratio(profile, recent, self.settings.min_level)
-            coef, scale, *_ = _fit_frame(y, basis, np.zeros(basis.shape[1]), 1)
+            coef, scale, *_ = _fit_frame(y, basis, np.zeros(basis.shape[1]), 1, 0.0)
             _row_pattern(y, basis, coef, max(3.0 * scale, 0.75 * amplitude), lock.gains,
                          1.0 / ROW_GAIN_FRAMES, 2.0 * amplitude**2)
         self._lock = lock
@@ -211,9 +215,8 @@ class FlickerRemover:
             return t_ms, profile
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
-        coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS)
-        noise = scale * math.sqrt(2.0 / max(int(np.isfinite(y).sum()), 1))
-        if ok and abs(complex(coef[1], coef[2])) <= MAX_AMPLITUDE_FACTOR * lock.amplitude + 6.0 * noise:
+        coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
+        if ok and lock.plausible(coef, init, scale):
             self._fits.append((frame, t_ms, complex(coef[1], -coef[2]) + self._mean_phasor))
             if self._evidence.add(lock.nu, num / scale**2, den / scale**2):
                 lock.retune(self._evidence.latest, self.settings.harmonics)
@@ -261,9 +264,30 @@ class _Lock:
     radians_per_ms: float
     last: tuple[float, np.ndarray] | None = None
     gains: np.ndarray = None
+    deviation: float = 0.0
+    scale: float = 0.0
 
     def __post_init__(self):
         self.gains = np.zeros((len(self.basis), 5))
+        self.deviation = 0.2 * self.amplitude
+
+    def plausible(self, coef: np.ndarray, init: np.ndarray, scale: float) -> bool:
+        """Whether a frame's fitted pattern can be flicker: no farther (largest difference over
+        the rows) than :data:`MAX_DEVIATION` times the typical distance from the one predicted
+        from the frame before (a band the harmonics of a long period would take in moves it
+        far), or, without a prediction, no more than :data:`MAX_AMPLITUDE_FACTOR` times the
+        learned amplitude. Keeps the typical distance and residual scale of the frames
+        that pass."""
+        if self.last is None:
+            if math.hypot(coef[1], coef[2]) > MAX_AMPLITUDE_FACTOR * self.amplitude:
+                return False
+        else:
+            distance = float(np.max(np.abs(self.basis[:, 1:] @ (coef[1:] - init[1:]))))
+            if distance > MAX_DEVIATION * self.deviation + 2.0 * scale:
+                return False
+            self.deviation += (distance - self.deviation) / DEVIATION_FRAMES
+        self.scale = scale if self.scale == 0.0 else self.scale + (scale - self.scale) / DEVIATION_FRAMES
+        return True
 
     def predict(self, t_ms: float) -> np.ndarray:
         """The previous frame's coefficients rotated by the roll since it (the fit's start)."""
@@ -385,7 +409,7 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     nu = float(grid[search[np.argmax(power[search])]])
     for _ in range(LEARNING_STEPS):
         basis = _basis(height, nu, settings.harmonics)
-        fits = [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1) for row in logs]
+        fits = [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0) for row in logs]
         num = sum(f[2][0] / f[1] ** 2 for f in fits if f[4])
         den = sum(f[3][0] / f[1] ** 2 for f in fits if f[4])
         if not den > 0:
@@ -475,10 +499,14 @@ def _row_log_ratio(profile, reference, min_level):  # pragma: no cover - compile
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fit_frame(y, basis, init, strips):  # pragma: no cover - compiled
+def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compiled
     """Robust fit of ``y ≈ basis @ coef`` (:func:`_basis`) over the finite rows (iteratively
-    reweighted least squares, Cauchy weights at 2.385 robust sigmas), started from ``init``;
-    a flash band or a player is an outlier.
+    reweighted least squares, Tukey's biweight at 4.685 robust sigmas), started from
+    ``init``; a flash band or a player is an outlier. The biweight gives rows far off no
+    weight at all: with a few harmonics of a long period the pattern could otherwise bend
+    to take in a flash band that a long-tailed weight leaves a little say. The residual
+    scale is ``scale_hint`` where positive (the scale of recent frames: a band does not
+    widen it), else the robust scale of each iteration's residuals.
 
     Returns (coef, scale, gn_num, gn_den, ok): the robust residual scale; the Gauss-Newton
     sums (``sum w d e``, ``sum w d^2``) of the residual ``e`` against ``d``, the pattern's
@@ -516,9 +544,10 @@ def _fit_frame(y, basis, init, strips):  # pragma: no cover - compiled
             for j in range(p):
                 fitted += basis[r, j] * coef[j]
             residual[i] = y[r] - fitted
-        scale = max(1.4826 * np.median(np.abs(residual)), 1e-5)
+        scale = scale_hint if scale_hint > 0 else max(1.4826 * np.median(np.abs(residual)), 1e-5)
         for i in range(n):
-            weight[i] = 1.0 / (1.0 + (residual[i] / (2.385 * scale)) ** 2)
+            u = residual[i] / (4.685 * scale)
+            weight[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
         normal = np.zeros((p, p))
         right = np.zeros(p)
         for i in range(n):

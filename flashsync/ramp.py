@@ -50,8 +50,11 @@ def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, ri
     Returns
     -------
     float: the fitted edge, rows; ``row`` itself where fewer than six rows are usable, the
-    fit does not converge or it would move the edge by more than two rows.
+    fit does not converge or it would move the edge by more than two rows; NaN where the
+    band is degenerate (a level that is not positive, a crossing or rise that is not finite).
     """
+    if not (np.isfinite(row) and np.isfinite(rise) and np.isfinite(level) and level > 0):
+        return float("nan")
     k = max(rise / np.log(3.0), 0.3)            # 25 % -> 75 % of an exponential ramp: k ln 3
     first, last = int(np.floor(row - 3 - 2 * k)), int(np.ceil(row + 2 + 6 * k))   # flat side, tail
     x = np.arange(max(first, 0), min(last, len(values) - 1) + 1)
@@ -79,7 +82,7 @@ def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
     return foot if 0 <= foot < len(values) and values[foot] == 0 else -1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     """Robust fit of ``y = plateau * ramp(x - start, scale, blur)`` (``rising``) or of
     ``y = plateau * (1 - ramp(...))``; ``p`` = (start, scale, blur, plateau) is the first
@@ -88,11 +91,17 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     Levenberg-Marquardt on the soft-L1 cost ``sum 2 f^2 (sqrt(1 + (r / f)^2) - 1)`` (``f`` =
     ``f_scale``), the normal equations weighted by the loss's derivative (iteratively
     reweighted), so rows hit by a player or a compression artefact barely count; the blur
-    has a weak prior at 0 (:data:`BLUR_PRIOR_STD`). Returns (p, converged).
+    has a weak prior at 0 (:data:`BLUR_PRIOR_STD`). Returns (p, converged); not converged
+    where ``f_scale`` is not positive or anything turns non-finite (numba's "numpy" error
+    model: a division by zero gives inf, it does not raise).
     """
     n = x.size
     p = _clamp(p.copy())
+    if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
+        return p, False
     cost = _cost(x, y, p, f_scale, rising)
+    if not np.isfinite(cost):
+        return p, False
     damping = 1e-3
     jacobian = np.empty((n, 4))
     residual = np.empty(n)
@@ -120,6 +129,8 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
             damping *= 10.0
         else:
             return p, True                       # no step lowers the cost: at the minimum
+        if not np.all(np.isfinite(trial)):
+            return p, False
         moved_most = np.max(np.abs(trial - p))
         p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
         if moved_most < 1e-7 * (1.0 + np.max(np.abs(p))):
@@ -127,14 +138,14 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     return p, False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _clamp(p):  # pragma: no cover - compiled
     p[1] = min(max(p[1], MIN_SCALE), MAX_SCALE)
     p[2] = min(max(p[2], 0.0), MAX_BLUR)
     return p
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     """Soft-L1 cost of the ramp ``p`` = (start, scale, blur, plateau) against ``y``, plus the
     blur's prior."""
@@ -145,7 +156,7 @@ def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     return total + (f_scale * p[2] / BLUR_PRIOR_STD) ** 2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _shape(x, p, rising):  # pragma: no cover - compiled
     """The band's level at row ``x`` relative to its plateau, for ``p`` = (start, scale,
     blur, plateau): the ramp rising from 0, or falling from 1."""
@@ -153,7 +164,7 @@ def _shape(x, p, rising):  # pragma: no cover - compiled
     return share if rising else 1.0 - share
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _ramp(z, scale, blur):  # pragma: no cover - compiled
     """Share of the flash's light in a row ``z`` rows past its start: ``1 - exp(-z / scale)``
     (0 before), convolved with a Gaussian of ``blur`` rows. The tail term
@@ -168,7 +179,7 @@ def _ramp(z, scale, blur):  # pragma: no cover - compiled
     return 0.5 * math.erfc(-z / (blur * math.sqrt(2.0))) - tail
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _erfcx(t):  # pragma: no cover - compiled
     """``exp(t^2) erfc(t)`` for t >= 0 (asymptotic series past 25, where erfc underflows)."""
     if t < 25.0:
@@ -177,7 +188,7 @@ def _erfcx(t):  # pragma: no cover - compiled
     return (1.0 - 0.5 * u + 0.75 * u * u) / (t * math.sqrt(math.pi))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _solve_spd(a, b):  # pragma: no cover - compiled
     """``a^-1 b`` for a symmetric positive definite ``a`` by Cholesky; zeros if it is not."""
     n = b.size

@@ -31,7 +31,7 @@ REPEAT_FRACTION = 0.8
 ECHO_OVERLAP = 0.5
 #: Two bands are at the same rows when both their ends are within this fraction of the
 #: shorter one's height of each other (and within :data:`MIN_TOLERANCE_ROWS`).
-EDGE_TOLERANCE = 0.25
+EDGE_TOLERANCE = 0.1
 MIN_TOLERANCE_ROWS = 3
 
 
