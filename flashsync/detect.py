@@ -72,6 +72,11 @@ class DetectorSettings:
         Smallest brightness step (fraction of white; 1.5 DN) that counts as a change.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
+    agreement : float
+        Light changes every column block of a row alike; a player changes a few, each by
+        its own amount. Over a band's rows, at least this fraction of the blocks (median
+        over its rows) must have changed within a factor of two of the row's median change:
+        several players in one row can lift the median, they do not agree with it.
     clutter_factor : float
         Threshold in units of the video's clutter: the median over recent frames of each
         frame's largest change (what players, leftover flicker and the codec leave in frames
@@ -88,6 +93,7 @@ class DetectorSettings:
     min_step: float = 1.5 / 219.0
     step_frames: int = 2
     clutter_factor: float = 2.5
+    agreement: float = 0.6
     flipped: bool = False
 
 
@@ -157,7 +163,7 @@ class EventDetector:
         if self._n_history == 0:
             self._remember(readout)
             return
-        change, noise, peak, lit_start, lit_stop = _relative_change(
+        change, agree, noise, peak, lit_start, lit_stop = _relative_change(
             self._history[:self._n_history], readout, self.settings.min_level, self.settings.min_step)
         if np.isfinite(noise):
             self._noise.append(noise)
@@ -171,7 +177,8 @@ class EventDetector:
         for sign in (1, -1) if peak > threshold and self._n_history >= MIN_BASELINE else ():
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
-                if stop - start >= max(self.settings.min_rows, self.height // 100):
+                if (stop - start >= max(self.settings.min_rows, self.height // 100)
+                        and np.median(agree[start:stop]) >= self.settings.agreement):
                     band = Band(frame, int(start), int(stop), sign * float(np.median(signed[start:stop])),
                                 start <= lit_start, stop >= lit_stop)
                     segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
@@ -288,12 +295,16 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     less than ``min_step`` counts as unchanged (a one-DN jump of a dark flat area at an
     H.264 key frame is a large relative change).
 
-    Returns (change, noise, peak, lit_start, lit_stop): change of shape (height,); the
-    robust sigma of its row-to-row noise (NaN if nothing is lit); the largest ``|change|``;
-    and the first and past-the-last lit rows ((0, height) if none).
+    Returns (change, agree, noise, peak, lit_start, lit_stop): change of shape (height,);
+    ``agree``, the fraction of the lit blocks whose change is within a factor of two of the
+    row's (light scales every block alike; a player changes a few, by its own amount),
+    shape (height,); the robust sigma of the change's row-to-row noise (NaN if nothing is
+    lit); the largest ``|change|``; and the first and past-the-last lit rows ((0, height) if
+    none).
     """
     k, height, blocks = history.shape
     change = np.empty(height, np.float64)
+    agree = np.zeros(height, np.float64)
     column = np.empty(k, np.float64)
     lit = np.empty(blocks, np.float64)
     for r in range(height):
@@ -311,6 +322,14 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
                 lit[n_lit] = step / baseline if abs(step) >= min_step else 0.0
                 n_lit += 1
         change[r] = _median_in_place(lit, n_lit) if 2 * n_lit >= blocks and n_lit > 0 else np.nan
+        middle = change[r]
+        if np.isfinite(middle) and middle != 0.0:
+            alike = 0
+            for i in range(n_lit):
+                ratio = lit[i] / middle
+                if 0.5 <= ratio <= 2.0:
+                    alike += 1
+            agree[r] = alike / n_lit
     steps = np.empty(height, np.float64)
     n_steps, peak, lit_start, lit_stop = 0, 0.0, height, 0
     for r in range(height):
@@ -324,7 +343,7 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     noise = 1.4826 / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
     if lit_stop == 0:
         lit_start, lit_stop = 0, height
-    return change, noise, peak, lit_start, lit_stop
+    return change, agree, noise, peak, lit_start, lit_stop
 
 
 @numba.njit(cache=True, nogil=True, inline="always", error_model="numpy")
