@@ -32,7 +32,7 @@ def synced_scenario(tmp_path_factory) -> Path:
         CameraSpec("r", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5),
         CameraSpec("f", 256, 144, 30.0, r0=6, r1=8, exposure_ms=8.0, start_ms=2000.0,
                    offset_ms=-1900.0, drift_ppm=25.0, container="mkv", flipped=True,
-                   dropped_frames=(30, 31, 55), noise_std=1.5, position_m=(-7.0, 15.0, 14.0),
+                   dropped_frames=(45, 46, 60), noise_std=1.5, position_m=(-7.0, 15.0, 14.0),
                    look_at_m=(18.0, 15.0), hfov_deg=75.0),
         CameraSpec("s", 240, 180, 50.0, r0=6, r1=4, exposure_ms=6.0, start_ms=500.0,
                    offset_ms=-200.0, drift_ppm=-15.0, noise_std=1.5, n_frames=140,

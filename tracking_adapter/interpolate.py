@@ -3,8 +3,8 @@
 track at common ticks) share.
 
 An instant gets a value only between two detections of the track (never extrapolated)
-that are at most ``max_gap_ms`` apart; elsewhere the value is NaN and the status says why
-(:data:`STATUS`).
+that are at most ``max_gap_ms`` apart, or on a detection; elsewhere the value is NaN and the
+status says why (:data:`STATUS`).
 """
 
 from __future__ import annotations
@@ -84,8 +84,8 @@ def interpolate_track(times_ms: np.ndarray, values: np.ndarray, instants_ms: np.
     inside = np.flatnonzero(status == INTERPOLATED)
     after = np.clip(np.searchsorted(times, instants[inside], side="right"), 1, len(times) - 1)
     gap = times[after] - times[after - 1]
-    status[inside[gap > max_gap_ms]] = GAP_OVER_LIMIT
-    close = gap <= max_gap_ms
+    close = (gap <= max_gap_ms) | (nearest[inside] == 0)          # or on a detection
+    status[inside[~close]] = GAP_OVER_LIMIT
     after, inside, gap = after[close], inside[close], gap[close]
     weight = ((instants[inside] - times[after - 1]) / gap)[:, None]
     result[inside] = points[after - 1] + weight * (points[after] - points[after - 1])
