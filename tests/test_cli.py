@@ -88,7 +88,8 @@ def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, 
 
 
 def test_help_of_every_command_has_an_example():
-    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo"):
+    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo", "frames", "resample",
+                    "montage"):
         result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"],
                                 capture_output=True, text=True)
         assert result.returncode == 0 and "example:" in result.stdout and "flashsync " + command in result.stdout
