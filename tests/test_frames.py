@@ -5,12 +5,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flashsync.cli import main
 from flashsync.evaluate import clock_origin_ms, sync_errors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.model_file import load_model
 from flashsync.simulation import load_ground_truth
 from flashsync.ticks import REASONS, frame_table, model_ticks_ms, tick_times_ms
+
+from cli_run import one_error_line, run
 
 
 def true_exposure(truth, camera, ticks_ms):
@@ -116,11 +117,6 @@ def test_reasons_of_the_solved_model_match_the_sensor_away_from_boundaries(synce
     assert (table[table["camera"] == "f"]["reason"] == "dropped frame").sum() >= 3 * 25
 
 
-def run(capsys, *args):
-    code = main([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
 
 def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys):
     model = synced_scenario / "sync.json"
@@ -142,12 +138,6 @@ def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys
     csv = pd.read_csv(tmp_path / "frames.csv")
     pd.testing.assert_series_equal(parquet["row"], csv["row"])
 
-
-def one_error_line(err, *words):
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1 and "Traceback" not in err and "error:" in lines[0], err
-    for word in words:
-        assert word in lines[0], lines[0]
 
 
 @pytest.mark.parametrize("options, words", [

@@ -14,20 +14,11 @@ from flashsync.montage import layout, write_montage
 from flashsync.simulation.encode import write_video
 from flashsync.ticks import AFTER, BEFORE, LOCATED, locate_ticks, tick_times_ms
 
+from cli_run import one_error_line, run
+
 VIDEOS = ("r.mp4", "f.mkv", "s.mp4")
 
 
-def run(capsys, *args):
-    code = main([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def one_error_line(err, *words):
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1 and "Traceback" not in err and "error:" in lines[0], err
-    for word in words:
-        assert word in lines[0], lines[0]
 
 
 def decoded(path, **size):

@@ -6,7 +6,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flashsync.cli import main
 from flashsync.evaluate import clock_origin_ms
 from flashsync.model_file import load_model
 from flashsync.simulation import load_ground_truth
@@ -16,18 +15,9 @@ from tracking_adapter.formats import read_detections
 from tracking_adapter.interpolate import interpolate_track
 from tracking_adapter.resample import TRACK_COLUMNS, resample
 
-
-def run(capsys, *args):
-    code = main([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
+from cli_run import one_error_line, run
 
 
-def one_error_line(err, *words):
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1 and "Traceback" not in err and "error:" in lines[0], err
-    for word in words:
-        assert word in lines[0], lines[0]
 
 
 def true_puck_px(folder, model, tracks):
