@@ -166,3 +166,23 @@ def test_frames_refuses_a_missing_model_and_an_unknown_format(synced_scenario, t
     assert code == 1
     one_error_line(err, "frames.xlsx", "use .csv or .parquet")
     assert not list(tmp_path.iterdir())
+
+
+def test_rows_round_trip_through_a_warped_clock():
+    """With a drift warp (a clock whose rate changes), an upside-down readout and dropped
+    frames, every located (frame, row) maps back onto its tick, and no tick is located
+    in a frame the camera dropped."""
+    stamps = np.delete(np.arange(300) * 40.0 + 3.0, [100, 101, 200])
+    clock = CameraClock("w", stamps, height=200, width=320, alpha=1.00002, beta_ms=-51.7,
+                        row_time_ms=0.19, flipped=True, drift_knots_ms=np.array([3.0, 4000.0, 8000.0, 11963.0]),
+                        drift_warp_ms=np.array([0.8, -0.5]))
+    model = SyncModel("w", {"w": clock})
+    table = frame_table(model, model_ticks_ms(model, 1000.0))
+    located = table[table["reason"] == ""]
+    back = clock.t_global_ms(located["frame"].to_numpy(dtype=np.int64), located["row"].to_numpy())
+    np.testing.assert_allclose(back, located["t_global_ms"], atol=1e-9)
+    starts = clock.frame_start_ms(stamps)
+    dropped = table[table["reason"] == "dropped frame"]["t_global_ms"].to_numpy()
+    assert 3 * 37 <= len(dropped) <= 3 * 38                 # 3 frames x 37.8 ms of visible rows
+    assert np.all(((dropped > starts[99]) & (dropped < starts[100]))
+                  | ((dropped > starts[197]) & (dropped < starts[198])))
