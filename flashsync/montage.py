@@ -23,6 +23,7 @@ from pathlib import Path
 import av
 import cv2
 import numpy as np
+from av.video.reformatter import VideoReformatter
 
 from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
@@ -259,6 +260,7 @@ class _TileReader:
         stream = self._container.streams.video[0]
         stream.thread_type = "AUTO"
         self._frames: Iterator[av.VideoFrame] = self._container.decode(stream)
+        self._scaler = VideoReformatter()                  # keeps its scaling context: 3-5x faster
         self._index, self._image = -1, None
 
     def image(self, frame: int) -> np.ndarray:
@@ -275,8 +277,8 @@ class _TileReader:
             except av.FFmpegError as error:
                 raise FlashsyncError(f"{self.path}: cannot decode ({error.strerror}); is the file "
                                      "complete?") from None
-            self._image = decoded.to_ndarray(width=self.tile.width, height=self.tile.height,
-                                             format="bgr24", interpolation="AREA")
+            self._image = self._scaler.reformat(decoded, self.tile.width, self.tile.height, "bgr24",
+                                                interpolation="AREA").to_ndarray()
             self._index = frame
         return self._image
 
