@@ -21,7 +21,9 @@ ends its exposure at the tick, the reason is one of :data:`REASONS`:
     in the vertical blanking.
 
 Ticks are ``start_ms + k * 1000 / rate_hz`` for ``k = 0, 1, ...`` while before
-``end_ms``: the end is exclusive, so 10 000 to 14 000 ms at 25 Hz is 100 ticks.
+``end_ms``: the end is exclusive, so 10 000 to 14 000 ms at 25 Hz is 100 ticks. Without a
+start, the grid's phase is chosen so that the most ticks meet a visible row
+(:func:`model_ticks_ms`).
 """
 
 from __future__ import annotations
@@ -43,6 +45,9 @@ LOCATED, BEFORE, AFTER, BLANKING, DROPPED = range(len(REASONS))
 DROP_GAP_PERIODS = 1.5
 #: Most ticks one call makes (a guard against a mistyped rate).
 MAX_TICKS = 50_000_000
+#: Phases of the default tick grid tried within one tick period, and the ticks scored.
+GRID_PHASES = 16
+PHASE_PROBES = 20_000
 
 
 def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
@@ -89,11 +94,15 @@ def model_ticks_ms(model: SyncModel, rate_hz: float, start_ms: float | None = No
                    end_ms: float | None = None, cameras: Sequence[str] | None = None) -> np.ndarray:
     """Ticks over the span covered by any camera of ``model``, or over a given span.
 
-    Without ``start_ms`` the first tick is the first multiple of the tick period
-    (``1000 / rate_hz`` ms, counted from global time 0) at or after the first row of the
-    earliest camera's first frame, so runs at one rate share their instants; without
-    ``end_ms`` the end is the last row of the latest camera's last frame (exclusive).
-    ``cameras`` limits those to some of the model's cameras (default: all).
+    Without ``start_ms`` the ticks lie on the grid ``k * 1000 / rate_hz + phase`` (ms,
+    global clock) from the first row of the earliest camera's first frame on, with the
+    phase (one of :data:`GRID_PHASES` steps of the tick period) at which the most (tick,
+    camera) pairs land on a visible row: where the rate is a multiple of a camera's frame
+    rate the same few instants of its frame recur, and a grid that put one of them in the
+    vertical blanking would lose that share of the ticks (a 50 fps camera half of them at
+    100 Hz). The phase depends on the model and rate only, so runs at one rate share their
+    instants. Without ``end_ms`` the end is the last row of the latest camera's last frame
+    (exclusive). ``cameras`` limits those to some of the model's cameras (default: all).
 
     Returns
     -------
@@ -104,10 +113,25 @@ def model_ticks_ms(model: SyncModel, rate_hz: float, start_ms: float | None = No
     if start_ms is None:
         step_ms = tick_period_ms(rate_hz)
         start_ms = math.ceil(first / step_ms - 1e-6) * step_ms
+        start_ms += _best_phase_ms(model, cameras, start_ms, last, step_ms)
     elif end_ms is None and not start_ms < last:
         raise FlashsyncError(f"--start-ms {start_ms} is not before the end of the recordings "
                              f"({last:.3f} ms on the global clock); give an earlier start")
     return tick_times_ms(rate_hz, start_ms, last if end_ms is None else end_ms)
+
+
+def _best_phase_ms(model: SyncModel, cameras: Sequence[str] | None, start_ms: float, end_ms: float,
+                   step_ms: float) -> float:
+    """The offset (ms, one of :data:`GRID_PHASES` in ``[0, step_ms)``) of a tick grid from
+    ``start_ms`` at which the most (tick, camera) pairs are located, scored on at most
+    :data:`PHASE_PROBES` ticks spread over the span; the smallest offset on a tie."""
+    count = max(math.ceil((end_ms - start_ms) / step_ms), 1)
+    probes = start_ms + np.unique(np.linspace(0, count - 1, min(count, PHASE_PROBES)).astype(np.int64)) * step_ms
+    clocks = [model.camera(name) for name in (cameras or model.cameras)]
+    offsets = np.arange(GRID_PHASES) * step_ms / GRID_PHASES
+    located = [sum(int(np.count_nonzero(locate_ticks(clock, probes + offset)[2] == LOCATED))
+                   for clock in clocks) for offset in offsets]
+    return float(offsets[int(np.argmax(located))])
 
 
 def recording_span_ms(model: SyncModel, cameras: Sequence[str] | None = None) -> tuple[float, float]:

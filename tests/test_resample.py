@@ -9,7 +9,7 @@ import pytest
 from flashsync.evaluate import clock_origin_ms
 from flashsync.model_file import load_model
 from flashsync.simulation import load_ground_truth
-from flashsync.simulation.scene import make_scene
+from flashsync.simulation.truth import puck_image_px
 from flashsync.ticks import model_ticks_ms
 from tracking_adapter.formats import read_detections
 from tracking_adapter.interpolate import interpolate_track
@@ -21,22 +21,14 @@ from cli_run import one_error_line, run
 
 
 def true_puck_px(folder, model, tracks):
-    """Where the simulated puck is in each row's camera image at the row's tick, px: its
-    rink position at that instant (true clocks) through the inverse of the camera's
-    image -> rink homography."""
+    """Where the simulated puck is in each row's camera image at the row's tick, px."""
     truth = load_ground_truth(folder / "truth.json")
-    scenario = truth.scenario
-    puck = make_scene(scenario["seed"], scenario["n_players"], scenario["puck_speed_mps"]).puck
-    ref = truth.cameras[truth.reference]
-    instants = tracks["t_global_ms"].to_numpy() - clock_origin_ms(model, truth)
-    world = (instants + ref.r0 * ref.sensor_row_ms) * (1 + ref.drift_ppm * 1e-6) + ref.offset_ms
-    rink = puck.position(world)
     homographies = json.loads((folder / "homographies.json").read_text())
+    instants = tracks["t_global_ms"].to_numpy() - clock_origin_ms(model, truth)
     image = np.full((len(tracks), 2), np.nan)
-    for name, h in homographies.items():
+    for name, homography in homographies.items():
         mine = (tracks["camera"] == name).to_numpy()
-        points = np.linalg.inv(np.array(h)) @ np.vstack([rink[mine].T, np.ones(mine.sum())])
-        image[mine] = (points[:2] / points[2]).T
+        image[mine] = puck_image_px(truth, homography, instants[mine])
     return image
 
 
@@ -109,7 +101,10 @@ def test_resample_command_on_raw_and_restamped_detections(synced_scenario, tmp_p
     assert "3 tracks" in err and "interpolated" in err
     raw = pd.read_csv(tmp_path / "tracks.csv", keep_default_na=False)
     assert list(raw.columns) == list(TRACK_COLUMNS)
-    assert (raw["t_global_ms"] % 20 == 0).all()                      # ticks on the 50 Hz grid
+    code, _, err = run(capsys, "frames", "--model", model, "--rate", 50, "-o", tmp_path / "frames.csv")
+    assert code == 0, err
+    ticks = pd.read_csv(tmp_path / "frames.csv")["t_global_ms"].unique()
+    assert np.isin(raw["t_global_ms"].unique(), ticks).all()           # the same default instants
     code, _, err = run(capsys, "restamp", detections, "--model", model, "-o", tmp_path / "stamped.csv")
     assert code == 0, err
     code, _, err = run(capsys, "resample", tmp_path / "stamped.csv", "--model", model, "--rate", 50,
