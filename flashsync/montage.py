@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import ExitStack, closing
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -193,30 +194,29 @@ def write_montage(videos: Sequence[str | Path], model: SyncModel, output: str | 
     height = max(t.cell_top + t.cell_height for t in tiles)
     located = {name: locate_ticks(model.cameras[name], ticks) for name in named}
     update = progress("montage", len(ticks)) if progress else None
-    readers = [_TileReader(path, tile) for path, tile in zip(named.values(), tiles)]
-    try:
-        with atomic_output(output) as temporary:
-            with av.open(str(temporary), "w", format=CONTAINERS[output.suffix.lower()]) as container:
-                rate = Fraction(rate_hz).limit_denominator(1001)
-                stream = container.add_stream("libx264", rate=rate)
-                stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-                stream.codec_context.time_base = 1 / rate
-                stream.options = {"crf": str(crf), "preset": "veryfast"}
-                canvas = np.empty((height, width, 3), dtype=np.uint8)
-                for k, tick in enumerate(ticks):
-                    canvas[:] = BACKGROUND
-                    for reader in readers:
-                        frame, row, reason = (values[k] for values in located[reader.tile.camera])
-                        _draw_tile(canvas, reader, int(frame), float(row), int(reason), float(tick))
-                    image = av.VideoFrame.from_ndarray(canvas, format="bgr24")
-                    image.pts, image.time_base = k, 1 / rate
-                    container.mux(stream.encode(image))
-                    if update:
-                        update(1)
-                container.mux(stream.encode())
-    finally:
-        for reader in readers:
-            reader.close()
+    with ExitStack() as stack:
+        readers = [stack.enter_context(closing(_TileReader(path, tile)))
+                   for path, tile in zip(named.values(), tiles)]
+        temporary = stack.enter_context(atomic_output(output))
+        container = stack.enter_context(av.open(str(temporary), "w",
+                                                format=CONTAINERS[output.suffix.lower()]))
+        rate = Fraction(rate_hz).limit_denominator(1001)
+        stream = container.add_stream("libx264", rate=rate)
+        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
+        stream.codec_context.time_base = 1 / rate
+        stream.options = {"crf": str(crf), "preset": "veryfast"}
+        canvas = np.empty((height, width, 3), dtype=np.uint8)
+        for k, tick in enumerate(ticks):
+            canvas[:] = BACKGROUND
+            for reader in readers:
+                frame, row, reason = (values[k] for values in located[reader.tile.camera])
+                _draw_tile(canvas, reader, int(frame), float(row), int(reason), float(tick))
+            image = av.VideoFrame.from_ndarray(canvas, format="bgr24")
+            image.pts, image.time_base = k, 1 / rate
+            container.mux(stream.encode(image))
+            if update:
+                update(1)
+        container.mux(stream.encode())
     return MontageSummary(output, len(ticks), width, height, float(rate_hz), float(ticks[0]))
 
 
