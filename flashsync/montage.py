@@ -131,6 +131,8 @@ def named_videos(paths: Sequence[str | Path], model: SyncModel) -> dict[str, Pat
         if path.stem in videos:
             raise FlashsyncError(f"{path}: two videos are named {path.stem}; camera names are file "
                                  "stems and must be unique: rename one")
+        if not path.is_file():
+            raise FlashsyncError(f"{path}: no such file; check the path")
         if path.stem not in model.cameras:
             raise FlashsyncError(f"{path}: camera {path.stem!r} is not in the model (it has "
                                  f"{', '.join(model.cameras)}); give the videos the model was made from")

@@ -167,6 +167,7 @@ def test_montage_refuses_bad_input(synced_scenario, tmp_path, capsys):
     cases = [
         ([*videos, "--model", tmp_path / "nope.json"], ["nope.json", "no such model file"]),
         ([tmp_path / "x.mp4", "--model", model], ["x.mp4", "'x' is not in the model"]),
+        ([tmp_path / "r.mp4", "--model", model], ["r.mp4", "no such file"]),
         ([tmp_path / "short" / "r.mp4", "--model", model], ["r.mp4", "10 frames", "model has 80"]),
         ([*videos, "--model", model, "--rate", 0], ["--rate 0", "positive"]),
         ([*videos, "--model", model, "--rate", "nan"], ["--rate nan", "positive"]),
