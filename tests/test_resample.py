@@ -141,3 +141,15 @@ def test_resample_refuses_bad_input(synced_scenario, tmp_path, capsys):
     code, _, err = run(capsys, "resample", detections, "--model", tmp_path / "no-exposure.json",
                        "--rate", 100, "--exposure", "f=8", "-o", tmp_path / "out" / "tracks.csv")
     assert code == 0, err
+
+
+def test_objects_are_tracked_apart_and_every_left_out_detection_is_counted(resampled):
+    model, detections, _ = resampled
+    table = detections[detections["camera"] == "r"].head(12).drop(columns="object")
+    table = table.assign(id=[7.0] * 6 + [8.0] * 5 + [np.nan])            # read as floats: a gap
+    table = pd.concat([table, table.iloc[[2]]], ignore_index=True)     # 7 twice in one frame
+    result = resample(table, model, model_ticks_ms(model, 100.0))
+    assert set(result.tracks["object"]) == {7, 8}
+    assert result.not_used == {"object id missing": 1, "another detection of the object in the frame": 1}
+    interpolated = result.tracks[result.tracks["reason"] == ""]
+    assert interpolated.groupby("object")["t_global_ms"].agg(["min", "max"]).diff()["min"].iloc[1] > 0

@@ -103,7 +103,7 @@ def resample(detections: pd.DataFrame, model: SyncModel, ticks_ms: np.ndarray, *
     not_used = {str(k): int(v) for k, v in stamped["restamp_error"].value_counts().items()}
     usable = stamped["restamp_error"].isna().to_numpy().copy()
     id_column = next((name for name in OBJECT_COLUMNS if name in detections.columns), None)
-    objects, object_names = (pd.factorize(detections[id_column]) if id_column
+    objects, object_names = (pd.factorize(_whole_ids(detections[id_column])) if id_column
                              else (np.zeros(len(detections), dtype=np.int64), pd.Index(["object"])))
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
     for reason, bad in (("x missing or not a number", np.isnan(x)), ("object id missing", objects < 0)):
@@ -172,6 +172,13 @@ def _require_exposures(stamped: pd.DataFrame, cameras: np.ndarray, usable: np.nd
         raise FlashsyncError(f"camera {', '.join(missing)}: exposure unknown (not in the model), so "
                              "its detections have no mid-exposure time; give --exposure "
                              f"{missing[0]}=MS")
+
+
+def _whole_ids(ids: pd.Series) -> pd.Series:
+    """Integer ids read as floats (a column of numbers with a gap) back as integers: 7, not 7.0."""
+    if pd.api.types.is_float_dtype(ids) and (ids.dropna() % 1 == 0).all():
+        return ids.astype("Int64")
+    return ids
 
 
 def _count(counts: dict[str, int], reason: str, count: int) -> None:
