@@ -128,6 +128,8 @@ MAX_AMPLITUDE_FACTOR = 2.5
 #: Time constant of each row's own gain on the pattern, frames, and its largest size.
 ROW_GAIN_FRAMES = 32.0
 MAX_ROW_GAIN = 1.5
+#: Fewest rows a frame needs for its flicker to be looked for.
+MIN_ROWS = 16
 #: Gauss-Newton steps on the learning frames.
 LEARNING_STEPS = 4
 
@@ -393,6 +395,8 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     frames by the median (a flashed frame does not count), gives the peak; Gauss-Newton steps
     of the robust fit of every frame (harmonics included) refine it, and the fitted
     amplitudes over their noise decide."""
+    if logs.shape[1] < MIN_ROWS:
+        return None
     valid = np.isfinite(logs)
     logs = logs[valid.sum(axis=1) >= logs.shape[1] // 2]
     if len(logs) < 4:
