@@ -223,9 +223,15 @@ def _run_detect(args) -> None:
     from flashsync.pipeline import all_events, detect_videos
     from flashsync.tables import write_table
 
-    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress,
-                           timestamps=_timestamp_files(args.timestamps)))
+    from flashsync.report import detection_notes
+
+    detections = detect_videos(args.videos, args.flipped, progress=_progress,
+                               timestamps=_timestamp_files(args.timestamps))
+    events = all_events(detections)
     write_table(events, args.output)
+    for detection in detections:
+        for note in detection_notes(detection):
+            print(note, file=sys.stderr)
     print(f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
           f"in {len(args.videos)} videos -> {args.output}", file=sys.stderr)
 
@@ -236,12 +242,15 @@ def _run_sync(args) -> None:
     from flashsync.atomic import write_text
     from flashsync.model_file import save_model
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
-    from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
-                                  sync_table)
+    from flashsync.report import (detection_notes, pairwise_table, pairwise_text, rejected_events,
+                                  sync_summary, sync_table)
     from flashsync.tables import write_table
 
     detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
                                timestamps=_timestamp_files(args.timestamps))
+    for detection in detections:
+        for note in detection_notes(detection):
+            print(f"flashsync sync: {note}", file=sys.stderr)
     if args.events:
         write_table(all_events(detections), args.events)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}

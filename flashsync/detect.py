@@ -62,7 +62,10 @@ class DetectorSettings:
     k_sigma : float
         Threshold in units of the video's profile noise (robust sigma, relative change).
     min_change : float
-        Smallest relative brightness change that can be an event (0.03 = 3 %).
+        Smallest relative brightness change that can be an event (0.03 = 3 %). Where the
+        video makes bands again and again (codec echoes, leftover flicker), 1.25 times the
+        median strength of the last ones dropped as recurring, up to twice this: a flash
+        has to stand out of them.
     min_rows : int
         Shortest band, rows; at least 1 % of the frame height is used.
     min_level : float
@@ -170,8 +173,10 @@ class EventDetector:
         sigma = max(statistics.median(self._noise), 1e-4) if self._noise else 1e-4
         self._peaks.append(peak)
         clutter = statistics.median(self._peaks) if len(self._peaks) >= 3 else 0.0
+        recurring = self._recurrence.recent_dropped
+        echoes = min(1.25 * statistics.median(recurring), 2.0 * self.settings.min_change) if len(recurring) >= 5 else 0.0
         threshold = max(self.settings.min_change, self.settings.k_sigma * sigma,
-                        self.settings.clutter_factor * clutter)
+                        self.settings.clutter_factor * clutter, echoes)
         self._lit_rows = (lit_start, lit_stop)
         segments = []
         for sign in (1, -1) if peak > threshold and self._n_history >= MIN_BASELINE else ():
@@ -461,6 +466,9 @@ class CameraDetection:
 
     ``events`` are read in the direction ``flipped`` says; ``alternative`` holds the same
     video's events read the other way, where the direction is still to be estimated.
+    ``flicker`` is the camera's rolling mains flicker (None: none seen); ``n_recurring`` and
+    ``n_degenerate`` count the bands dropped as recurring at the same rows and as degenerate
+    (reading ``events``' way).
     """
 
     camera: str
@@ -472,6 +480,8 @@ class CameraDetection:
     flipped: bool = False
     alternative: pd.DataFrame | None = None
     flicker: Flicker | None = None
+    n_recurring: int = 0
+    n_degenerate: int = 0
 
     def read_flipped(self, flipped: bool) -> CameraDetection:
         """This detection with the readout direction ``flipped`` (needs ``alternative``)."""
@@ -519,4 +529,4 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     events = [detector.finish() for detector in detectors]
     return CameraDetection(info.camera, info.path, info.width, info.height, frame_times, events[0],
                            directions[0], events[1] if len(events) > 1 else None,
-                           remove_flicker.estimate())
+                           remove_flicker.estimate(), detectors[0].n_recurring, detectors[0].n_degenerate)

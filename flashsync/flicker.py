@@ -163,9 +163,9 @@ class FlickerRemover:
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
         settings = self.settings
-        for t_ms, profile in frames:
+        for t_ms, profile, *key in frames:
             profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
-            self._queue.append((t_ms, profile))
+            self._queue.append((t_ms, profile, bool(key and key[0])))
             if self._n_seen % settings.reservoir_step == 0:
                 self._reservoir.append((t_ms, profile))
             self._n_seen += 1
@@ -185,7 +185,7 @@ class FlickerRemover:
         switched on later, a roll too slow to see at first), then every 1024 frames."""
         self._attempts += 1
         self._next_attempt = self._n_seen + min(self.settings.lookahead * 2 ** self._attempts, 1024)
-        dense = list(self._queue)
+        dense = [(t, p) for t, p, _ in self._queue]
         frames = [item for item in self._reservoir if item[0] < dense[0][0]] + dense
         profiles = np.stack([p for _, p in frames])
         logs = np.stack([_row_log_ratio(p, np.median(profiles, axis=0), self.settings.min_level)
@@ -197,7 +197,7 @@ class FlickerRemover:
         basis = _basis(self.height, nu, self.settings.harmonics)
         fundamentals = np.array([_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0)[0][1:3]
                                  for row in logs[-len(dense):]])
-        recent = np.median(np.stack([p for _, p in dense]), axis=0).astype(np.float32)
+        recent = np.mean(np.stack([p for _, p in dense]), axis=0).astype(np.float32)
         lock = _Lock(nu, basis, recent, amplitude,
                      _rotation_per_ms(fundamentals[:, 0] - 1j * fundamentals[:, 1],
                                       np.array([t for t, _ in dense])))
@@ -208,8 +208,12 @@ class FlickerRemover:
                          1.0 / ROW_GAIN_FRAMES, 2.0 * amplitude**2)
         self._lock = lock
 
-    def _correct(self, t_ms: float, profile: np.ndarray) -> tuple[float, np.ndarray]:
-        """Fit the frame's pattern against the running mean, divide it out, learn from it."""
+    def _correct(self, t_ms: float, profile: np.ndarray, key: bool) -> tuple[float, np.ndarray]:
+        """Fit the frame's pattern against the running mean, divide it out, learn from it.
+
+        What the codec keeps from frame to frame (a row whose blocks it skips) holds the
+        pattern of the last key frame, where it refreshes everything: each row removes its
+        share ``G`` of this frame's pattern and the rest of the key frame's."""
         frame = self._n_out
         self._n_out += 1
         lock = self._lock
@@ -225,8 +229,11 @@ class FlickerRemover:
         else:
             coef = init
         lock.last = (t_ms, coef.copy())
-        pattern = _row_pattern(y, lock.basis, coef, max(3.0 * scale, 0.75 * lock.amplitude), lock.gains,
-                               1.0 / ROW_GAIN_FRAMES, 2.0 * lock.amplitude**2)
+        pattern, follows = _row_pattern(y, lock.basis, coef, max(3.0 * scale, 0.75 * lock.amplitude),
+                                        lock.gains, 1.0 / ROW_GAIN_FRAMES, 2.0 * lock.amplitude**2)
+        if key:
+            lock.key_pattern = lock.basis[:, 1:] @ coef[1:]
+        pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
         return t_ms, profile / np.exp(pattern).astype(np.float32)[:, None]
@@ -266,11 +273,13 @@ class _Lock:
     radians_per_ms: float
     last: tuple[float, np.ndarray] | None = None
     gains: np.ndarray = None
+    key_pattern: np.ndarray = None
     deviation: float = 0.0
     scale: float = 0.0
 
     def __post_init__(self):
         self.gains = np.zeros((len(self.basis), 5))
+        self.key_pattern = np.zeros(len(self.basis))
         self.deviation = 0.2 * self.amplitude
 
     def plausible(self, coef: np.ndarray, init: np.ndarray, scale: float) -> bool:
@@ -627,7 +636,8 @@ def _cholesky_solve(a, b):  # pragma: no cover - compiled
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover - compiled
     """The log flicker to divide out of each row: the frame's fitted pattern ``z(r)``
-    (complex: its value and its quadrature) times the row's own complex gain ``G(r)``.
+    (complex: its value and its quadrature) times the row's own complex gain ``G(r)``; and
+    ``Re G(r)``, the share of the pattern the row follows. Both shape (height,).
 
     The codec does not keep the pattern alike in every row: it freezes flat areas (skipped
     blocks keep an old phase or none) and delays others. Each row's gain is the least-squares
@@ -638,6 +648,7 @@ def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover -
     """
     height, p = basis.shape
     out = np.zeros(height)
+    follows = np.zeros(height)
     for r in range(height):
         re = 0.0
         im = 0.0
@@ -665,7 +676,8 @@ def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover -
             sums[r, 3] += w * re * e
             sums[r, 4] -= w * im * e
         out[r] = g_re * re - g_im * im
-    return out
+        follows[r] = g_re
+    return out, follows
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

@@ -103,14 +103,15 @@ def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
-def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray]]]:
-    """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile)``
-    per decoded frame, presentation order (the file closes when the iterator ends).
+def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, bool]]]:
+    """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile,
+    key)`` per decoded frame, presentation order (the file closes when the iterator ends).
 
     ``profile`` is the float32 mean luma per row and column block, shape (height, blocks),
     as a fraction of the way from black (0) to white (1), so that light scales it: a flash
-    multiplies it by the same factor whatever the row's content. Frames without a timestamp
-    are an error naming the file.
+    multiplies it by the same factor whatever the row's content. ``key``: the frame is a key
+    frame (coded on its own; the codec refreshes there what it kept from frame to frame).
+    Frames without a timestamp are an error naming the file.
     """
     path = Path(path)
     container = open_video(path)
@@ -122,7 +123,7 @@ def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np
     return info, _profiles(container, path)
 
 
-def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tuple[float, np.ndarray]]:
+def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tuple[float, np.ndarray, bool]]:
     with container:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
@@ -131,7 +132,7 @@ def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tu
                 if frame.pts is None:
                     raise FlashsyncError(f"{path}: a frame has no timestamp; remux the file "
                                          "(ffmpeg -i IN -c copy OUT.mkv)")
-                yield float(frame.pts * frame.time_base) * 1000.0, row_profile(luma_plane(frame),
-                                                                               *luma_range(frame))
+                yield (float(frame.pts * frame.time_base) * 1000.0,
+                       row_profile(luma_plane(frame), *luma_range(frame)), bool(frame.key_frame))
         except av.FFmpegError as error:
             raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None

@@ -26,13 +26,13 @@ from dataclasses import dataclass, field
 #: An earlier band at least this fraction as strong makes a band its echo.
 ECHO_FRACTION = 0.5
 #: A later band at least this fraction as strong makes a band a repeating pattern.
-REPEAT_FRACTION = 0.8
+REPEAT_FRACTION = 0.7
 #: Fraction of an echo's rows that lie among the rows of the band it echoes.
 ECHO_OVERLAP = 0.5
 #: Two bands are at the same rows when both their ends are within this fraction of the
 #: shorter one's height of each other (and within :data:`MIN_TOLERANCE_ROWS`).
 EDGE_TOLERANCE = 0.1
-MIN_TOLERANCE_ROWS = 3
+MIN_TOLERANCE_ROWS = 4
 
 
 @dataclass(frozen=True)
@@ -100,8 +100,8 @@ class RecurrenceFilter:
         back this far: the previous P-frame, with two B-frames between).
 
     Feed it every band a frame shows (:meth:`see`), candidates as they end (:meth:`hold`);
-    :meth:`release` returns the payloads whose verdict is in, in order, and counts the
-    dropped ones in :attr:`dropped`.
+    :meth:`release` returns the payloads whose verdict is in, in order, counts the dropped
+    ones in :attr:`dropped` and keeps the strengths of the last ones in :attr:`recent_dropped`.
     """
 
     def __init__(self, frames: int = 6, echo_frames: int = 3):
@@ -110,6 +110,7 @@ class RecurrenceFilter:
         self._seen: deque[Band] = deque()
         self._held: deque[Candidate] = deque()
         self.dropped = 0
+        self.recent_dropped: deque[float] = deque(maxlen=25)
 
     def see(self, band: Band) -> None:
         """A band of some frame (frames in increasing order); old ones are forgotten."""
@@ -130,6 +131,7 @@ class RecurrenceFilter:
             candidate = self._held.popleft()
             if candidate.checked and self._recurs(candidate):
                 self.dropped += 1
+                self.recent_dropped.append(abs(candidate.strength))
             else:
                 out.append(candidate.payload)
         return out

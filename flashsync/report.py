@@ -11,6 +11,25 @@ import pandas as pd
 from flashsync.model import CameraClock, SyncModel
 
 
+def detection_notes(detection) -> list[str]:
+    """Lines on what a camera's detection (:class:`~flashsync.detect.CameraDetection`) found
+    besides its events: the mains flicker it removed, the bands it dropped."""
+    notes = []
+    flicker = detection.flicker
+    if flicker is not None:
+        hz = f"{flicker.hz:.0f} Hz" if flicker.hz else "frequency not told (not mains, or too few frames)"
+        depth = f"depth {100 * flicker.depth:.1f} %, " if np.isfinite(flicker.depth) else ""
+        notes.append(f"{detection.camera}: rolling flicker {hz}, period {flicker.period_rows:.2f} "
+                     f"± {flicker.period_rows_std:.2f} readout rows, {depth}measured on "
+                     f"{flicker.n_frames} frames and removed before detection")
+    dropped = [f"{n} {what}" for n, what in ((detection.n_recurring, "recurring at the same rows (codec "
+                                              "echoes, leftover flicker)"),
+                                             (detection.n_degenerate, "degenerate (no plateau to fit)")) if n]
+    if dropped:
+        notes.append(f"{detection.camera}: bands dropped: {'; '.join(dropped)}")
+    return notes
+
+
 def sync_uncertainty_ms(camera: CameraClock) -> float:
     """Largest predicted std (ms) of ``t_global_ms`` over the camera's frames and rows."""
     frames = np.array([0, camera.n_frames // 2, camera.n_frames - 1])

@@ -120,8 +120,8 @@ def test_flicker_kernels_never_raise(stack, nu, harmonics, scale_hint):
     if ok:
         assert np.all(np.isfinite(coef)) and np.all(np.isfinite(num)) and np.all(np.isfinite(den))
     sums = np.zeros((len(y), 5))
-    pattern = _row_pattern(y, basis, np.nan_to_num(coef), 0.01, sums, 0.05, 1e-4)
-    assert pattern.shape == y.shape
+    pattern, follows = _row_pattern(y, basis, np.nan_to_num(coef), 0.01, sums, 0.05, 1e-4)
+    assert pattern.shape == follows.shape == y.shape
     mean = reference.copy()
     _update_mean(mean, current, 0.01, 0.2)
 
