@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flashsync.coincidence import chance_alignments
 from flashsync.errors import FlashsyncError
 
 #: Largest clock drift considered, as a fraction (100 ppm).
@@ -22,6 +23,13 @@ MAX_DRIFT = 100e-6
 #: Another shift that explains this fraction of the best one's matches makes a pair
 #: ambiguous (a periodic strobe fits at every multiple of its period).
 RIVAL_FRACTION = 0.7
+#: Fewest flashes two cameras must share for their pair alignment to count.
+MIN_SHARED_FLASHES = 3
+#: Largest expected number of chance alignments as good for a pair alignment to count. The
+#: count is conservative: of 100,000 random pairs of unrelated sequences (3-15 events over
+#: 1.5 s to 10 min, or 10 over a minute; tolerance 5-40 ms) 0.13 % came below 0.1, 0.013 %
+#: below 0.01, one below 0.003 and none below 0.001.
+MAX_CHANCE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -29,7 +37,10 @@ class PairAlignment:
     """Affine map ``t_a ≈ alpha * t_b + beta`` between two cameras' event times (ms).
 
     ``matches`` has shape (n, 2): indices into camera a's and camera b's events;
-    ``ambiguous`` is True when another shift explained nearly as many events.
+    ``ambiguous`` is True when another shift explained nearly as many events; ``chance`` is
+    the expected number of shifts and drifts under which unrelated events would match as
+    well (:func:`flashsync.coincidence.chance_alignments`): the evidence is strong where it
+    is far below one.
     """
 
     alpha: float
@@ -37,6 +48,13 @@ class PairAlignment:
     matches: np.ndarray
     rms_ms: float
     ambiguous: bool
+    chance: float = float("nan")
+
+    @property
+    def convincing(self) -> bool:
+        """Enough shared events (:data:`MIN_SHARED_FLASHES`), no rival shift, and a chance
+        alignment this good less likely than :data:`MAX_CHANCE`."""
+        return len(self.matches) >= MIN_SHARED_FLASHES and not self.ambiguous and self.chance <= MAX_CHANCE
 
 
 def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
@@ -55,7 +73,8 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
 
     Returns
     -------
-    The alignment with most matched events (at least 2), or None.
+    The alignment with most matched events (at least 2, and without an anchor a shift that
+    lines up :data:`MIN_SHARED_FLASHES`), or None.
     """
     times_a = np.asarray(times_a, dtype=np.float64)
     times_b = np.asarray(times_b, dtype=np.float64)
@@ -72,19 +91,24 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
     best = results[0]
     rivals = [r for r in results[1:] if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches))
               and abs(r.beta - best.beta) > tolerance_ms]
-    return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals))
+    residuals = times_a[best.matches[:, 0]] - (best.alpha * times_b[best.matches[:, 1]] + best.beta)
+    chance = (0.0 if anchor is not None else
+              chance_alignments(residuals, len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b),
+                                tolerance_ms, MAX_DRIFT))
+    return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals), chance)
 
 
 def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
                       n_candidates: int) -> np.ndarray:
-    """The shifts (ms) that line up most event pairs, strongest first."""
+    """The shifts (ms) that line up most event pairs, strongest first; only those that line
+    up at least :data:`MIN_SHARED_FLASHES` (fewer never count)."""
     differences = np.sort((times_a[:, None] - times_b[None, :]).ravel())
     span = max(np.ptp(times_a), np.ptp(times_b))
     window = tolerance_ms + MAX_DRIFT * span
     votes = np.searchsorted(differences, differences + window) - np.searchsorted(differences, differences - window)
     chosen: list[float] = []
     for index in np.argsort(-votes, kind="stable"):
-        if votes[index] < 2 or len(chosen) == n_candidates:
+        if votes[index] < MIN_SHARED_FLASHES or len(chosen) == n_candidates:
             break
         if all(abs(differences[index] - shift) > 2 * window for shift in chosen):
             chosen.append(differences[index])
@@ -102,10 +126,11 @@ def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms
         if len(matches) < 2:
             return None
         a, b = times_a[matches[:, 0]], times_b[matches[:, 1]]
+        centred = b - b.mean()
         if np.ptp(b) > 0:
-            slope, intercept = np.polyfit(b - b.mean(), a, 1)
+            slope = float(centred @ (a - a.mean()) / (centred @ centred))
             if abs(slope - 1.0) <= 1.5 * MAX_DRIFT:
-                alpha, beta = slope, intercept - slope * b.mean()
+                alpha, beta = slope, a.mean() - slope * b.mean()
                 continue
         alpha, beta = 1.0, float(np.mean(a - b))
     residuals = times_a[matches[:, 0]] - (alpha * times_b[matches[:, 1]] + beta)
@@ -113,21 +138,23 @@ def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms
 
 
 def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) -> np.ndarray:
-    """Pairs (i, j) where a_i and mapped b_j are each other's nearest and within ``window``."""
-    order = np.argsort(times_a)
-    sorted_a = times_a[order]
-    position = np.clip(np.searchsorted(sorted_a, mapped_b), 1, len(sorted_a) - 1)
-    left, right = sorted_a[position - 1], sorted_a[position]
-    nearest_a = order[np.where(mapped_b - left < right - mapped_b, position - 1, position)]
-    distance = np.abs(times_a[nearest_a] - mapped_b)
-    pairs = []
-    for j in np.argsort(distance):
-        i = nearest_a[j]
-        if distance[j] <= window:
-            closest_b = np.argmin(np.abs(mapped_b - times_a[i]))
-            if closest_b == j:
-                pairs.append((i, j))
-    return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    """Pairs (i, j) where a_i and mapped b_j are each other's nearest and within ``window``,
+    closest first."""
+    nearest_a = _nearest(times_a, mapped_b)
+    nearest_b = _nearest(mapped_b, times_a)
+    j = np.flatnonzero((nearest_b[nearest_a] == np.arange(len(mapped_b)))
+                       & (np.abs(times_a[nearest_a] - mapped_b) <= window))
+    j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="stable")]
+    return np.stack([nearest_a[j], j], axis=1).astype(np.int64).reshape(-1, 2)
+
+
+def _nearest(values: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Index into ``values`` (at least one) of the nearest to each query."""
+    order = np.argsort(values, kind="stable")
+    position = np.clip(np.searchsorted(values[order], queries), 1, max(len(values) - 1, 1))
+    left = values[order[position - 1]]
+    right = values[order[np.minimum(position, len(values) - 1)]]
+    return order[np.where(queries - left <= right - queries, position - 1, np.minimum(position, len(values) - 1))]
 
 
 def group_flashes(n_events: dict[str, int], alignments: dict[tuple[str, str], PairAlignment],

@@ -27,7 +27,7 @@ import pandas as pd
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
 from flashsync.errors import FlashsyncError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
+from flashsync.match import MIN_SHARED_FLASHES, PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import csv_timestamps
@@ -36,8 +36,6 @@ from flashsync.timestamps import csv_timestamps
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
 NOMINAL_HIDDEN_ROWS = 1.05
 NOMINAL_ROW_TIME_STD = 0.08
-#: Fewest flashes two cameras must share for their pair alignment to count.
-MIN_SHARED_FLASHES = 3
 
 
 def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
@@ -238,12 +236,14 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
                               anchors)
     flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
     connected = _connected(reference, usable, alignments)
-    warnings += [f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
-                 f"with the other cameras; cannot be tied to {reference}; left out"
+    warnings += [f"{cameras[name].video}: shares too few flashes with the other cameras to tell them "
+                 f"from a chance coincidence (at least {MIN_SHARED_FLASHES}, whose intervals match); "
+                 f"cannot be tied to {reference}; left out"
                  for name in usable if name not in connected]
     if reference not in connected or len(connected) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
-                             "check that the videos overlap in time and saw the same flashes")
+        raise FlashsyncError(f"no camera shares enough flashes with {reference} to tell them from a chance "
+                             f"coincidence (at least {MIN_SHARED_FLASHES}, whose intervals match); check that "
+                             "the videos overlap in time and saw the same flashes, or record more flashes")
     observations = _observations(connected, sync_events, flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
@@ -280,7 +280,7 @@ def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, pd.
             anchor = ((anchor_events[name_a], anchor_events[name_b])
                       if name_a in anchor_events and name_b in anchor_events else None)
             alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
-            if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
+            if alignment is not None and alignment.convincing:
                 alignments[(name_a, name_b)] = alignment
     return alignments
 
@@ -343,8 +343,10 @@ def _frame_period(detection: CameraDetection) -> float:
 
 
 def _approximate_times(detection: CameraDetection, events: pd.DataFrame) -> np.ndarray:
-    """Event times on the camera's own clock, ms, with a nominal time per row."""
-    row_time = _frame_period(detection) / detection.height
+    """Event times on the camera's own clock, ms, with the nominal time per row of the prior
+    (:data:`NOMINAL_HIDDEN_ROWS`: sensors read some hidden rows, so frame period / height is
+    always long): the closer, the tighter true matches sit and the stronger their evidence."""
+    row_time = _frame_period(detection) / (NOMINAL_HIDDEN_ROWS * detection.height)
     return events["t_frame_ms"].to_numpy() + events["q"].to_numpy() * row_time
 
 

@@ -144,8 +144,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         for name_b in names[i + 1:]:
             alignment = align_pair(pulses[name_a]["time_ms"].to_numpy(), pulses[name_b]["time_ms"].to_numpy(),
                                    tolerance)
-            if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
-                    and not alignment.ambiguous):
+            if alignment is not None and alignment.convincing:
                 alignments[(name_a, name_b)] = alignment
     flash_of = group_flashes({name: len(pulses[name]) for name in names}, alignments)
     kept = [d for d in detections if d.camera in _tied_to(reference, flash_of)]
