@@ -40,28 +40,66 @@ CASES = ("rink", "rink-0.5ms-3%", *CROWD_CASES)
 
 def exposure_steps(duration_ms: float) -> tuple:
     """Auto-exposure steps up and down every two minutes."""
-    return tuple((t, 1.15 if i % 2 == 0 else 1 / 1.15)
-                 for i, t in enumerate(range(60_000, int(duration_ms), 120_000)))
+    return tuple((t, 1.15 if i % 2 == 0 else 1 / 1.15) for i, t in enumerate(range(60_000, int(duration_ms), 120_000)))
 
 
 def flash_free_scenario(case: str, minutes: float) -> Scenario:
     duration_ms = minutes * 60_000.0
     if case == "rink":
-        camera = CameraSpec("quiet", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5,
-                            crf=26, gain_steps=exposure_steps(duration_ms))
-        return Scenario("flash-free", (camera,), duration_ms=duration_ms, flicker_depth=0.03,
-                        flicker_hz=100.0, n_players=12, seed=21)
+        camera = CameraSpec(
+            "quiet",
+            320,
+            180,
+            25.0,
+            r0=8,
+            r1=6,
+            exposure_ms=10.0,
+            noise_std=1.5,
+            crf=26,
+            gain_steps=exposure_steps(duration_ms),
+        )
+        return Scenario(
+            "flash-free",
+            (camera,),
+            duration_ms=duration_ms,
+            flicker_depth=0.03,
+            flicker_hz=100.0,
+            n_players=12,
+            seed=21,
+        )
     if case == "rink-0.5ms-3%":
-        camera = CameraSpec("quiet", 320, 240, 30.0, r0=8, r1=12, exposure_ms=0.5, noise_std=1.5,
-                            crf=23, gain_steps=exposure_steps(duration_ms))
-        return Scenario(case, (camera,), duration_ms=duration_ms, flicker_depth=0.03, flicker_hz=100.0,
-                        n_players=10, seed=3)
+        camera = CameraSpec(
+            "quiet",
+            320,
+            240,
+            30.0,
+            r0=8,
+            r1=12,
+            exposure_ms=0.5,
+            noise_std=1.5,
+            crf=23,
+            gain_steps=exposure_steps(duration_ms),
+        )
+        return Scenario(
+            case, (camera,), duration_ms=duration_ms, flicker_depth=0.03, flicker_hz=100.0, n_players=10, seed=3
+        )
     fps, exposure_ms, depth, hz = CROWD_CASES[case]
-    camera = CameraSpec("quiet", 320, 240, fps, r0=8, r1=12, exposure_ms=exposure_ms, noise_std=1.5,
-                        crf=23, gain_steps=exposure_steps(duration_ms), hfov_deg=26.0,
-                        position_m=(30.0, -6.0, 10.0), look_at_m=(30.0, 15.0))
-    return Scenario(case, (camera,), duration_ms=duration_ms, flicker_depth=depth, flicker_hz=hz,
-                    n_players=24, seed=21)
+    camera = CameraSpec(
+        "quiet",
+        320,
+        240,
+        fps,
+        r0=8,
+        r1=12,
+        exposure_ms=exposure_ms,
+        noise_std=1.5,
+        crf=23,
+        gain_steps=exposure_steps(duration_ms),
+        hfov_deg=26.0,
+        position_m=(30.0, -6.0, 10.0),
+        look_at_m=(30.0, 15.0),
+    )
+    return Scenario(case, (camera,), duration_ms=duration_ms, flicker_depth=depth, flicker_hz=hz, n_players=24, seed=21)
 
 
 def main() -> None:
@@ -82,8 +120,10 @@ def main() -> None:
         elapsed = time.perf_counter() - start
         events = detection.events
         frames = len(detection.frame_times_ms)
-        print(f"{case:<22} {frames:>7} {events['event'].nunique() if len(events) else 0:>12} "
-              f"{frames / elapsed:>10.0f}", flush=True)
+        print(
+            f"{case:<22} {frames:>7} {events['event'].nunique() if len(events) else 0:>12} {frames / elapsed:>10.0f}",
+            flush=True,
+        )
         if len(events):
             print(events.to_string())
 

@@ -30,8 +30,15 @@ from scipy.special import bdtrc
 LEVELS = 5
 
 
-def chance_alignments(residuals_ms: np.ndarray, n_a: int, n_b: int, span_a_ms: float, span_b_ms: float,
-                      tolerance_ms: float, max_drift: float) -> float:
+def chance_alignments(
+    residuals_ms: np.ndarray,
+    n_a: int,
+    n_b: int,
+    span_a_ms: float,
+    span_b_ms: float,
+    tolerance_ms: float,
+    max_drift: float,
+) -> float:
     """Expected number of maps (shift and drift free) under which unrelated events match as
     well as these do.
 
@@ -62,5 +69,5 @@ def chance_alignments(residuals_ms: np.ndarray, n_a: int, n_b: int, span_a_ms: f
     trials, others, other_span = (n_a, n_b, span_b) if n_a <= n_b else (n_b, n_a, span_a)
     p = np.minimum(1.0, 2.0 * tolerances * others / other_span)
     maps = (span_a + span_b) / (2.0 * tolerances) * (1.0 + max_drift * span_b / tolerances)
-    tails = np.where(counts > 0, bdtrc(np.maximum(counts - 1, 0), trials, p), 1.0)   # P(Binomial >= count)
+    tails = np.where(counts > 0, bdtrc(np.maximum(counts - 1, 0), trials, p), 1.0)  # P(Binomial >= count)
     return float(LEVELS * np.min(maps * tails))

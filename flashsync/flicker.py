@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
-from typing import Iterable, Iterator
 
 import numba
 import numpy as np
@@ -157,7 +157,7 @@ class FlickerRemover:
         self._n_seen = self._n_out = self._attempts = 0
         self._next_attempt = settings.lookahead
         self._lock: _Lock | None = None
-        self._fits: list[tuple[int, float, complex]] = []     # (frame, t_ms, fundamental)
+        self._fits: list[tuple[int, float, complex]] = []  # (frame, t_ms, fundamental)
         self._evidence = _Evidence()
         self._mean_phasor = 0j
 
@@ -184,28 +184,39 @@ class FlickerRemover:
         Attempts are made when the lookahead first fills, then at doubling intervals (a light
         switched on later, a roll too slow to see at first), then every 1024 frames."""
         self._attempts += 1
-        self._next_attempt = self._n_seen + min(self.settings.lookahead * 2 ** self._attempts, 1024)
+        self._next_attempt = self._n_seen + min(self.settings.lookahead * 2**self._attempts, 1024)
         dense = [(t, p) for t, p, _ in self._queue]
         frames = [item for item in self._reservoir if item[0] < dense[0][0]] + dense
         profiles = np.stack([p for _, p in frames])
-        logs = np.stack([_row_log_ratio(p, np.median(profiles, axis=0), self.settings.min_level)
-                         for p in profiles])
+        logs = np.stack([_row_log_ratio(p, np.median(profiles, axis=0), self.settings.min_level) for p in profiles])
         found = _learn_frequency(logs, self.settings)
         if found is None:
             return
         nu, amplitude = found
         basis = _basis(self.height, nu, self.settings.harmonics)
-        fundamentals = np.array([_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0)[0][1:3]
-                                 for row in logs[-len(dense):]])
+        fundamentals = np.array(
+            [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0)[0][1:3] for row in logs[-len(dense) :]]
+        )
         recent = np.mean(np.stack([p for _, p in dense]), axis=0).astype(np.float32)
-        lock = _Lock(nu, basis, recent, amplitude,
-                     _rotation_per_ms(fundamentals[:, 0] - 1j * fundamentals[:, 1],
-                                      np.array([t for t, _ in dense])))
-        for _, profile in dense:                 # the rows' gains learn before the first frame
+        lock = _Lock(
+            nu,
+            basis,
+            recent,
+            amplitude,
+            _rotation_per_ms(fundamentals[:, 0] - 1j * fundamentals[:, 1], np.array([t for t, _ in dense])),
+        )
+        for _, profile in dense:  # the rows' gains learn before the first frame
             y = _row_log_ratio(profile, recent, self.settings.min_level)
             coef, scale, *_ = _fit_frame(y, basis, np.zeros(basis.shape[1]), 1, 0.0)
-            _row_pattern(y, basis, coef, max(3.0 * scale, 0.75 * amplitude), lock.gains,
-                         1.0 / ROW_GAIN_FRAMES, 2.0 * amplitude**2)
+            _row_pattern(
+                y,
+                basis,
+                coef,
+                max(3.0 * scale, 0.75 * amplitude),
+                lock.gains,
+                1.0 / ROW_GAIN_FRAMES,
+                2.0 * amplitude**2,
+            )
         self._lock = lock
 
     def _correct(self, t_ms: float, profile: np.ndarray, key: bool) -> tuple[float, np.ndarray]:
@@ -229,8 +240,15 @@ class FlickerRemover:
         else:
             coef = init
         lock.last = (t_ms, coef.copy())
-        pattern, follows = _row_pattern(y, lock.basis, coef, max(3.0 * scale, 0.75 * lock.amplitude),
-                                        lock.gains, 1.0 / ROW_GAIN_FRAMES, 2.0 * lock.amplitude**2)
+        pattern, follows = _row_pattern(
+            y,
+            lock.basis,
+            coef,
+            max(3.0 * scale, 0.75 * lock.amplitude),
+            lock.gains,
+            1.0 / ROW_GAIN_FRAMES,
+            2.0 * lock.amplitude**2,
+        )
         if key:
             lock.key_pattern = lock.basis[:, 1:] @ coef[1:]
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
@@ -325,8 +343,8 @@ class _Evidence:
     estimate retunes the lock) and per band of rows over the whole video."""
 
     def __init__(self):
-        self.chunks: list[tuple[float, float]] = []    # (estimate, information)
-        self.strip_sums = np.zeros(STRIPS)             # sum of information x estimate
+        self.chunks: list[tuple[float, float]] = []  # (estimate, information)
+        self.strip_sums = np.zeros(STRIPS)  # sum of information x estimate
         self.strip_information = np.zeros(STRIPS)
         self._num = np.zeros(STRIPS)
         self._den = np.zeros(STRIPS)
@@ -430,8 +448,11 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
         nu += float(np.clip(num / den, -1.0 / pad, 1.0 / pad))
     amplitude = [math.hypot(f[0][1], f[0][2]) for f in fits if f[4]]
     noise = [f[1] * math.sqrt(2.0 / np.isfinite(row).sum()) for f, row in zip(fits, logs) if f[4]]
-    if (not amplitude or np.median(amplitude) < settings.min_depth
-            or np.median(np.divide(amplitude, noise)) < settings.min_snr):
+    if (
+        not amplitude
+        or np.median(amplitude) < settings.min_depth
+        or np.median(np.divide(amplitude, noise)) < settings.min_snr
+    ):
         return None
     return nu, float(np.median(amplitude))
 
@@ -499,7 +520,7 @@ def _row_log_ratio(profile, reference, min_level):  # pragma: no cover - compile
         if n == 0 or 2 * n < blocks:
             out[r] = np.nan
             continue
-        for i in range(1, n):                       # insertion sort: n is small
+        for i in range(1, n):  # insertion sort: n is small
             value = ratios[i]
             j = i - 1
             while j >= 0 and ratios[j] > value:
@@ -543,7 +564,7 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
     if n < 2 * p + 4:
         return coef, scale, gn_num, gn_den, False
     offset = np.empty(n)
-    for i in range(n):                               # the start's level: the median offset
+    for i in range(n):  # the start's level: the median offset
         r = rows[i]
         fitted = 0.0
         for j in range(1, p):
@@ -578,7 +599,7 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
         coef = solved
     slope = np.empty(n)
     projection = np.zeros(p)
-    for i in range(n):                               # the pattern's derivative in nu
+    for i in range(n):  # the pattern's derivative in nu
         r = rows[i]
         total = 0.0
         for h in range(1, (p - 1) // 2 + 1):
@@ -662,7 +683,7 @@ def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover -
         det = n00 * n11 - n01 * n01
         g_re, g_im = (n11 * r0 - n01 * r1) / det, (n00 * r1 - n01 * r0) / det
         size = math.hypot(g_re, g_im)
-        if size > MAX_ROW_GAIN:                  # a codec attenuates or delays, never amplifies
+        if size > MAX_ROW_GAIN:  # a codec attenuates or delays, never amplifies
             g_re, g_im = g_re * MAX_ROW_GAIN / size, g_im * MAX_ROW_GAIN / size
         if np.isfinite(y[r]):
             e = y[r] - coef[0]

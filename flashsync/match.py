@@ -57,8 +57,13 @@ class PairAlignment:
         return len(self.matches) >= MIN_SHARED_FLASHES and not self.ambiguous and self.chance <= MAX_CHANCE
 
 
-def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-               anchor: tuple[int, int] | None = None, n_candidates: int = 8) -> PairAlignment | None:
+def align_pair(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    tolerance_ms: float,
+    anchor: tuple[int, int] | None = None,
+    n_candidates: int = 8,
+) -> PairAlignment | None:
     """Coarse alignment of two cameras' event times (ms, own clocks).
 
     Parameters
@@ -89,17 +94,23 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
     if not results:
         return None
     best = results[0]
-    rivals = [r for r in results[1:] if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches))
-              and abs(r.beta - best.beta) > tolerance_ms]
+    rivals = [
+        r
+        for r in results[1:]
+        if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches)) and abs(r.beta - best.beta) > tolerance_ms
+    ]
     residuals = times_a[best.matches[:, 0]] - (best.alpha * times_b[best.matches[:, 1]] + best.beta)
-    chance = (0.0 if anchor is not None else
-              chance_alignments(residuals, len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b),
-                                tolerance_ms, MAX_DRIFT))
+    chance = (
+        0.0
+        if anchor is not None
+        else chance_alignments(
+            residuals, len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b), tolerance_ms, MAX_DRIFT
+        )
+    )
     return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals), chance)
 
 
-def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-                      n_candidates: int) -> np.ndarray:
+def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float, n_candidates: int) -> np.ndarray:
     """The shifts (ms) that line up most event pairs, strongest first; only those that line
     up at least :data:`MIN_SHARED_FLASHES` (fewer never count)."""
     differences = np.sort((times_a[:, None] - times_b[None, :]).ravel())
@@ -115,8 +126,12 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     return np.asarray(chosen)
 
 
-def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms: float,
-            ) -> PairAlignment | None:
+def _refine(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    shift: float,
+    tolerance_ms: float,
+) -> PairAlignment | None:
     """Alternate one-to-one matching and an affine fit, starting from ``shift``."""
     alpha, beta = 1.0, shift
     span = max(np.ptp(times_a), np.ptp(times_b))
@@ -142,8 +157,9 @@ def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) ->
     closest first."""
     nearest_a = _nearest(times_a, mapped_b)
     nearest_b = _nearest(mapped_b, times_a)
-    j = np.flatnonzero((nearest_b[nearest_a] == np.arange(len(mapped_b)))
-                       & (np.abs(times_a[nearest_a] - mapped_b) <= window))
+    j = np.flatnonzero(
+        (nearest_b[nearest_a] == np.arange(len(mapped_b))) & (np.abs(times_a[nearest_a] - mapped_b) <= window)
+    )
     j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="stable")]
     return np.stack([nearest_a[j], j], axis=1).astype(np.int64).reshape(-1, 2)
 
@@ -157,8 +173,10 @@ def _nearest(values: np.ndarray, queries: np.ndarray) -> np.ndarray:
     return order[np.where(queries - left <= right - queries, position - 1, np.minimum(position, len(values) - 1))]
 
 
-def group_flashes(n_events: dict[str, int], alignments: dict[tuple[str, str], PairAlignment],
-                  ) -> dict[tuple[str, int], int]:
+def group_flashes(
+    n_events: dict[str, int],
+    alignments: dict[tuple[str, str], PairAlignment],
+) -> dict[tuple[str, int], int]:
     """Merge pairwise matches into flashes: groups holding at most one event per camera.
 
     Pairs are merged strongest first (most matches); a merge that would put two events of one
@@ -200,8 +218,10 @@ def parse_anchors(anchors: list[str], n_events: dict[str, int]) -> dict[str, int
     for text in anchors:
         camera, _, index = text.rpartition(":")
         if camera not in n_events or not index.isdigit():
-            raise FlashsyncError(f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
-                                 f"{', '.join(n_events)} and a 0-based event index")
+            raise FlashsyncError(
+                f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
+                f"{', '.join(n_events)} and a 0-based event index"
+            )
         if int(index) >= n_events[camera]:
             raise FlashsyncError(f"--anchor {text}: {camera} has only {n_events[camera]} sync events")
         result[camera] = int(index)

@@ -26,7 +26,7 @@ def synthetic_profiles(hz, fps, period_rows, depth, frames=240, height=240, bloc
     light = np.exp(depth * np.sin(phase))[:, :, None]
     clean = np.repeat(scene[None], frames, axis=0)
     for frame, first, n in flashes:
-        clean[frame, first:first + n] *= 1.3
+        clean[frame, first : first + n] *= 1.3
     noisy = clean * light * (1 + 0.002 * rng.standard_normal(clean.shape))
     return times, noisy.astype(np.float32), clean
 
@@ -74,10 +74,12 @@ ROW_MS = 1000.0 / FPS / (R0 + HEIGHT + R1)
 
 
 def render_flicker_clip(folder, depth, flashes, exposure_ms=0.5):
-    camera = CameraSpec("cam", 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=exposure_ms, n_frames=150,
-                        noise_std=1.5, crf=23)
-    scenario = Scenario("flicker", (camera,), flashes=flashes, flicker_depth=depth, flicker_hz=100.0,
-                        n_players=8, seed=4)
+    camera = CameraSpec(
+        "cam", 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=exposure_ms, n_frames=150, noise_std=1.5, crf=23
+    )
+    scenario = Scenario(
+        "flicker", (camera,), flashes=flashes, flicker_depth=depth, flicker_hz=100.0, n_players=8, seed=4
+    )
     return render_scenario(scenario, folder)
 
 
@@ -86,8 +88,9 @@ def test_short_exposure_under_rolling_flicker(tmp_path_factory):
     frame (the detector used to report three bands a frame). Every flash is found, nothing
     else, and each edge lands where it lands without flicker."""
     rows = [60.5, 150.2, 110.7, 200.3, 90.1, 170.8]
-    flashes = tuple(FlashSpec((12 + 22 * i) * 1000.0 / FPS + (R0 + row) * ROW_MS, strength=0.3)
-                    for i, row in enumerate(rows))
+    flashes = tuple(
+        FlashSpec((12 + 22 * i) * 1000.0 / FPS + (R0 + row) * ROW_MS, strength=0.3) for i, row in enumerate(rows)
+    )
     errors = {}
     for depth in (0.03, 0.0):
         folder = tmp_path_factory.mktemp(f"flicker{depth}")
@@ -101,7 +104,7 @@ def test_short_exposure_under_rolling_flicker(tmp_path_factory):
             flicker = detection.flicker
             assert flicker.hz == 100.0
             assert flicker.period_rows == pytest.approx(10.0 / ROW_MS, rel=0.03)
-            assert flicker.depth == pytest.approx(0.03, rel=0.5)        # the codec keeps about 2/3
+            assert flicker.depth == pytest.approx(0.03, rel=0.5)  # the codec keeps about 2/3
         else:
             assert detection.flicker is None
     assert abs(errors[0.03].mean() - errors[0.0].mean()) < 0.4, errors

@@ -14,8 +14,15 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from flashsync.detect import EventDetector, _median5, _median_in_place, _relative_change
-from flashsync.flicker import (FlickerRemover, _basis, _cholesky_solve, _fit_frame, _row_log_ratio,
-                               _row_pattern, _update_mean)
+from flashsync.flicker import (
+    FlickerRemover,
+    _basis,
+    _cholesky_solve,
+    _fit_frame,
+    _row_log_ratio,
+    _row_pattern,
+    _update_mean,
+)
 from flashsync.ramp import MAX_SCALE, MIN_SCALE, _fit_ramp, _solve_spd, fit_pulse_edge
 
 FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -37,9 +44,14 @@ def ramps(draw):
     edge, scale = draw(st.floats(-5, 65)), draw(st.floats(0.05, 60))
     level = draw(st.sampled_from([0.0, -0.2, 1e-9, 0.3, 5.0]))
     share = -np.expm1(-np.maximum(x - edge, 0.0) / scale)
-    y = {"ramp": level * share, "reversed": level * share[::-1], "clipped": np.minimum(level * share, 0.5 * level),
-         "constant": np.full(n, level), "zero": np.zeros(n),
-         "noise": draw(arrays(np.float64, n, elements=plain))}[kind]
+    y = {
+        "ramp": level * share,
+        "reversed": level * share[::-1],
+        "clipped": np.minimum(level * share, 0.5 * level),
+        "constant": np.full(n, level),
+        "zero": np.zeros(n),
+        "noise": draw(arrays(np.float64, n, elements=plain)),
+    }[kind]
     if n and draw(st.booleans()):
         y[draw(st.integers(0, n - 1))] = np.nan
     return x, y, level
@@ -127,8 +139,13 @@ def test_flicker_kernels_never_raise(stack, nu, harmonics, scale_hint):
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.integers(1, 40), st.integers(2, 60), st.sampled_from([anything, st.floats(0, 1, width=32)]),
-       st.booleans(), st.data())
+@given(
+    st.integers(1, 40),
+    st.integers(2, 60),
+    st.sampled_from([anything, st.floats(0, 1, width=32)]),
+    st.booleans(),
+    st.data(),
+)
 def test_a_stream_of_odd_profiles_never_stops_the_detector(height, frames, fill, flipped, data):
     """Whole frames of anything through flicker removal and detection: events or none, no
     exception."""

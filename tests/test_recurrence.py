@@ -20,7 +20,7 @@ def run(bands_by_frame, candidates):
 
 def test_a_flash_keeps_its_weaker_echo_from_dropping_it_and_the_echo_goes():
     flash = Band(10, 100, 112, 0.30)
-    echo = Band(11, 103, 110, 0.12)          # the B-frame next to it: the middle, weaker
+    echo = Band(11, 103, 110, 0.12)  # the B-frame next to it: the middle, weaker
     released, dropped = run({10: [flash], 11: [echo]}, {10: [[flash]], 11: [[echo]]})
     assert released == [10] and dropped == 1
 
@@ -45,8 +45,7 @@ def test_flashes_a_few_frames_apart_at_overlapping_rows_are_kept():
     first = Band(10, 77, 175, 0.35)
     second = Band(16, 111, 180, 0.40, cut_stop=True)
     third = Band(22, 132, 180, 0.30, cut_stop=True)
-    released, dropped = run({10: [first], 16: [second], 22: [third]},
-                            {10: [[first]], 16: [[second]], 22: [[third]]})
+    released, dropped = run({10: [first], 16: [second], 22: [third]}, {10: [[first]], 16: [[second]], 22: [[third]]})
     assert released == [10, 16, 22] and dropped == 0
 
 
