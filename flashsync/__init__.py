@@ -10,10 +10,11 @@ The library API (the ``flashsync`` command is a thin layer over it)::
 """
 
 from flashsync.detect import DetectorSettings, EventDetector, detect_video
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError, ModelFileError, NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
 from flashsync.model_file import load_model, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 
-__all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "SyncModel",
-           "all_events", "detect_video", "detect_videos", "load_model", "save_model", "synchronize"]
+__all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "InputError", "ModelFileError",
+           "NotEnoughDataError", "SyncModel", "all_events", "detect_video", "detect_videos", "load_model",
+           "save_model", "synchronize"]

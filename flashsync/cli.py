@@ -11,7 +11,7 @@ import itertools
 import sys
 from pathlib import Path
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError, ModelFileError
 
 EXAMPLES = {
     "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv",
@@ -24,6 +24,18 @@ EXAMPLES = {
     "demo": "flashsync demo",
 }
 
+#: The library's parameters and the options that set them: an error about a parameter's value
+#: is shown after its option.
+OPTIONS = {
+    "anchors": "--anchor",
+    "exposure_ms": "--exposure",
+    "flipped": "--flipped",
+    "reference": "--reference",
+    "row_times": "--row-time",
+    "samples": "--samples",
+    "timestamps": "--timestamps",
+}
+
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (0 ok, 1 bad input, 130 interrupted)."""
@@ -32,11 +44,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args) or 0
     except FlashsyncError as error:
-        print(f"flashsync {args.command}: error: {error}", file=sys.stderr)
+        print(f"flashsync {args.command}: error: {_message(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"flashsync {args.command}: interrupted; no output written", file=sys.stderr)
         return 130
+
+
+def _message(error: FlashsyncError) -> str:
+    """The error's line, after the option that set the parameter it is about."""
+    option = OPTIONS.get(error.parameter)
+    return f"{option} {error}" if option else str(error)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -159,7 +177,7 @@ def _timestamp_files(values: list[str]) -> dict[str, Path]:
     for text in values:
         camera, _, path = text.partition("=")
         if not camera or not path:
-            raise FlashsyncError(f"--timestamps {text}: expected CAMERA=FILE.csv")
+            raise InputError(f"--timestamps {text}: expected CAMERA=FILE.csv")
         result[camera] = Path(path)
     return result
 
@@ -238,18 +256,27 @@ def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
         try:
             result[camera] = float(value)
         except ValueError:
-            raise FlashsyncError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
+            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
         if not result[camera] > 0:
-            raise FlashsyncError(f"{option} {text}: the value must be a positive number of ms")
+            raise InputError(f"{option} {text}: the value must be a positive number of ms")
     return result
 
 
-def _run_restamp(args) -> int:
+def _load_model(path: Path):
+    """The model file, or an error saying how to make one."""
     from flashsync.model_file import load_model
+
+    if not path.is_file():
+        raise ModelFileError(f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the "
+                             "model with --model")
+    return load_model(path)
+
+
+def _run_restamp(args) -> int:
     from tracking_adapter.restamp import format_summary, restamp_file
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
-    model = load_model(args.model)
+    model = _load_model(args.model)
     summary = restamp_file(args.detections, output, model, camera=args.camera,
                            exposure_ms=_per_camera_ms("--exposure", args.exposure), with_std=args.std)
     print(format_summary(summary), file=sys.stderr)
@@ -267,12 +294,11 @@ def _run_validate(args) -> None:
     import pandas as pd
 
     from flashsync.atomic import write_text
-    from flashsync.model_file import load_model
     from tracking_adapter.formats import load_homographies, read_detections
     from tracking_adapter.validate import format_report, validate
 
     detections = pd.concat([read_detections(path) for path in args.detections], ignore_index=True)
-    report = validate(detections, load_model(args.model), load_homographies(args.homographies),
+    report = validate(detections, _load_model(args.model), load_homographies(args.homographies),
                       max_gap_ms=args.max_gap_ms, exposure_ms=_per_camera_ms("--exposure", args.exposure),
                       source=", ".join(map(str, args.detections)))
     print(format_report(report))
@@ -286,10 +312,9 @@ def _run_view(args) -> None:
     import pandas as pd
 
     import viz
-    from flashsync.model_file import load_model
     from tracking_adapter.formats import load_homographies, read_detections
 
-    model = load_model(args.model)
+    model = _load_model(args.model)
     data = {"videos": args.videos or None,
             "events": read_detections(args.events) if args.events else None,
             "detections": read_detections(args.detections) if args.detections else None,
@@ -298,7 +323,7 @@ def _run_view(args) -> None:
         try:
             triples = json.loads(args.validation.read_text())["triples"]
         except (OSError, ValueError, KeyError, TypeError) as error:
-            raise FlashsyncError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
+            raise InputError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
                                  f"({type(error).__name__}: {error})") from None
         data["validation"] = pd.DataFrame.from_records(triples)
     if args.save:

@@ -8,7 +8,7 @@ from typing import Callable
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
 from flashsync.model_file import save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
@@ -36,8 +36,8 @@ def run_demo(samples: Path | None, output: Path,
     samples = samples or default_samples()
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
-        raise FlashsyncError(f"{samples}: no sample videos with truth.json; run the demo from the "
-                             "repository, or give --samples DIR (flashsync simulate sample -o DIR)")
+        raise InputError(f"{samples}: no sample videos with truth.json; run the demo from the repository, "
+                         "or on a folder that 'flashsync simulate sample' rendered", parameter="samples")
     started = time.perf_counter()
     detections = detect_videos(videos, estimate_readout=True, progress=progress)
     write_table(all_events(detections), output / "events.csv")

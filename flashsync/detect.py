@@ -31,7 +31,7 @@ import numba
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 from flashsync.profiles import read_profiles
 from flashsync.ramp import fit_pulse_edge
 from flashsync.timestamps import check_timestamps
@@ -446,7 +446,7 @@ def detect_video(path: str | Path, flipped: bool | None = False,
             update(1)
     frame_times = check_timestamps(np.asarray(times), str(info.path))
     if len(frame_times) < 2:
-        raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
+        raise NotEnoughDataError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
     events = [detector.finish() for detector in detectors]
     return CameraDetection(info.camera, info.path, info.width, info.height, frame_times, events[0],
                            directions[0], events[1] if len(events) > 1 else None)

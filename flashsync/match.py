@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 
 #: Largest clock drift considered, as a fraction (100 ppm).
 MAX_DRIFT = 100e-6
@@ -173,9 +173,9 @@ def parse_anchors(anchors: list[str], n_events: dict[str, int]) -> dict[str, int
     for text in anchors:
         camera, _, index = text.rpartition(":")
         if camera not in n_events or not index.isdigit():
-            raise FlashsyncError(f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
-                                 f"{', '.join(n_events)} and a 0-based event index")
+            raise InputError(f"{text}: expected CAMERA:EVENT_INDEX with a camera of {', '.join(n_events)} "
+                             "and a 0-based event index", parameter="anchors")
         if int(index) >= n_events[camera]:
-            raise FlashsyncError(f"--anchor {text}: {camera} has only {n_events[camera]} sync events")
+            raise InputError(f"{text}: {camera} has only {n_events[camera]} sync events", parameter="anchors")
         result[camera] = int(index)
     return result

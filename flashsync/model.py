@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 
 
 @dataclass
@@ -163,6 +163,6 @@ class SyncModel:
         try:
             return self.cameras[name]
         except KeyError:
-            raise FlashsyncError(
+            raise InputError(
                 f"camera {name!r} is not in the model (it has {', '.join(self.cameras)}); "
                 "sync its video too or fix the camera name") from None

@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
@@ -63,13 +63,14 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     stems = [p.stem for p in paths]
     duplicates = sorted({s for s in stems if stems.count(s) > 1})
     if duplicates:
-        raise FlashsyncError(f"camera names come from file stems and {', '.join(duplicates)} is "
+        raise InputError(f"camera names come from file stems and {', '.join(duplicates)} is "
                              "given twice; rename one of the videos")
     timestamps = timestamps or {}
-    for option, names in (("--flipped", flipped), ("--timestamps", timestamps)):
+    for parameter, names in (("flipped", flipped), ("timestamps", timestamps)):
         unknown = sorted(set(names) - set(stems))
         if unknown:
-            raise FlashsyncError(f"{option} {', '.join(unknown)}: no such camera among {', '.join(stems)}")
+            raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}",
+                             parameter=parameter)
     stamps = {camera: csv_timestamps(path) for camera, path in timestamps.items()}
 
     def detect(path: Path) -> CameraDetection:
@@ -78,7 +79,7 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
-            raise FlashsyncError(
+            raise InputError(
                 f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame")
         return with_frame_times(detection, stamps[path.stem])
@@ -128,7 +129,8 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
     if reference not in names:
-        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
+        raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
+                         "of them", parameter="reference")
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: with_frame_times(d, report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.alternative is not None]
@@ -153,7 +155,7 @@ def _best_readout(cameras: dict[str, CameraDetection], undecided: list[str],
                 trial[flip] = trial[flip].read_flipped(not trial[flip].flipped)
             try:
                 result = attempt(trial)
-            except FlashsyncError as error:
+            except NotEnoughDataError as error:
                 failure = failure or error
                 continue
             if best is None or result.score > best.score:
@@ -232,7 +234,7 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
                 "least 2); left out" for name in cameras if name not in usable]
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
-        raise FlashsyncError(f"need two or more cameras with at least two flash events each; found "
+        raise NotEnoughDataError(f"need two or more cameras with at least two flash events each; found "
                              f"{counts}; check that the videos show flashes (or lights switching)")
     alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable},
                               anchors)
@@ -242,7 +244,7 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
                  f"with the other cameras; cannot be tied to {reference}; left out"
                  for name in usable if name not in connected]
     if reference not in connected or len(connected) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
+        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
                              "check that the videos overlap in time and saw the same flashes")
     observations = _observations(connected, sync_events, flashes)
     durations = _durations([cameras[name] for name in connected])

@@ -28,7 +28,7 @@ import scipy.sparse as sparse
 from scipy import linalg
 from threadpoolctl import threadpool_limits
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 from flashsync.model import hat_basis
 
 #: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
@@ -122,7 +122,7 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
 
     Raises
     ------
-    FlashsyncError
+    NotEnoughDataError
         When the equations cannot determine every unknown.
     """
     with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
@@ -186,7 +186,7 @@ def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0,
             break
         try:
             trial = solve_clocks(events, n_cameras, reference, drift_knots=dict(knots), **options)
-        except FlashsyncError:
+        except NotEnoughDataError:
             break
         bic = _bic(trial)
         if bic < best_bic - MIN_BIC_GAIN:
@@ -278,7 +278,7 @@ class _System:
         matrix = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
-            raise FlashsyncError("the matched events leave a camera parameter undetermined; "
+            raise NotEnoughDataError("the matched events leave a camera parameter undetermined; "
                                  "each camera needs events on flashes shared with other cameras")
         self.column_scale = 1.0 / norms
         self.matrix = (matrix @ sparse.diags(self.column_scale)).tocsc()
@@ -309,10 +309,10 @@ class _System:
         except linalg.LinAlgError:
             factor = None
         if factor is None or np.min(np.diag(factor[0])) ** 2 <= 1e-12 * np.max(np.diag(schur)):
-            raise FlashsyncError(
+            raise NotEnoughDataError(
                 "the matched events cannot separate every camera's drift, shift and time per row "
                 "(too few flashes, or all at the same rows); record more flashes seen by several "
-                "cameras, or give --row-time")
+                "cameras, or give the cameras' times per row (datasheet)")
         return factor, coupling, d, right_cams, right_flashes
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
@@ -320,9 +320,10 @@ class _System:
         equations are too few or (nearly) singular."""
         n_used = int(np.count_nonzero(weights)) + self.n_priors
         if n_used < self.n_unknowns:
-            raise FlashsyncError(
+            raise NotEnoughDataError(
                 f"the cameras share too few events: {n_used} equations for {self.n_unknowns} "
-                "unknowns; record more flashes seen by several cameras, or give --row-time")
+                "unknowns; record more flashes seen by several cameras, or give the cameras' times "
+                "per row (datasheet)")
         factor, coupling, d, right_cams, right_flashes = self._reduced(weights)
         x_cams = linalg.cho_solve(factor, right_cams - coupling @ (right_flashes / d))
         x_flashes = (right_flashes - coupling.T @ x_cams) / d

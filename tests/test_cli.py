@@ -225,3 +225,16 @@ def test_timestamps_from_an_rtp_csv(tiny_scenario, tmp_path, capsys):
     code, _, err = run(capsys, "detect", tiny_scenario / "cam1.mp4", "--timestamps", "cam9=x.csv")
     assert code == 1
     one_error_line(err, "--timestamps cam9")
+
+
+def test_library_errors_name_data_and_the_command_adds_its_option(tiny_scenario, capsys):
+    from flashsync.errors import InputError
+    from flashsync.pipeline import detect_videos
+
+    with pytest.raises(InputError) as error:
+        detect_videos([tiny_scenario / "cam1.mp4"], flipped=["cam9"])
+    assert error.value.parameter == "flipped" and "--" not in str(error.value)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
+                       "--reference", "cam9")
+    assert code == 1
+    one_error_line(err, "--reference cam9: no such camera among cam1, cam2")

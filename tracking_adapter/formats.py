@@ -20,7 +20,7 @@ from typing import BinaryIO
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 from flashsync.tables import write_table
 
 REQUIRED_COLUMNS = ("camera", "frame", "y")
@@ -41,28 +41,28 @@ def detections_format(path: str | Path, input_format: str | None = None) -> str:
     """
     if input_format is not None:
         if input_format not in set(_EXTENSIONS.values()):
-            raise FlashsyncError(f"{path}: unknown detections format {input_format!r}; "
+            raise InputError(f"{path}: unknown detections format {input_format!r}; "
                                  "use csv, parquet or mot")
         return input_format
     try:
         return _EXTENSIONS[Path(path).suffix.lower()]
     except KeyError:
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet "
             "or .txt (MOTChallenge)") from None
 
 
 def require_columns(columns: Iterable[str], required: Iterable[str], source: str | Path) -> None:
-    """Raise a :class:`FlashsyncError` naming ``source`` if a column name is duplicated or
+    """Raise an :class:`~flashsync.errors.InputError` naming ``source`` if a column name is duplicated or
     a required one is missing."""
     columns = list(columns)
     duplicates = sorted({str(name) for name in columns if columns.count(name) > 1})
     if duplicates:
-        raise FlashsyncError(f"{source}: duplicate column names {', '.join(duplicates)}; "
+        raise InputError(f"{source}: duplicate column names {', '.join(duplicates)}; "
                              "rename them so that every column name is unique")
     missing = [name for name in required if name not in columns]
     if missing:
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
             f"(it has {', '.join(map(str, columns)) or 'no columns'}); detections need "
             f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file")
@@ -100,7 +100,7 @@ def read_detections(path: str | Path, *, camera: str | None = None,
             return pd.read_parquet(path)
         return pd.read_csv(path)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
+        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
                              "check the file") from None
 
 
@@ -108,7 +108,7 @@ def write_detections(table: pd.DataFrame, path: str | Path) -> None:
     """Write ``table`` to ``path`` (CSV or Parquet by extension) atomically, without index."""
     kind = detections_format(path)
     if kind == "mot":
-        raise FlashsyncError(f"{path}: detections are written as .csv or .parquet, not .txt; "
+        raise InputError(f"{path}: detections are written as .csv or .parquet, not .txt; "
                              "change the output extension")
     write_table(table, path)
 
@@ -145,11 +145,11 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     try:
         table = pd.read_csv(path, header=0 if has_header else None, skipinitialspace=True)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(f"{path}: cannot read it as a MOTChallenge file "
+        raise InputError(f"{path}: cannot read it as a MOTChallenge file "
                              f"({first_line(error)}); check the file") from None
     if not has_header:
         if table.shape[1] < len(MOT_COLUMNS) - 1:
-            raise FlashsyncError(
+            raise InputError(
                 f"{path}: {table.shape[1]} columns, a MOTChallenge file has at least 6 "
                 f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format")
         table.columns = [MOT_COLUMNS[i] if i < len(MOT_COLUMNS) else f"mot_{i + 1}"
@@ -158,7 +158,7 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     require_mot = MOT_COLUMNS[:6]
     missing = [name for name in require_mot if name not in table.columns]
     if missing:
-        raise FlashsyncError(f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
+        raise InputError(f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
                              f"columns {', '.join(MOT_COLUMNS)} or remove the header line")
     numbers = {name: pd.to_numeric(table[name], errors="coerce") for name in require_mot}
     new = pd.DataFrame({
@@ -201,7 +201,7 @@ def read_csv_header(path: str | Path) -> CsvHeader:
     with open(path, "rb") as file:
         line = file.readline()
     if not line.strip():
-        raise FlashsyncError(f"{path}: empty file or empty first line; a detections CSV starts "
+        raise InputError(f"{path}: empty file or empty first line; a detections CSV starts "
                              "with a header line such as camera,frame,x,y")
     eol = b"\r\n" if line.endswith(b"\r\n") else b"\n"
     raw = line[:-len(eol)] if line.endswith(eol) else line
@@ -209,7 +209,7 @@ def read_csv_header(path: str | Path) -> CsvHeader:
     try:
         names = next(csv.reader([text.decode("utf-8")]))
     except UnicodeDecodeError:
-        raise FlashsyncError(f"{path}: the header line is not UTF-8 text; save the file as "
+        raise InputError(f"{path}: the header line is not UTF-8 text; save the file as "
                              "UTF-8 CSV") from None
     return CsvHeader(names=names, raw=raw, eol=eol, size=len(line))
 
@@ -244,10 +244,10 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
     try:
         document = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise FlashsyncError(f"{path}: not a JSON file ({first_line(error)}); give "
+        raise InputError(f"{path}: not a JSON file ({first_line(error)}); give "
                              "{\"camera\": [[...], [...], [...]]} with 3x3 matrices") from None
     if not isinstance(document, dict) or not document:
-        raise FlashsyncError(f"{path}: expected a JSON object {{camera: 3x3 matrix}}; "
+        raise InputError(f"{path}: expected a JSON object {{camera: 3x3 matrix}}; "
                              "write one 3x3 image->plane homography per camera")
     homographies = {}
     for name, matrix in document.items():
@@ -257,7 +257,7 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
             matrix = np.empty(0)
         if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) \
                 or abs(np.linalg.det(matrix)) < 1e-300:
-            raise FlashsyncError(f"{path}: the homography of camera {name!r} is not an "
+            raise InputError(f"{path}: the homography of camera {name!r} is not an "
                                  "invertible 3x3 matrix of numbers; fix that entry")
         homographies[str(name)] = matrix
     return homographies
@@ -266,7 +266,7 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
 def _existing(path: str | Path) -> Path:
     path = Path(path)
     if not path.is_file():
-        raise FlashsyncError(f"{path}: no such file; check the path")
+        raise InputError(f"{path}: no such file; check the path")
     return path
 
 

@@ -33,7 +33,7 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from flashsync.atomic import atomic_output
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 from flashsync.model import SyncModel
 from tracking_adapter.formats import (REQUIRED_COLUMNS, detections_format, first_line,
                                       iter_csv_blocks, read_csv_header, read_mot,
@@ -162,10 +162,10 @@ def restamp_file(in_path: str | Path, out_path: str | Path, model: SyncModel, *,
     kind = detections_format(in_path, input_format)
     out_kind = detections_format(out_path)
     if camera is not None and kind != "mot":
-        raise FlashsyncError(f"{in_path}: a camera name is only given for MOTChallenge files; "
+        raise InputError(f"{in_path}: a camera name is only given for MOTChallenge files; "
                              "the detections' camera column names the cameras")
     if out_kind == "mot":
-        raise FlashsyncError(f"{out_path}: re-stamped detections are written as .csv or "
+        raise InputError(f"{out_path}: re-stamped detections are written as .csv or "
                              ".parquet; change the output extension")
     exposures = _exposures(model, exposure_ms)
     summary = RestampSummary(source=str(in_path), output=str(out_path))
@@ -211,11 +211,11 @@ def _restamp_csv_text(in_path: Path, out_path: Path, model: SyncModel,
             try:
                 table = pacsv.read_csv(pa.BufferReader(block), **options)
             except pa.ArrowInvalid as error:
-                raise FlashsyncError(
+                raise InputError(
                     f"{in_path}: {first_line(error)}; every row needs the header's "
                     f"{len(header.names)} columns") from None
             if table.num_rows != len(lines):
-                raise FlashsyncError(f"{in_path}: a quoted value spans several lines; "
+                raise InputError(f"{in_path}: a quoted value spans several lines; "
                                      "remove the line breaks inside values")
             columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS],
                                       model, exposures, with_std)
@@ -237,7 +237,7 @@ def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
     ends = np.flatnonzero(data == ord("\n"))
     carriage = data[ends - 1] == ord("\r")
     if not np.all(carriage == (eol == b"\r\n")):
-        raise FlashsyncError(f"{path}: mixed line endings (\\n and \\r\\n); convert the file "
+        raise InputError(f"{path}: mixed line endings (\\n and \\r\\n); convert the file "
                              "to one kind, e.g. with dos2unix")
     offsets = np.concatenate([[0], ends + 1]).astype(np.int32)
     buffer = pa.py_buffer(eol + block[:-len(eol)])
@@ -269,7 +269,7 @@ def _restamp_batches(in_path: Path, kind: str, camera: str | None, out_path: Pat
                     writer.write_batch(pa.RecordBatch.from_arrays(
                         [*batch.columns, *new, _reason_texts(reasons)], schema=schema))
             except pa.ArrowInvalid as error:
-                raise FlashsyncError(f"{in_path}: {first_line(error)}; fix the file") from None
+                raise InputError(f"{in_path}: {first_line(error)}; fix the file") from None
 
 
 def _read_batches(path: Path, kind: str, camera: str | None,
@@ -288,7 +288,7 @@ def _read_batches(path: Path, kind: str, camera: str | None,
                                     column_types={name: pa.string() for name in header.names}))
         return reader.schema, reader
     except (OSError, pa.ArrowException) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
+        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
                              "check the file") from None
 
 
@@ -407,11 +407,11 @@ def _exposures(model: SyncModel,
     given = dict(exposure_ms or {})
     unknown = [name for name in given if name not in model.cameras]
     if unknown:
-        raise FlashsyncError(f"exposure given for camera {', '.join(unknown)}, which the model "
-                             f"does not have (it has {', '.join(model.cameras)}); fix the name")
+        raise InputError(f"{', '.join(unknown)}: exposure given for a camera the model does not have "
+                         f"(it has {', '.join(model.cameras)}); fix the name", parameter="exposure_ms")
     for name, value in given.items():
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
-            raise FlashsyncError(f"exposure of camera {name} is {value!r}; give a time >= 0 "
+            raise InputError(f"exposure of camera {name} is {value!r}; give a time >= 0 "
                                  "in ms")
     return {name: given.get(name, clock.exposure_ms) for name, clock in model.cameras.items()}
 
@@ -429,5 +429,5 @@ def _new_columns(exposures: dict[str, float | None], with_std: bool) -> list[str
 def _check_free(columns: list, source: str | Path) -> None:
     taken = [name for name in NEW_COLUMNS if name in columns]
     if taken:
-        raise FlashsyncError(f"{source}: already has column {', '.join(taken)}; restamp the "
+        raise InputError(f"{source}: already has column {', '.join(taken)}; restamp the "
                              "original detections or drop those columns")

@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
 from tracking_adapter.formats import require_columns
 from tracking_adapter.restamp import restamp
@@ -314,8 +314,9 @@ def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
 def _default_gap_ms(clock: CameraClock) -> float:
     """``DEFAULT_GAP_FRAMES`` frame periods of a camera, ms (reference clock)."""
     if clock.n_frames < 2:
-        raise FlashsyncError(f"camera {clock.name} has {clock.n_frames} frame in the model; "
-                             "give --max-gap-ms or sync a longer video")
+        raise NotEnoughDataError(f"camera {clock.name} has {clock.n_frames} frame in the model; give the "
+                                 "longest gap between two detections to interpolate over, or sync a "
+                                 "longer video")
     return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
 
 

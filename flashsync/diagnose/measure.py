@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from flashsync.detect import CameraDetection
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.match import align_pair, group_flashes
 
 #: Fewest flashes two cameras must share for their pairing to count.
@@ -126,17 +126,20 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
 
     Raises
     ------
-    FlashsyncError
-        Fewer than two cameras, an unknown reference, no camera sharing at least
+    InputError
+        An unknown reference.
+    NotEnoughDataError
+        Fewer than two cameras, no camera sharing at least
         :data:`MIN_SHARED_BANDS` flashes with the reference, or no clean band shared.
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
-        raise FlashsyncError(f"diagnose needs videos of two or more cameras, got {len(names)}; "
+        raise NotEnoughDataError(f"diagnose needs videos of two or more cameras, got {len(names)}; "
                              "give every camera's video")
     reference = reference or names[0]
     if reference not in names:
-        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
+        raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
+                         "of them", parameter="reference")
     pulses = {d.camera: _pulses(d) for d in detections}
     tolerance = max(float(np.median(np.diff(d.frame_times_ms))) for d in detections)
     alignments = {}
@@ -150,7 +153,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     flash_of = group_flashes({name: len(pulses[name]) for name in names}, alignments)
     kept = [d for d in detections if d.camera in _tied_to(reference, flash_of)]
     if len(kept) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
+        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
                              "check that the videos overlap in time and saw the same flashes")
     warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other "
                      "cameras; left out" for d in detections if d not in kept)
@@ -159,7 +162,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     bands = [pulses[d.camera][pulses[d.camera]["clean"]] for d in kept]
     edges = _edges(bands, flash_of, cameras)
     if len(edges) == 0:
-        raise FlashsyncError("no flash band with both edges inside the image is seen by two cameras; "
+        raise NotEnoughDataError("no flash band with both edges inside the image is seen by two cameras; "
                              "record more flashes, away from the top and bottom of the image")
     return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
                        _edge_noise_ms(cameras, bands), warnings)

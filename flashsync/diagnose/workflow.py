@@ -24,7 +24,7 @@ from flashsync.detect import CameraDetection
 from flashsync.diagnose.effects import CATALOGUE, DRIFT, DRIFT_RATE, OTHER_CAMERAS, ROW_TIME
 from flashsync.diagnose.fit import Fit, Term, fit_model
 from flashsync.diagnose.measure import Measurement, measure
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -159,7 +159,7 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
 
     Raises
     ------
-    FlashsyncError
+    NotEnoughDataError
         Fewer than two cameras sharing flashes, or too few flashes to fit the plain model.
 
     Examples
@@ -170,7 +170,7 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     measurement = measure(detections, reference)
     plain = fit_model(measurement, frozenset())
     if plain is None:
-        raise FlashsyncError(
+        raise NotEnoughDataError(
             f"{measurement.n_flashes} flashes seen by several cameras cannot determine even the "
             "plain model; record more flashes")
     current, steps, removed, fits = plain, [], set(), [plain]
