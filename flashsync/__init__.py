@@ -12,7 +12,7 @@ The library API (the ``flashsync`` command is a thin layer over it)::
 from flashsync.detect import DetectorSettings, EventDetector, detect_video
 from flashsync.errors import FlashsyncError, InputError, ModelFileError, NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
-from flashsync.model_file import load_model, save_model
+from flashsync.io.model_file import load_model, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 
 __all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "InputError", "ModelFileError",

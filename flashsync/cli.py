@@ -195,8 +195,8 @@ _BAR_POSITIONS = itertools.count()
 
 
 def _run_detect(args) -> None:
+    from flashsync.io import write_table
     from flashsync.pipeline import all_events, detect_videos
-    from flashsync.tables import write_table
 
     events = all_events(detect_videos(args.videos, args.flipped, progress=_progress,
                            timestamps=_timestamp_files(args.timestamps)))
@@ -209,11 +209,10 @@ def _run_sync(args) -> None:
     import json
 
     from flashsync.atomic import write_text
-    from flashsync.model_file import save_model
+    from flashsync.io import save_model, write_table
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
     from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
                                   sync_table)
-    from flashsync.tables import write_table
 
     detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
                                timestamps=_timestamp_files(args.timestamps))
@@ -264,7 +263,7 @@ def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
 
 def _load_model(path: Path):
     """The model file, or an error saying how to make one."""
-    from flashsync.model_file import load_model
+    from flashsync.io import load_model
 
     if not path.is_file():
         raise ModelFileError(f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the "
@@ -289,43 +288,30 @@ def _run_restamp(args) -> int:
 
 
 def _run_validate(args) -> None:
-    import json
-
     import pandas as pd
 
-    from flashsync.atomic import write_text
-    from tracking_adapter.formats import load_homographies, read_detections
+    from flashsync.io import load_detections, load_homographies, save_validation
     from tracking_adapter.validate import format_report, validate
 
-    detections = pd.concat([read_detections(path) for path in args.detections], ignore_index=True)
+    detections = pd.concat([load_detections(path) for path in args.detections], ignore_index=True)
     report = validate(detections, _load_model(args.model), load_homographies(args.homographies),
                       max_gap_ms=args.max_gap_ms, exposure_ms=_per_camera_ms("--exposure", args.exposure),
                       source=", ".join(map(str, args.detections)))
     print(format_report(report))
     if args.json:
-        write_text(args.json, json.dumps(report.to_dict(), indent=1))
+        save_validation(report, args.json)
 
 
 def _run_view(args) -> None:
-    import json
-
-    import pandas as pd
-
     import viz
-    from tracking_adapter.formats import load_homographies, read_detections
+    from flashsync.io import load_detections, load_homographies, load_validation
 
     model = _load_model(args.model)
     data = {"videos": args.videos or None,
-            "events": read_detections(args.events) if args.events else None,
-            "detections": read_detections(args.detections) if args.detections else None,
-            "homographies": load_homographies(args.homographies) if args.homographies else None}
-    if args.validation:
-        try:
-            triples = json.loads(args.validation.read_text())["triples"]
-        except (OSError, ValueError, KeyError, TypeError) as error:
-            raise InputError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
-                                 f"({type(error).__name__}: {error})") from None
-        data["validation"] = pd.DataFrame.from_records(triples)
+            "events": load_detections(args.events) if args.events else None,
+            "detections": load_detections(args.detections) if args.detections else None,
+            "homographies": load_homographies(args.homographies) if args.homographies else None,
+            "validation": load_validation(args.validation) if args.validation else None}
     if args.save:
         viz.save_recording(args.save, model, **data)
         print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
@@ -336,7 +322,8 @@ def _run_view(args) -> None:
 
 
 def _run_simulate(args) -> None:
-    from flashsync.simulation import load_scenario, render_scenario
+    from flashsync.io import load_scenario
+    from flashsync.simulation import render_scenario
 
     truth = render_scenario(load_scenario(args.scenario), args.output)
     print(f"{len(truth.cameras)} cameras rendered -> {args.output}", file=sys.stderr)

@@ -10,12 +10,9 @@ import numpy as np
 
 from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
-from flashsync.model_file import save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
-from flashsync.simulation import load_ground_truth
-from flashsync.tables import write_table
-from tracking_adapter.formats import load_homographies, read_detections
+from flashsync.io import load_detections, load_ground_truth, load_homographies, save_model, write_table
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -48,7 +45,7 @@ def run_demo(samples: Path | None, output: Path,
 
     truth = load_ground_truth(samples / "truth.json")
     errors = sync_errors(model, truth)
-    detection_error = stamp_errors(read_detections(output / "restamped.csv"), model, truth)
+    detection_error = stamp_errors(load_detections(output / "restamped.csv"), model, truth)
 
     lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "",
              sync_table(model, report), ""]
@@ -66,7 +63,7 @@ def run_demo(samples: Path | None, output: Path,
         import viz
 
         viz.save_recording(recording, model, videos=videos, events=all_events(detections),
-                           detections=read_detections(output / "restamped.csv"),
+                           detections=load_detections(output / "restamped.csv"),
                            homographies=load_homographies(samples / "homographies.json"))
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

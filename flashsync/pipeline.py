@@ -30,7 +30,7 @@ from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
 from flashsync.model import CameraClock, SyncModel
 from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
-from flashsync.timestamps import csv_timestamps
+from flashsync.io.timestamps import load_timestamps
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
@@ -54,7 +54,7 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         :func:`synchronize` can find an upside-down camera.
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
-        per decoded frame) used instead of the container's (see :func:`csv_timestamps`).
+        per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
 
     Videos are decoded in parallel threads, one per core (decoding and the compiled row
     kernel release the GIL).
@@ -71,7 +71,7 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         if unknown:
             raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}",
                              parameter=parameter)
-    stamps = {camera: csv_timestamps(path) for camera, path in timestamps.items()}
+    stamps = {camera: load_timestamps(path) for camera, path in timestamps.items()}
 
     def detect(path: Path) -> CameraDetection:
         direction = True if path.stem in flipped else (None if estimate_readout else False)

@@ -1,4 +1,5 @@
-"""Frame timestamps in ms: from video containers, from CSV files and from RTP 90 kHz stamps.
+"""Frame timestamps in ms: from video containers and from RTP 90 kHz stamps (CSV files of
+frame times: :mod:`flashsync.io.timestamps`).
 
 flashsync works with container timestamps, never with ``frame_index / fps``, so dropped
 frames and variable frame rates cost nothing. All functions return float64 arrays of
@@ -11,7 +12,6 @@ from pathlib import Path
 
 import av
 import numpy as np
-import pandas as pd
 
 from flashsync.errors import InputError
 
@@ -82,31 +82,6 @@ def open_video(path: Path) -> av.container.InputContainer:
         container.close()
         raise InputError(f"{path}: has no video stream; give a video file")
     return container
-
-
-def csv_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
-    """Frame times (ms) from a CSV file, one row per frame in presentation order.
-
-    The column is ``column`` if given, else the first of ``t_ms``, ``timestamp_ms``,
-    ``time_ms``; a column ``rtp`` (90 kHz RTP stamps) is unwrapped with
-    :func:`rtp_timestamps`.
-    """
-    path = Path(path)
-    try:
-        table = pd.read_csv(path)
-    except (OSError, ValueError) as error:
-        raise InputError(f"{path}: cannot read as CSV ({error})") from None
-    candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
-    found = [name for name in candidates if name in table.columns]
-    if not found:
-        raise InputError(
-            f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
-    values = pd.to_numeric(table[found[0]], errors="coerce").to_numpy()
-    if found[0] == "rtp":
-        if np.any(~np.isfinite(values)):
-            raise InputError(f"{path}: column rtp has empty or non-numeric values")
-        values = rtp_timestamps(values.astype(np.uint64))
-    return check_timestamps(values, str(path))
 
 
 def rtp_timestamps(stamps: np.ndarray, clock_hz: int = RTP_CLOCK_HZ) -> np.ndarray:

@@ -10,9 +10,8 @@ import pytest
 
 from flashsync.cli import main
 from flashsync.evaluate import sync_errors
-from flashsync.model_file import load_model
-from flashsync.simulation import (CameraSpec, FlashSpec, Scenario, load_ground_truth,
-                                  render_scenario)
+from flashsync.io import load_ground_truth, load_model
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
 def run(capsys, *args):

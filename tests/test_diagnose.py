@@ -12,7 +12,8 @@ from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.workflow import NOISE_FACTOR
 from flashsync.errors import FlashsyncError
 from flashsync.pipeline import detect_videos
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+from flashsync.io import load_ground_truth
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 DURATION_MS = 6000.0
 

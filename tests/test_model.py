@@ -4,7 +4,7 @@ import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
-from flashsync.model_file import load_model, save_model
+from flashsync.io import load_model, save_model
 
 
 def camera(flipped=False):

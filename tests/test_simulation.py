@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from flashsync.errors import FlashsyncError
-from flashsync.simulation import (CameraSpec, FlashSpec, LightSwitch, load_ground_truth, load_scenario, preset,
-                                  render_scenario)
+from flashsync.io import load_ground_truth, load_scenario
+from flashsync.io.scenario import scenario_from_dict
+from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, preset, render_scenario
 from flashsync.simulation.encode import write_video
 from flashsync.simulation.render import (Lighting, ambient_light, camera_view, frame_gain, kept_frames, puck_track,
                                          render_frame)
-from flashsync.simulation.scenario import scenario_from_dict
 from flashsync.simulation.scene import apply_homography, make_scene
 
 # A camera with a non-trivial clock: 50 ppm fast, camera time 7 s ahead of the world.

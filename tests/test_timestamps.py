@@ -5,7 +5,8 @@ import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.simulation.encode import write_video
-from flashsync.timestamps import csv_timestamps, rtp_timestamps, video_timestamps
+from flashsync.io.timestamps import load_timestamps
+from flashsync.timestamps import rtp_timestamps, video_timestamps
 
 
 def frames(n):
@@ -37,17 +38,17 @@ def test_rtp_wraparound_is_unwrapped():
 def test_rtp_csv_and_step_backwards(tmp_path):
     good = tmp_path / "rtp.csv"
     good.write_text("rtp\n" + "\n".join(str((2**32 - 3600 + i * 3000) % 2**32) for i in range(5)))
-    np.testing.assert_allclose(csv_timestamps(good), np.arange(5) * 1000 / 30)
+    np.testing.assert_allclose(load_timestamps(good), np.arange(5) * 1000 / 30)
     bad = tmp_path / "back.csv"
     bad.write_text("rtp\n1000\n4600\n2000\n")
     with pytest.raises(FlashsyncError, match="not increasing at frame 2"):
-        csv_timestamps(bad)
+        load_timestamps(bad)
 
 
 def test_csv_timestamps_in_ms(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text("frame,t_ms\n0,0.0\n1,33.4\n2,66.7\n")
-    np.testing.assert_allclose(csv_timestamps(path), [0.0, 33.4, 66.7])
+    np.testing.assert_allclose(load_timestamps(path), [0.0, 33.4, 66.7])
 
 
 @pytest.mark.parametrize("content, message", [
@@ -59,7 +60,7 @@ def test_bad_timestamp_csv(tmp_path, content, message):
     path = tmp_path / "t.csv"
     path.write_text(content)
     with pytest.raises(FlashsyncError, match=message):
-        csv_timestamps(path)
+        load_timestamps(path)
 
 
 def test_not_a_video_and_missing_file(tmp_path):

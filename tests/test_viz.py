@@ -20,10 +20,9 @@ import rerun.chunk
 
 import viz
 from flashsync.errors import FlashsyncError
-from flashsync.model_file import save_model
+from flashsync.io import load_homographies, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.timestamps import video_timestamps
-from tracking_adapter.formats import load_homographies
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import image_to_plane
 from viz.events import event_table
@@ -348,7 +347,7 @@ def free_port() -> int:
 
 def test_serve_hosts_the_web_viewer_until_ctrl_c(tiny):
     web_port, grpc_port = free_port(), free_port()
-    script = ("import viz; from flashsync.model_file import load_model; "
+    script = ("import viz; from flashsync.io import load_model; "
               f"viz.serve(load_model({str(tiny['directory'] / 'sync.json')!r}), "
               f"web_port={web_port}, grpc_port={grpc_port})")
     server = subprocess.Popen([sys.executable, "-c", script], cwd=Path(__file__).parents[1],

@@ -35,9 +35,9 @@ import pyarrow.parquet as pq
 from flashsync.atomic import atomic_output
 from flashsync.errors import InputError
 from flashsync.model import SyncModel
-from tracking_adapter.formats import (REQUIRED_COLUMNS, detections_format, first_line,
-                                      iter_csv_blocks, read_csv_header, read_mot,
-                                      require_columns)
+from flashsync.io.detections import (REQUIRED_COLUMNS, detections_format, iter_csv_blocks, load_mot,
+                                     read_csv_header, require_columns)
+from flashsync.io.files import first_line
 
 #: Why a row was not stamped, in the order the checks run (the first failing one is reported).
 REASONS = (
@@ -132,7 +132,7 @@ def restamp_file(in_path: str | Path, out_path: str | Path, model: SyncModel, *,
     CSV to CSV copies every input line byte for byte and appends the new values, so
     nothing is reformatted. CSV to Parquet stores the input columns as text, exactly as
     in the CSV. Parquet input keeps its column types. A MOTChallenge file (one camera,
-    read whole) becomes the table of :func:`~tracking_adapter.formats.read_mot`. The
+    read whole) becomes the table of :func:`~flashsync.io.detections.load_mot`. The
     output is written atomically: an interrupted run leaves no file behind.
 
     Parameters
@@ -280,7 +280,7 @@ def _read_batches(path: Path, kind: str, camera: str | None,
             parquet = pq.ParquetFile(path)
             return parquet.schema_arrow, parquet.iter_batches(batch_size=_BATCH_ROWS)
         if kind == "mot":
-            table = pa.Table.from_pandas(read_mot(path, camera), preserve_index=False)
+            table = pa.Table.from_pandas(load_mot(path, camera), preserve_index=False)
             return table.schema, iter(table.to_batches(max_chunksize=_BATCH_ROWS))
         header = read_csv_header(path)
         reader = pacsv.open_csv(path, read_options=pacsv.ReadOptions(block_size=block_bytes),

@@ -34,7 +34,7 @@ import pandas as pd
 
 from flashsync.errors import NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter.formats import require_columns
+from flashsync.io.detections import require_columns
 from tracking_adapter.restamp import restamp
 
 TIME_MODELS = {
@@ -174,7 +174,7 @@ def validate(detections: pd.DataFrame, model: SyncModel,
 
     Examples
     --------
-    >>> report = validate(read_detections("puck.csv"), load_model("sync.json"),
+    >>> report = validate(load_detections("puck.csv"), load_model("sync.json"),
     ...                   load_homographies("H.json"))               # doctest: +SKIP
     >>> print(format_report(report))                                  # doctest: +SKIP
     """

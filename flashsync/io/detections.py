@@ -1,4 +1,4 @@
-"""Tracker detections in and out: CSV, Parquet, MOTChallenge, and homography files.
+"""Tracker detections in and out: CSV, Parquet and MOTChallenge files.
 
 A detections table has one row per detection with at least ``camera`` (name = video file
 stem), ``frame`` (0-based decoded frame index) and ``y`` (stored-image row, px, top = 0);
@@ -11,17 +11,16 @@ The format of a file follows its extension: ``.csv`` CSV, ``.parquet`` / ``.pq``
 from __future__ import annotations
 
 import csv
-import json
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
-import numpy as np
 import pandas as pd
 
 from flashsync.errors import InputError
-from flashsync.tables import write_table
+from flashsync.io.files import existing_file, first_line
+from flashsync.io.tables import write_table
 
 REQUIRED_COLUMNS = ("camera", "frame", "y")
 MOT_COLUMNS = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf")
@@ -68,7 +67,7 @@ def require_columns(columns: Iterable[str], required: Iterable[str], source: str
             f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file")
 
 
-def read_detections(path: str | Path, *, camera: str | None = None,
+def load_detections(path: str | Path, *, camera: str | None = None,
                     input_format: str | None = None) -> pd.DataFrame:
     """Read a detections file into a DataFrame (column types inferred).
 
@@ -84,17 +83,17 @@ def read_detections(path: str | Path, *, camera: str | None = None,
     Returns
     -------
     DataFrame
-        The file's columns; for MOTChallenge the columns of :func:`read_mot`.
+        The file's columns; for MOTChallenge the columns of :func:`load_mot`.
 
     Examples
     --------
-    >>> tables = [read_detections(p) for p in ["cam1.txt", "cam2.txt"]]  # doctest: +SKIP
+    >>> tables = [load_detections(p) for p in ["cam1.txt", "cam2.txt"]]  # doctest: +SKIP
     >>> detections = pd.concat(tables, ignore_index=True)                  # doctest: +SKIP
     """
     kind = detections_format(path, input_format)
     if kind == "mot":
-        return read_mot(path, camera=camera)
-    path = _existing(path)
+        return load_mot(path, camera=camera)
+    path = existing_file(path)
     try:
         if kind == "parquet":
             return pd.read_parquet(path)
@@ -104,7 +103,7 @@ def read_detections(path: str | Path, *, camera: str | None = None,
                              "check the file") from None
 
 
-def write_detections(table: pd.DataFrame, path: str | Path) -> None:
+def save_detections(table: pd.DataFrame, path: str | Path) -> None:
     """Write ``table`` to ``path`` (CSV or Parquet by extension) atomically, without index."""
     kind = detections_format(path)
     if kind == "mot":
@@ -113,7 +112,7 @@ def write_detections(table: pd.DataFrame, path: str | Path) -> None:
     write_table(table, path)
 
 
-def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
+def load_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     """Read a MOTChallenge file (one camera) as a detections table.
 
     The file has comma-separated ``frame, id, bb_left, bb_top, bb_width, bb_height, conf,
@@ -137,7 +136,7 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
         named by the header, or ``mot_8``, ``mot_9``, ... (1-based position) without one.
         A header name that clashes with the new columns gets a ``mot_`` prefix.
     """
-    path = _existing(path)
+    path = existing_file(path)
     with open(path, "rb") as file:
         first = file.readline().decode("utf-8", errors="replace").strip()
     fields = [field.strip() for field in first.split(",")]
@@ -197,7 +196,7 @@ class CsvHeader:
 
 def read_csv_header(path: str | Path) -> CsvHeader:
     """Read the header line of a CSV file; an error for an empty file."""
-    path = _existing(path)
+    path = existing_file(path)
     with open(path, "rb") as file:
         line = file.readline()
     if not line.strip():
@@ -232,44 +231,6 @@ def iter_csv_blocks(file: BinaryIO, block_bytes: int, eol: bytes = b"\n") -> Ite
         yield carry + eol
 
 
-def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
-    """Read ``{camera: 3x3 matrix}`` (image px -> plane m) from a JSON file.
-
-    Returns
-    -------
-    dict of str to ndarray of shape (3, 3)
-        Each camera's homography, float64.
-    """
-    path = _existing(path)
-    try:
-        document = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise InputError(f"{path}: not a JSON file ({first_line(error)}); give "
-                             "{\"camera\": [[...], [...], [...]]} with 3x3 matrices") from None
-    if not isinstance(document, dict) or not document:
-        raise InputError(f"{path}: expected a JSON object {{camera: 3x3 matrix}}; "
-                             "write one 3x3 image->plane homography per camera")
-    homographies = {}
-    for name, matrix in document.items():
-        try:
-            matrix = np.asarray(matrix, dtype=np.float64)
-        except (TypeError, ValueError):
-            matrix = np.empty(0)
-        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) \
-                or abs(np.linalg.det(matrix)) < 1e-300:
-            raise InputError(f"{path}: the homography of camera {name!r} is not an "
-                                 "invertible 3x3 matrix of numbers; fix that entry")
-        homographies[str(name)] = matrix
-    return homographies
-
-
-def _existing(path: str | Path) -> Path:
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such file; check the path")
-    return path
-
-
 def _is_number(text: str) -> bool:
     try:
         float(text)
@@ -277,8 +238,3 @@ def _is_number(text: str) -> bool:
         return False
     return True
 
-
-def first_line(error: Exception) -> str:
-    """The first line of an exception's message (library messages can be long)."""
-    lines = str(error).strip().splitlines()
-    return lines[0] if lines else type(error).__name__
