@@ -32,8 +32,10 @@ import numpy as np
 import pandas as pd
 
 from flashsync.errors import NotEnoughDataError
+from flashsync.model import readout_rows
 from flashsync.profiles import read_profiles
 from flashsync.ramp import fit_pulse_edge
+from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
@@ -224,7 +226,7 @@ class EventDetector:
         for edge, segment, row, rise in edges:
             if row is None:
                 continue
-            stored = self.height - 1 - row if self.settings.flipped else row
+            stored = readout_rows(row, self.height, self.settings.flipped)
             self.events.append({
                 "camera": self.camera, "event": self._n_events, "frame": segment.frame,
                 "t_frame_ms": segment.t_frame_ms, "row": stored, "edge": edge, "band": kind,
@@ -276,7 +278,7 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
         if r > 0 and not np.isnan(change[r - 1]):
             steps[n_steps] = abs(change[r] - change[r - 1])
             n_steps += 1
-    noise = 1.4826 / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
+    noise = MAD_TO_SIGMA / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
     if lit_stop == 0:
         lit_start, lit_stop = 0, height
     return change, noise, peak, lit_start, lit_stop

@@ -13,6 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flashsync.robust import mad_sigma
+from flashsync.timestamps import median_step_ms
+
 #: Largest stamp residual (ms) still explained by quantisation or muxer jitter.
 MAX_STEADY_RESIDUAL_MS = 2.0
 #: Frames over which the clock's slow wander (a rate that changes with temperature) is
@@ -65,8 +68,7 @@ def fit_frame_clock(stamps_ms: np.ndarray) -> FrameClock:
     (True, 39.96, 1.0)
     """
     stamps = np.asarray(stamps_ms, dtype=np.float64)
-    steps = np.diff(stamps)
-    period = float(np.median(steps)) if steps.size else 0.0
+    period = median_step_ms(stamps)
     quantum = _grid(stamps)
     if stamps.size < 3 or period <= 0:
         return FrameClock(stamps, period, False, 0.0, quantum, 0)
@@ -102,7 +104,7 @@ def _robust_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     for _ in range(3):
         slope, intercept = np.polyfit(x[keep], y[keep], 1)
         residual = y - (intercept + slope * x)
-        sigma = max(1.4826 * float(np.median(np.abs(residual[keep]))), 1e-6)
+        sigma = mad_sigma(residual[keep], 1e-6)
         keep = np.abs(residual) <= 3 * sigma + 0.5
     return float(intercept), float(slope)
 

@@ -73,8 +73,7 @@ class CameraClock:
 
     def readout_row(self, row: np.ndarray) -> np.ndarray:
         """Readout index (0 = first row read) of stored-image rows."""
-        row = np.asarray(row, dtype=np.float64)
-        return self.height - 1 - row if self.flipped else row
+        return readout_rows(np.asarray(row, dtype=np.float64), self.height, self.flipped)
 
     def t_global_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
         """Global time (ms) of the end of exposure of ``row`` in ``frame``.
@@ -125,8 +124,13 @@ class CameraClock:
         q = (t - starts[np.clip(frame, 0, None)]) / self.row_time_ms
         visible = (frame >= 0) & (q <= self.height - 1 + 1e-6)
         q = np.where(visible, q, np.nan)
-        row = self.height - 1 - q if self.flipped else q
-        return frame, row
+        return frame, readout_rows(q, self.height, self.flipped)
+
+
+def readout_rows(rows: np.ndarray, height: int, flipped: bool) -> np.ndarray:
+    """Readout index (0 = first row read) of stored-image rows (top = 0) of a camera that reads
+    bottom-up when ``flipped``; the same map takes readout rows back to stored rows."""
+    return height - 1 - rows if flipped else rows
 
 
 def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:

@@ -28,8 +28,9 @@ from flashsync.detect import CameraDetection, DetectorSettings, detect_video
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
-from flashsync.model import CameraClock, SyncModel
+from flashsync.model import CameraClock, SyncModel, readout_rows
 from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
+from flashsync.timestamps import median_step_ms
 from flashsync.io.timestamps import load_timestamps
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
@@ -314,8 +315,7 @@ def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: f
 def _with_readout_rows(detection: CameraDetection) -> pd.DataFrame:
     """The camera's events with their readout row ``q``."""
     events = detection.events
-    q = detection.height - 1 - events["row"] if detection.flipped else events["row"]
-    return events.assign(q=q.to_numpy())
+    return events.assign(q=readout_rows(events["row"], detection.height, detection.flipped).to_numpy())
 
 
 def _sync_events(detection: CameraDetection) -> pd.DataFrame:
@@ -341,7 +341,7 @@ def _durations(detections: list[CameraDetection]) -> Durations:
 
 
 def _frame_period(detection: CameraDetection) -> float:
-    return float(np.median(np.diff(detection.frame_times_ms)))
+    return median_step_ms(detection.frame_times_ms)
 
 
 def _approximate_times(detection: CameraDetection, events: pd.DataFrame) -> np.ndarray:

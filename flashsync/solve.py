@@ -30,6 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from flashsync.errors import NotEnoughDataError
 from flashsync.model import hat_basis
+from flashsync.robust import mad_sigma
 
 #: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
 MIN_SIGMA_MS = 1e-3
@@ -138,12 +139,12 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     for _ in range(iterations):
         x = system.solve(weights)
         residual = system.residuals(x)
-        sigma = _robust_sigma(residual)
+        sigma = mad_sigma(residual, MIN_SIGMA_MS)
         weights = 1.0 / (1.0 + (residual / (cauchy_k * sigma)) ** 2)
     inlier = np.abs(residual) <= reject_sigma * sigma
     x = system.solve(inlier.astype(np.float64))
     residual = system.residuals(x)
-    sigma = _robust_sigma(residual[inlier])
+    sigma = mad_sigma(residual[inlier], MIN_SIGMA_MS)
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
     covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
@@ -199,11 +200,6 @@ def _bic(solution: Solution) -> float:
     residual = solution.residual_ms[solution.inlier]
     n = len(residual)
     return n * np.log(max(float(np.mean(residual**2)), 1e-18)) + solution.n_unknowns * np.log(n)
-
-
-def _robust_sigma(residual: np.ndarray) -> float:
-    """1.4826 x median absolute residual, ms (at least MIN_SIGMA_MS)."""
-    return max(1.4826 * float(np.median(np.abs(residual))), MIN_SIGMA_MS) if residual.size else MIN_SIGMA_MS
 
 
 class _System:

@@ -84,6 +84,13 @@ def open_video(path: Path) -> av.container.InputContainer:
     return container
 
 
+def median_step_ms(times_ms: np.ndarray) -> float:
+    """The median interval between consecutive frame times, ms: the nominal frame period
+    (0 for fewer than two frames)."""
+    times = np.asarray(times_ms, dtype=np.float64)
+    return float(np.median(np.diff(times))) if times.size > 1 else 0.0
+
+
 def rtp_timestamps(stamps: np.ndarray, clock_hz: int = RTP_CLOCK_HZ) -> np.ndarray:
     """Unwrap 32-bit RTP timestamps into ms since the first frame.
 

@@ -34,6 +34,7 @@ import pandas as pd
 
 from flashsync.errors import NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
+from flashsync.timestamps import median_step_ms
 from flashsync.io.detections import require_columns
 from tracking_adapter.restamp import restamp
 
@@ -317,7 +318,7 @@ def _default_gap_ms(clock: CameraClock) -> float:
         raise NotEnoughDataError(f"camera {clock.name} has {clock.n_frames} frame in the model; give the "
                                  "longest gap between two detections to interpolate over, or sync a "
                                  "longer video")
-    return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
+    return DEFAULT_GAP_FRAMES * clock.alpha * median_step_ms(clock.frame_times_ms)
 
 
 def _add(counts: dict[str, int], reason: str, count: int) -> None:

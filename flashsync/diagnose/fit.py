@@ -22,7 +22,9 @@ import numpy as np
 
 from flashsync.diagnose.effects import (CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLIPPED, FRAME_CLOCK,
                                         Features)
-from flashsync.diagnose.measure import Measurement, readout_rows
+from flashsync.diagnose.measure import Measurement
+from flashsync.model import readout_rows
+from flashsync.timestamps import median_step_ms
 
 #: Floor of a fitted residual scale, ms (exact stamps would otherwise have zero scale).
 MIN_SCALE_MS = 1e-3
@@ -86,7 +88,7 @@ def model_clock(stamps_ms: np.ndarray, count_gaps: bool, least_squares: bool) ->
     least_squares : bool
         Offset and period fitted to all stamps; else the median step and the median offset.
     """
-    step = float(np.median(np.diff(stamps_ms)))
+    step = median_step_ms(stamps_ms)
     if count_gaps:
         gaps = np.maximum(np.round(np.diff(stamps_ms) / step), 1).astype(np.int64)
         slots = np.concatenate([[0], np.cumsum(gaps)])

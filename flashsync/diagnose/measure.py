@@ -21,6 +21,8 @@ import pandas as pd
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.match import align_pair, group_flashes
+from flashsync.model import readout_rows
+from flashsync.timestamps import median_step_ms
 
 #: Fewest flashes two cameras must share for their pairing to count.
 MIN_SHARED_BANDS = 3
@@ -53,7 +55,7 @@ class Camera:
     @property
     def median_step_ms(self) -> float:
         """The most common frame interval, ms: the nominal frame period."""
-        return float(np.median(np.diff(self.stamps_ms)))
+        return median_step_ms(self.stamps_ms)
 
 
 @dataclass(frozen=True)
@@ -141,7 +143,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
                          "of them", parameter="reference")
     pulses = {d.camera: _pulses(d) for d in detections}
-    tolerance = max(float(np.median(np.diff(d.frame_times_ms))) for d in detections)
+    tolerance = max(median_step_ms(d.frame_times_ms) for d in detections)
     alignments = {}
     for i, name_a in enumerate(names):
         for name_b in names[i + 1:]:
@@ -168,11 +170,6 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
                        _edge_noise_ms(cameras, bands), warnings)
 
 
-def readout_rows(row: np.ndarray, height: int, flipped: bool) -> np.ndarray:
-    """Readout index (0 = read first) of stored-image rows."""
-    return height - 1 - row if flipped else row
-
-
 def _pulses(detection: CameraDetection) -> pd.DataFrame:
     """The camera's pulse events, one row each: ``time_ms``, its approximate time on the
     camera's own clock (mean of its visible edges' stamp + readout row x frame step /
@@ -180,7 +177,7 @@ def _pulses(detection: CameraDetection) -> pd.DataFrame:
     and ``clean``: both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image."""
     events = detection.events[detection.events["band"] == "pulse"]
     stamps = np.asarray(detection.frame_times_ms, dtype=np.float64)
-    row_ms = float(np.median(np.diff(stamps))) / detection.height
+    row_ms = median_step_ms(stamps) / detection.height
     q = readout_rows(events["row"].to_numpy(dtype=np.float64), detection.height, detection.flipped)
     time_ms = pd.Series(stamps[events["frame"].to_numpy(dtype=np.int64)] + q * row_ms, index=events.index)
     pulses = events.pivot(index="event", columns="edge", values=["frame", "row"])
