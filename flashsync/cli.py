@@ -195,21 +195,22 @@ _BAR_POSITIONS = itertools.count()
 
 
 def _run_detect(args) -> None:
-    from flashsync.io import write_table
+    from flashsync.io import save_events
     from flashsync.pipeline import all_events, detect_videos
 
-    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress,
-                           timestamps=_timestamp_files(args.timestamps)))
-    write_table(events, args.output)
-    print(f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
-          f"in {len(args.videos)} videos -> {args.output}", file=sys.stderr)
+    detections = detect_videos(args.videos, args.flipped, progress=_progress,
+                               timestamps=_timestamp_files(args.timestamps))
+    save_events(all_events(detections), args.output)
+    print(f"{sum(len(d.events) for d in detections)} edges of "
+          f"{sum(len(set(d.events.event.tolist())) for d in detections)} events in {len(args.videos)} videos "
+          f"-> {args.output}", file=sys.stderr)
 
 
 def _run_sync(args) -> None:
     import json
 
     from flashsync.atomic import write_text
-    from flashsync.io import save_model, write_table
+    from flashsync.io import events_to_frame, save_events, save_model
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
     from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
                                   sync_table)
@@ -217,7 +218,7 @@ def _run_sync(args) -> None:
     detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
                                timestamps=_timestamp_files(args.timestamps))
     if args.events:
-        write_table(all_events(detections), args.events)
+        save_events(all_events(detections), args.events)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
     model, report = synchronize(detections, args.reference, **options)
     for warning in report.warnings:
@@ -242,7 +243,7 @@ def _run_sync(args) -> None:
     if args.rrd:
         import viz
 
-        viz.save_recording(args.rrd, model, videos=args.videos, events=all_events(detections))
+        viz.save_recording(args.rrd, model, videos=args.videos, events=events_to_frame(all_events(detections)))
         print(f"recording -> {args.rrd}", file=sys.stderr)
     print(f"model -> {args.output}", file=sys.stderr)
 
@@ -304,11 +305,11 @@ def _run_validate(args) -> None:
 
 def _run_view(args) -> None:
     import viz
-    from flashsync.io import load_detections, load_homographies, load_validation
+    from flashsync.io import events_to_frame, load_detections, load_events, load_homographies, load_validation
 
     model = _load_model(args.model)
     data = {"videos": args.videos or None,
-            "events": load_detections(args.events) if args.events else None,
+            "events": events_to_frame(load_events(args.events)) if args.events else None,
             "detections": load_detections(args.detections) if args.detections else None,
             "homographies": load_homographies(args.homographies) if args.homographies else None,
             "validation": load_validation(args.validation) if args.validation else None}

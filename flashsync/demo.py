@@ -12,7 +12,8 @@ from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
-from flashsync.io import load_detections, load_ground_truth, load_homographies, save_model, write_table
+from flashsync.io import (events_to_frame, load_detections, load_ground_truth, load_homographies, save_events,
+                          save_model)
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -37,7 +38,7 @@ def run_demo(samples: Path | None, output: Path,
                          "or on a folder that 'flashsync simulate sample' rendered", parameter="samples")
     started = time.perf_counter()
     detections = detect_videos(videos, estimate_readout=True, progress=progress)
-    write_table(all_events(detections), output / "events.csv")
+    save_events(all_events(detections), output / "events.csv")
     model, report = synchronize(detections)
     save_model(model, output / "sync.json")
     summary = restamp_file(samples / "detections.csv", output / "restamped.csv", model)
@@ -62,7 +63,7 @@ def run_demo(samples: Path | None, output: Path,
     if recording is not None:
         import viz
 
-        viz.save_recording(recording, model, videos=videos, events=all_events(detections),
+        viz.save_recording(recording, model, videos=videos, events=events_to_frame(all_events(detections)),
                            detections=load_detections(output / "restamped.csv"),
                            homographies=load_homographies(samples / "homographies.json"))
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")

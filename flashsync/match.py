@@ -15,13 +15,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
+from flashsync.events import Events
+from flashsync.model import readout_rows
+from flashsync.timestamps import median_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
 MAX_DRIFT = 100e-6
 #: Another shift that explains this fraction of the best one's matches makes a pair
 #: ambiguous (a periodic strobe fits at every multiple of its period).
 RIVAL_FRACTION = 0.7
+
+
+def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Times of the camera's ``events`` on its own clock, ms, with a nominal time per row: frame
+    time + readout row x median frame step / height (a few per cent off: good to a few ms)."""
+    row_time = median_step_ms(detection.frame_times_ms) / detection.height
+    return events.t_frame_ms + readout_rows(events.row, detection.height, detection.flipped) * row_time
 
 
 @dataclass(frozen=True)

@@ -143,6 +143,15 @@ def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
     return np.stack([np.interp(t, knots_ms, np.eye(interior + 2)[j + 1]) for j in range(interior)], axis=-1)
 
 
+#: The columns of :attr:`SyncModel.events`, one row per sync event matched into a flash: the
+#: flash's number, the camera, the detector's event number, the frame and stored row of its
+#: leading edge, the frame's time (ms), the flash's global time (ms), the event's residual in
+#: the solve (ms) and whether the robust solve kept it.
+MATCHED_EVENT_COLUMNS = {"flash": "int64", "camera": "str", "event": "int64", "frame": "int64", "row": "float64",
+                         "t_frame_ms": "float64", "t_global_ms": "float64", "residual_ms": "float64",
+                         "inlier": "bool"}
+
+
 @dataclass
 class SyncModel:
     """Every camera's clock on the reference clock, and the events it was fitted to.
@@ -154,8 +163,7 @@ class SyncModel:
     cameras : dict[str, CameraClock]
         In the order the videos were given.
     events : DataFrame
-        Matched events: ``flash, camera, frame, row, t_frame_ms, t_global_ms,
-        residual_ms, inlier``.
+        Matched events, columns :data:`MATCHED_EVENT_COLUMNS`.
     """
 
     reference: str

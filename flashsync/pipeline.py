@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import combinations
 from pathlib import Path
@@ -25,11 +25,12 @@ import numpy as np
 import pandas as pd
 
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
-from flashsync.model import CameraClock, SyncModel, readout_rows
-from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
+from flashsync.match import PairAlignment, align_pair, approximate_times_ms, group_flashes, parse_anchors
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 from flashsync.io.timestamps import load_timestamps
 
@@ -83,15 +84,16 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
             raise InputError(
                 f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame")
-        return with_frame_times(detection, stamps[path.stem])
+        return detection.retimed(stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         return list(pool.map(detect, paths))
 
 
-def all_events(detections: Sequence[CameraDetection]) -> pd.DataFrame:
-    """One events table (``detect`` output) for all cameras."""
-    return pd.concat([d.events for d in detections], ignore_index=True)
+def all_events(detections: Sequence[CameraDetection]) -> Events:
+    """The events of all cameras (in their readings in use), one camera after the other: the
+    events table ``flashsync detect`` writes (:func:`~flashsync.io.events.save_events`)."""
+    return Events.concat([d.events for d in detections])
 
 
 @dataclass
@@ -121,8 +123,8 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
 
     Parameters
     ----------
-    detections : one per camera (from :func:`detect_videos`); a detection with
-        ``alternative`` events has its readout direction chosen here.
+    detections : one per camera (from :func:`detect_videos`); a detection read both ways
+        up has its readout direction chosen here.
     reference : camera whose clock is the global clock; default the first.
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional).
@@ -133,8 +135,8 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
         raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
                          "of them", parameter="reference")
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
-    cameras = {d.camera: with_frame_times(d, report.frame_clocks[d.camera].times_ms) for d in detections}
-    undecided = [name for name, d in cameras.items() if d.alternative is not None]
+    cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
+    undecided = [name for name, d in cameras.items() if d.undecided]
     best = _best_readout(cameras, undecided, lambda trial: _attempt(trial, reference, row_times, anchors))
     report.alignments, report.warnings = best.alignments, best.warnings
     report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
@@ -184,6 +186,53 @@ def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[
     return results
 
 
+@dataclass(frozen=True)
+class Matches:
+    """The sync events (leading edges) that belong to a flash seen by two or more cameras,
+    arrays of shape (n,).
+
+    Attributes
+    ----------
+    flash : int array
+        Flash number, 0..n_flashes-1.
+    camera : str array
+        Camera name.
+    camera_index : int array
+        Index of the camera among the cameras solved.
+    event, frame : int arrays
+        The detector's event number and the decoded frame of its leading edge.
+    row, q : float arrays
+        Stored-image row and readout row of the edge.
+    t_frame_ms : float array
+        The frame's time (frame clock), ms.
+    """
+
+    flash: np.ndarray
+    camera: np.ndarray
+    camera_index: np.ndarray
+    event: np.ndarray
+    frame: np.ndarray
+    row: np.ndarray
+    q: np.ndarray
+    t_frame_ms: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.flash)
+
+    def observations(self) -> Observations:
+        """What the solve needs of them."""
+        return Observations(self.camera_index, self.flash, self.t_frame_ms, self.q)
+
+    def table(self, solution: Solution) -> pd.DataFrame:
+        """The matched events with the solve's results (:data:`~flashsync.model.MATCHED_EVENT_COLUMNS`)."""
+        n_events = len(self)
+        return pd.DataFrame({
+            "flash": self.flash, "camera": list(self.camera), "event": self.event, "frame": self.frame,
+            "row": self.row, "t_frame_ms": self.t_frame_ms, "t_global_ms": solution.flash_ms[self.flash],
+            "residual_ms": solution.residual_ms[:n_events], "inlier": solution.inlier[:n_events]},
+        ).astype(MATCHED_EVENT_COLUMNS)
+
+
 @dataclass
 class _Attempt:
     """One matching and solve with given readout directions."""
@@ -192,7 +241,7 @@ class _Attempt:
     connected: list[str]
     alignments: dict[tuple[str, str], PairAlignment]
     warnings: list[str]
-    observations: pd.DataFrame
+    matches: Matches
     durations: Durations
     solution: Solution
 
@@ -203,10 +252,10 @@ class _Attempt:
         matched to nothing) uniform over a frame period. Counting inliers alone would
         prefer a wrong direction whose loose fit (a scale ten times larger) lets one more
         event in."""
-        n_inliers = int(self.solution.inlier[: len(self.observations)].sum())
+        n_inliers = int(self.solution.inlier[: len(self.matches)].sum())
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
         sigma = max(self.solution.sigma_ms, 1e-4)
-        period = max(_frame_period(d) for d in self.cameras.values())
+        period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
         return (n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5)
                 - (n_events - n_inliers) * np.log(period))
 
@@ -218,12 +267,7 @@ class _Attempt:
                                        s.row_time_ms, d.flipped, s.covariance,
                                        _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
                                        str(d.video), s.knots_ms, s.warp_ms)
-        n_events = len(self.observations)
-        events = self.observations.assign(
-            t_global_ms=self.solution.flash_ms[self.observations["flash"].to_numpy()],
-            residual_ms=self.solution.residual_ms[:n_events],
-            inlier=self.solution.inlier[:n_events])
-        return SyncModel(reference, clocks, events.drop(columns=["camera_index", "q"]))
+        return SyncModel(reference, clocks, self.matches.table(self.solution))
 
 
 def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None,
@@ -236,7 +280,7 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
         raise NotEnoughDataError(f"need two or more cameras with at least two flash events each; found "
-                             f"{counts}; check that the videos show flashes (or lights switching)")
+                                 f"{counts}; check that the videos show flashes (or lights switching)")
     alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable},
                               anchors)
     flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
@@ -246,36 +290,22 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
                  for name in usable if name not in connected]
     if reference not in connected or len(connected) < 2:
         raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
-                             "check that the videos overlap in time and saw the same flashes")
-    observations = _observations(connected, sync_events, flashes)
+                                 "check that the videos overlap in time and saw the same flashes")
+    matches = _matches([cameras[name] for name in connected], sync_events, flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
-    solution = solve_with_drift_model(
-        Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
-               observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
-        len(connected), connected.index(reference), durations=durations, priors=Priors(priors))
-    return _Attempt(cameras, connected, alignments, warnings, observations, durations, solution)
+    solution = solve_with_drift_model(matches.observations(), len(connected), connected.index(reference),
+                                      durations=durations, priors=Priors(priors))
+    return _Attempt(cameras, connected, alignments, warnings, matches, durations, solution)
 
 
-def with_frame_times(detection: CameraDetection, times_ms: np.ndarray) -> CameraDetection:
-    """The detection with other frame times (ms, one per decoded frame), its events' frame
-    times too."""
-    def retimed(events: pd.DataFrame | None) -> pd.DataFrame | None:
-        if events is None:
-            return None
-        return events.assign(t_frame_ms=times_ms[events["frame"].to_numpy(dtype=np.int64)])
-
-    return replace(detection, frame_times_ms=times_ms, events=retimed(detection.events),
-                   alternative=retimed(detection.alternative))
-
-
-def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, pd.DataFrame],
+def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, Events],
                  anchors: Sequence[str]) -> dict[tuple[str, str], PairAlignment]:
     """Coarse alignment of every pair of cameras; pairs sharing too few or ambiguous flashes
     are left out."""
     anchor_events = parse_anchors(list(anchors), {n: len(e) for n, e in sync_events.items()})
-    approx = {name: _approximate_times(cameras[name], sync_events[name]) for name in cameras}
-    tolerance = max(5.0, 0.25 * max(_frame_period(d) for d in cameras.values()))
+    approx = {name: approximate_times_ms(cameras[name], sync_events[name]) for name in cameras}
+    tolerance = max(5.0, 0.25 * max(median_step_ms(d.frame_times_ms) for d in cameras.values()))
     names = list(cameras)
     alignments = {}
     for i, name_a in enumerate(names):
@@ -295,7 +325,7 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
         else:
-            nominal = _frame_period(camera) / (NOMINAL_HIDDEN_ROWS * camera.height)
+            nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
 
@@ -312,42 +342,31 @@ def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: f
     return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
 
 
-def _with_readout_rows(detection: CameraDetection) -> pd.DataFrame:
-    """The camera's events with their readout row ``q``."""
+def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Readout rows of the camera's events."""
+    return readout_rows(events.row, detection.height, detection.flipped)
+
+
+def _sync_events(detection: CameraDetection) -> Events:
+    """Leading edges: the synchronisation events."""
     events = detection.events
-    return events.assign(q=readout_rows(events["row"], detection.height, detection.flipped).to_numpy())
-
-
-def _sync_events(detection: CameraDetection) -> pd.DataFrame:
-    """Leading edges, the synchronisation events, with their readout row ``q``."""
-    events = _with_readout_rows(detection)
-    return events[events["edge"] == "leading"].reset_index(drop=True)
+    return events.take(events.edge == Edge.LEADING)
 
 
 def _durations(detections: list[CameraDetection]) -> Durations:
     """Pulse bands with both edges visible and unsaturated, camera indices in list order."""
     camera, dt, dq = [], [], []
     for index, detection in enumerate(detections):
-        events = _with_readout_rows(detection)
-        usable = events[(events["band"] == "pulse") & ~events["flags"].str.contains("saturated")]
-        both = usable.pivot_table(index="event", columns="edge", values=["t_frame_ms", "q"])
-        if not {("q", "leading"), ("q", "trailing")} <= set(both.columns):
-            continue
-        both = both.dropna()
-        camera += [index] * len(both)
-        dt += list(both[("t_frame_ms", "trailing")] - both[("t_frame_ms", "leading")])
-        dq += list(both[("q", "trailing")] - both[("q", "leading")])
+        events = detection.events
+        bands = events.bands()
+        first = bands.first_edges()
+        bands = bands.take(bands.complete & (events.band[first] == Band.PULSE)
+                           & ~events.has_flag(Flag.SATURATED)[first])
+        q = _readout_rows(detection, events)
+        camera += [index] * len(bands)
+        dt += list(events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
+        dq += list(q[bands.trailing] - q[bands.leading])
     return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
-
-
-def _frame_period(detection: CameraDetection) -> float:
-    return median_step_ms(detection.frame_times_ms)
-
-
-def _approximate_times(detection: CameraDetection, events: pd.DataFrame) -> np.ndarray:
-    """Event times on the camera's own clock, ms, with a nominal time per row."""
-    row_time = _frame_period(detection) / detection.height
-    return events["t_frame_ms"].to_numpy() + events["q"].to_numpy() * row_time
 
 
 def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str], PairAlignment]) -> list[str]:
@@ -363,19 +382,18 @@ def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str
     return [name for name in names if name in reached]
 
 
-def _observations(names: list[str], sync_events: dict[str, pd.DataFrame],
-                  flashes: dict[tuple[str, int], int]) -> pd.DataFrame:
-    """One row per (camera, event) that belongs to a flash seen by >= 2 connected cameras."""
-    rows = []
-    for index, name in enumerate(names):
-        for i, event in sync_events[name].iterrows():
-            if (name, i) in flashes:
-                rows.append({"flash": flashes[(name, i)], "camera": name, "camera_index": index,
-                             "event": int(event["event"]), "frame": int(event["frame"]),
-                             "row": float(event["row"]), "q": float(event["q"]),
-                             "t_frame_ms": float(event["t_frame_ms"])})
-    table = pd.DataFrame(rows)
-    counts = table.groupby("flash")["camera"].transform("size")
-    table = table[counts >= 2].copy()
-    table["flash"] = pd.factorize(table["flash"], sort=True)[0]
-    return table.reset_index(drop=True)
+def _matches(cameras: list[CameraDetection], sync_events: dict[str, Events],
+             flashes: dict[tuple[str, int], int]) -> Matches:
+    """The sync events of ``cameras`` that belong to a flash seen by two or more of them."""
+    chosen, flash, camera_index = [], [], []
+    for index, detection in enumerate(cameras):
+        mine = [i for i in range(len(sync_events[detection.camera])) if (detection.camera, i) in flashes]
+        chosen.append(sync_events[detection.camera].take(np.array(mine, dtype=np.int64)))
+        flash += [flashes[(detection.camera, i)] for i in mine]
+        camera_index += [index] * len(mine)
+    events = Events.concat(chosen)
+    q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
+    flash, camera_index = np.asarray(flash, dtype=np.int64), np.asarray(camera_index, dtype=np.int64)
+    keep = np.bincount(flash)[flash] >= 2
+    return Matches(np.unique(flash[keep], return_inverse=True)[1], events.camera[keep], camera_index[keep],
+                   events.event[keep], events.frame[keep], events.row[keep], q[keep], events.t_frame_ms[keep])

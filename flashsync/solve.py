@@ -37,8 +37,8 @@ MIN_SIGMA_MS = 1e-3
 
 
 @dataclass(frozen=True)
-class Events:
-    """Matched event edges: one entry per (camera, flash) observation.
+class Observations:
+    """Matched sync events: one entry per (camera, flash) observation.
 
     ``camera``, ``flash``: int arrays (n,); ``t_frame_ms``: frame timestamps (n,), ms;
     ``q``: readout rows (n,).
@@ -101,7 +101,7 @@ class Solution:
     n_unknowns: int
 
 
-def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
+def solve_clocks(events: Observations, n_cameras: int, reference: int = 0,
                  durations: Durations | None = None, priors: Priors | None = None,
                  drift_knots: dict[int, np.ndarray] | None = None,
                  event_sigma_ms: float = 0.05, reject_sigma: float = 5.0,
@@ -110,7 +110,7 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
 
     Parameters
     ----------
-    events : matched event edges.
+    events : matched sync events.
     n_cameras : number of cameras (indices 0..n_cameras-1).
     reference : index of the reference camera.
     durations : bands with both edges; used for cameras where they can tell ``T_row``
@@ -163,7 +163,7 @@ MIN_EVENTS_PER_SEGMENT = 4
 MIN_BIC_GAIN = 10.0
 
 
-def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0,
+def solve_with_drift_model(events: Observations, n_cameras: int, reference: int = 0,
                            **options) -> Solution:
     """:func:`solve_clocks` with the drift model chosen by the data.
 
@@ -211,7 +211,7 @@ class _System:
     events, durations, then priors.
     """
 
-    def __init__(self, events: Events, n_cameras: int, reference: int, durations: Durations | None,
+    def __init__(self, events: Observations, n_cameras: int, reference: int, durations: Durations | None,
                  priors: Priors, drift_knots: dict[int, np.ndarray], event_sigma_ms: float):
         camera = np.asarray(events.camera, dtype=np.int64)
         t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)

@@ -20,7 +20,7 @@ import rerun.chunk
 
 import viz
 from flashsync.errors import FlashsyncError
-from flashsync.io import load_homographies, save_model
+from flashsync.io import events_to_frame, load_homographies, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.timestamps import video_timestamps
 from tracking_adapter.restamp import restamp
@@ -60,7 +60,7 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
                                "x_b": plane_b[:, 0], "y_b": plane_b[:, 1],
                                "x_a": plane_b[:, 0] + 0.1, "y_a": plane_b[:, 1] - 0.2,
                                "error_m": np.hypot(0.1, 0.2)})
-    events = all_events(detections)
+    events = events_to_frame(all_events(detections))
     spurious = events.iloc[[0]].assign(camera="cam1", event=events["event"].max() + 1, frame=10,
                                        row=50.25)          # an event no other camera saw
     events = pd.concat([events, spurious], ignore_index=True)

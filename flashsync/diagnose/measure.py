@@ -16,12 +16,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
-from flashsync.match import align_pair, group_flashes
-from flashsync.model import readout_rows
+from flashsync.events import Band, Bands, Events
+from flashsync.match import align_pair, approximate_times_ms, group_flashes
 from flashsync.timestamps import median_step_ms
 
 #: Fewest flashes two cameras must share for their pairing to count.
@@ -147,47 +146,65 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     alignments = {}
     for i, name_a in enumerate(names):
         for name_b in names[i + 1:]:
-            alignment = align_pair(pulses[name_a]["time_ms"].to_numpy(), pulses[name_b]["time_ms"].to_numpy(),
-                                   tolerance)
+            alignment = align_pair(pulses[name_a].time_ms, pulses[name_b].time_ms, tolerance)
             if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
                     and not alignment.ambiguous):
                 alignments[(name_a, name_b)] = alignment
-    flash_of = group_flashes({name: len(pulses[name]) for name in names}, alignments)
-    kept = [d for d in detections if d.camera in _tied_to(reference, flash_of)]
+    flash_of = group_flashes({name: len(pulses[name].bands) for name in names}, alignments)
+    tied = _tied_to(reference, flash_of)
+    kept = [d for d in detections if d.camera in tied]
     if len(kept) < 2:
         raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
-                             "check that the videos overlap in time and saw the same flashes")
+                                 "check that the videos overlap in time and saw the same flashes")
     warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other "
-                     "cameras; left out" for d in detections if d not in kept)
+                     "cameras; left out" for d in detections if d.camera not in tied)
     cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
                            d.flipped) for d in kept)
-    bands = [pulses[d.camera][pulses[d.camera]["clean"]] for d in kept]
-    edges = _edges(bands, flash_of, cameras)
+    pulses = [pulses[d.camera] for d in kept]
+    edges = _edges(pulses, flash_of, cameras)
     if len(edges) == 0:
         raise NotEnoughDataError("no flash band with both edges inside the image is seen by two cameras; "
                              "record more flashes, away from the top and bottom of the image")
     return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
-                       _edge_noise_ms(cameras, bands), warnings)
+                       _edge_noise_ms(cameras, pulses), warnings)
 
 
-def _pulses(detection: CameraDetection) -> pd.DataFrame:
-    """The camera's pulse events, one row each: ``time_ms``, its approximate time on the
-    camera's own clock (mean of its visible edges' stamp + readout row x frame step /
-    height), ``frame_leading, row_leading, frame_trailing, row_trailing`` (NaN where hidden)
-    and ``clean``: both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image."""
-    events = detection.events[detection.events["band"] == "pulse"]
-    stamps = np.asarray(detection.frame_times_ms, dtype=np.float64)
-    row_ms = median_step_ms(stamps) / detection.height
-    q = readout_rows(events["row"].to_numpy(dtype=np.float64), detection.height, detection.flipped)
-    time_ms = pd.Series(stamps[events["frame"].to_numpy(dtype=np.int64)] + q * row_ms, index=events.index)
-    pulses = events.pivot(index="event", columns="edge", values=["frame", "row"])
-    pulses.columns = [f"{value}_{edge}" for value, edge in pulses.columns]
-    pulses = pulses.reindex(columns=["frame_leading", "row_leading", "frame_trailing", "row_trailing"])
-    inside = events["row"].between(EDGE_MARGIN_ROWS, detection.height - 1 - EDGE_MARGIN_ROWS)
-    counts = inside.groupby(events["event"]).agg(["sum", "size"])
-    pulses["clean"] = (counts["sum"] == 2) & (counts["size"] == 2)
-    pulses["time_ms"] = time_ms.groupby(events["event"]).mean()
-    return pulses.reset_index(drop=True)
+@dataclass(frozen=True)
+class _Pulses:
+    """One camera's pulse events: their edges side by side, where they are and whether they
+    are clean.
+
+    Attributes
+    ----------
+    events : Events
+        The camera's events.
+    bands : Bands
+        Its pulse events, ascending event number.
+    time_ms : float array of shape (n_bands,)
+        Approximate time of each band on the camera's own clock, ms: the mean of its visible
+        edges' :func:`~flashsync.match.approximate_times_ms`.
+    clean : bool array of shape (n_bands,)
+        Both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image.
+    """
+
+    events: Events
+    bands: Bands
+    time_ms: np.ndarray
+    clean: np.ndarray
+
+
+def _pulses(detection: CameraDetection) -> _Pulses:
+    """The camera's pulse events, with their approximate times and whether they are clean."""
+    events = detection.events
+    bands = events.bands()
+    bands = bands.take(events.band[bands.first_edges()] == Band.PULSE)
+    times = approximate_times_ms(detection, events)
+    lead, trail = bands.leading >= 0, bands.trailing >= 0
+    time_ms = np.where(lead & trail, (times[bands.leading] + times[bands.trailing]) / 2,
+                       np.where(lead, times[bands.leading], times[bands.trailing]))
+    inside = (events.row >= EDGE_MARGIN_ROWS) & (events.row <= detection.height - 1 - EDGE_MARGIN_ROWS)
+    clean = lead & trail & inside[bands.leading] & inside[bands.trailing]
+    return _Pulses(events, bands, time_ms, clean)
 
 
 def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
@@ -205,37 +222,40 @@ def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
     return tied
 
 
-def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
-           cameras: tuple[Camera, ...]) -> Edges:
+def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[Camera, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    rows = []
-    for index, (camera, camera_bands) in enumerate(zip(cameras, bands)):
-        for band, values in camera_bands.iterrows():
-            flash = flash_of.get((camera.name, band))
-            if flash is None:
+    camera, flash, frame, row, trailing = [], [], [], [], []
+    for index, (named, mine) in enumerate(zip(cameras, pulses)):
+        for band in np.flatnonzero(mine.clean):
+            if (named.name, band) not in flash_of:
                 continue
-            for trailing, edge in ((False, "leading"), (True, "trailing")):
-                rows.append((index, flash, int(values[f"frame_{edge}"]), float(values[f"row_{edge}"]),
-                             trailing))
-    table = pd.DataFrame(rows, columns=["camera", "flash", "frame", "row", "trailing"])
-    cameras_seeing = table.groupby("flash")["camera"].transform("nunique")
-    table = table[cameras_seeing >= 2]
-    return Edges(table["camera"].to_numpy(), pd.factorize(table["flash"], sort=True)[0],
-                 table["frame"].to_numpy(), table["row"].to_numpy(dtype=np.float64),
-                 table["trailing"].to_numpy(dtype=bool))
+            for is_trailing, edge in ((False, mine.bands.leading[band]), (True, mine.bands.trailing[band])):
+                camera.append(index)
+                flash.append(flash_of[(named.name, band)])
+                frame.append(mine.events.frame[edge])
+                row.append(mine.events.row[edge])
+                trailing.append(is_trailing)
+    camera, flash = np.asarray(camera, dtype=np.int64), np.asarray(flash, dtype=np.int64)
+    seen_by = np.array([len(set(camera[flash == k])) for k in flash])
+    keep = seen_by >= 2
+    return Edges(camera[keep], np.unique(flash[keep], return_inverse=True)[1],
+                 np.asarray(frame, dtype=np.int64)[keep], np.asarray(row, dtype=np.float64)[keep],
+                 np.asarray(trailing, dtype=bool)[keep])
 
 
-def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:
+def _edge_noise_ms(cameras: tuple[Camera, ...], pulses: list[_Pulses]) -> float:
     """Std of one edge's time, ms, from the scatter of band lengths among the bands of one
     camera that span the same number of frames (a length holds two edges' errors). Every
     band counts, one whose edge a codec artefact moved too: the edge residuals this is
     compared with hold that edge as well."""
     deviations = []
-    for camera, camera_bands in zip(cameras, bands):
-        frames = camera_bands["frame_trailing"] - camera_bands["frame_leading"]
-        for _, kind in camera_bands.groupby(frames):
-            if len(kind) >= 3:
-                rows = (kind["row_trailing"] - kind["row_leading"]).to_numpy()
+    for camera, mine in zip(cameras, pulses):
+        bands = mine.bands.take(mine.clean)
+        frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
+        lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
+        for span in np.unique(frames):
+            rows = lengths[frames == span]
+            if len(rows) >= 3:
                 scale = camera.median_step_ms / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
                 deviations.append((rows - np.median(rows)) * scale)
     if not deviations:
