@@ -28,7 +28,8 @@ from flashsync.detect import CameraDetection, DetectorSettings, detect_video
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.match import PairAlignment, align_pair, approximate_times_ms, group_flashes, parse_anchors
+from flashsync.match import (MIN_SHARED_FLASHES, PairAlignment, approximate_times_ms, match_events, match_tolerance_ms,
+                             parse_anchors, shared_flashes)
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
@@ -38,8 +39,6 @@ from flashsync.io.timestamps import load_timestamps
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
 NOMINAL_HIDDEN_ROWS = 1.05
 NOMINAL_ROW_TIME_STD = 0.08
-#: Fewest flashes two cameras must share for their pair alignment to count.
-MIN_SHARED_FLASHES = 3
 
 
 def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
@@ -281,41 +280,24 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
         raise NotEnoughDataError(f"need two or more cameras with at least two flash events each; found "
                                  f"{counts}; check that the videos show flashes (or lights switching)")
-    alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable},
-                              anchors)
-    flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
-    connected = _connected(reference, usable, alignments)
+    anchor_events = parse_anchors(list(anchors), {n: len(sync_events[n]) for n in usable})
+    tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
+    matching = match_events({n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance,
+                            anchor_events)
+    tied = matching.tied_to(reference)
+    connected = [name for name in usable if name in tied]
     warnings += [f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
                  f"with the other cameras; cannot be tied to {reference}; left out"
                  for name in usable if name not in connected]
     if reference not in connected or len(connected) < 2:
         raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
                                  "check that the videos overlap in time and saw the same flashes")
-    matches = _matches([cameras[name] for name in connected], sync_events, flashes)
+    matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
     solution = solve_with_drift_model(matches.observations(), len(connected), connected.index(reference),
                                       durations=durations, priors=Priors(priors))
-    return _Attempt(cameras, connected, alignments, warnings, matches, durations, solution)
-
-
-def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, Events],
-                 anchors: Sequence[str]) -> dict[tuple[str, str], PairAlignment]:
-    """Coarse alignment of every pair of cameras; pairs sharing too few or ambiguous flashes
-    are left out."""
-    anchor_events = parse_anchors(list(anchors), {n: len(e) for n, e in sync_events.items()})
-    approx = {name: approximate_times_ms(cameras[name], sync_events[name]) for name in cameras}
-    tolerance = max(5.0, 0.25 * max(median_step_ms(d.frame_times_ms) for d in cameras.values()))
-    names = list(cameras)
-    alignments = {}
-    for i, name_a in enumerate(names):
-        for name_b in names[i + 1:]:
-            anchor = ((anchor_events[name_a], anchor_events[name_b])
-                      if name_a in anchor_events and name_b in anchor_events else None)
-            alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
-            if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
-                alignments[(name_a, name_b)] = alignment
-    return alignments
+    return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
 
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
@@ -369,19 +351,6 @@ def _durations(detections: list[CameraDetection]) -> Durations:
     return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
 
 
-def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str], PairAlignment]) -> list[str]:
-    """Cameras reachable from the reference through accepted pair alignments, in input order."""
-    reached, frontier = {reference}, [reference]
-    while frontier:
-        current = frontier.pop()
-        for a, b in alignments:
-            for here, there in ((a, b), (b, a)):
-                if here == current and there not in reached:
-                    reached.add(there)
-                    frontier.append(there)
-    return [name for name in names if name in reached]
-
-
 def _matches(cameras: list[CameraDetection], sync_events: dict[str, Events],
              flashes: dict[tuple[str, int], int]) -> Matches:
     """The sync events of ``cameras`` that belong to a flash seen by two or more of them."""
@@ -393,7 +362,7 @@ def _matches(cameras: list[CameraDetection], sync_events: dict[str, Events],
         camera_index += [index] * len(mine)
     events = Events.concat(chosen)
     q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
-    flash, camera_index = np.asarray(flash, dtype=np.int64), np.asarray(camera_index, dtype=np.int64)
-    keep = np.bincount(flash)[flash] >= 2
-    return Matches(np.unique(flash[keep], return_inverse=True)[1], events.camera[keep], camera_index[keep],
-                   events.event[keep], events.frame[keep], events.row[keep], q[keep], events.t_frame_ms[keep])
+    camera_index = np.asarray(camera_index, dtype=np.int64)
+    keep, flash = shared_flashes(camera_index, flash)
+    return Matches(flash, events.camera[keep], camera_index[keep], events.event[keep], events.frame[keep],
+                   events.row[keep], q[keep], events.t_frame_ms[keep])

@@ -2,12 +2,13 @@
 
 A band (one detected pulse event with both edges visible and unsaturated) gives two edges:
 the leading edge is the row whose exposure *ends* at the flash, the trailing edge the row
-whose exposure *starts* there (DESIGN.md, time convention). Bands are paired across cameras
-by their approximate time on each camera's own clock (stamp + row x frame step / height)
-with :func:`flashsync.match.align_pair` and :func:`flashsync.match.group_flashes`, with a
-tolerance of one frame period: loose enough for every effect of the catalogue (an
-upside-down camera misplaces a band by less than a frame, a dropped frame or a clock drift
-does not move a stamp). Nothing here depends on the model under test.
+whose exposure *starts* there (docs/architecture.md, time convention). Bands are paired
+across cameras by their approximate time on each camera's own clock (stamp + row x frame
+step / height) with the pipeline's matcher, :func:`flashsync.match.match_events`, at the
+tolerance of a readout direction that may be wrong (one frame period): loose enough for
+every effect of the catalogue (an upside-down camera misplaces a band by less than a frame,
+a dropped frame or a clock drift does not move a stamp). Nothing here depends on the model
+under test.
 """
 
 from __future__ import annotations
@@ -20,11 +21,10 @@ import numpy as np
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Bands, Events
-from flashsync.match import align_pair, approximate_times_ms, group_flashes
+from flashsync.match import (MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms,
+                             shared_flashes)
 from flashsync.timestamps import median_step_ms
 
-#: Fewest flashes two cameras must share for their pairing to count.
-MIN_SHARED_BANDS = 3
 #: Bands with an edge this close (rows) to the top or bottom of the image are left out: the
 #: detector sees only part of the edge's ramp and plateau there.
 EDGE_MARGIN_ROWS = 6
@@ -131,7 +131,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         An unknown reference.
     NotEnoughDataError
         Fewer than two cameras, no camera sharing at least
-        :data:`MIN_SHARED_BANDS` flashes with the reference, or no clean band shared.
+        :data:`MIN_SHARED_FLASHES` flashes with the reference, or no clean band shared.
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
@@ -142,26 +142,19 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
                          "of them", parameter="reference")
     pulses = {d.camera: _pulses(d) for d in detections}
-    tolerance = max(median_step_ms(d.frame_times_ms) for d in detections)
-    alignments = {}
-    for i, name_a in enumerate(names):
-        for name_b in names[i + 1:]:
-            alignment = align_pair(pulses[name_a].time_ms, pulses[name_b].time_ms, tolerance)
-            if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
-                    and not alignment.ambiguous):
-                alignments[(name_a, name_b)] = alignment
-    flash_of = group_flashes({name: len(pulses[name].bands) for name in names}, alignments)
-    tied = _tied_to(reference, flash_of)
+    tolerance = match_tolerance_ms([median_step_ms(d.frame_times_ms) for d in detections], readout_known=False)
+    matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
+    tied = matching.tied_to(reference)
     kept = [d for d in detections if d.camera in tied]
     if len(kept) < 2:
-        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
+        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
                                  "check that the videos overlap in time and saw the same flashes")
-    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other "
+    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other "
                      "cameras; left out" for d in detections if d.camera not in tied)
     cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
                            d.flipped) for d in kept)
     pulses = [pulses[d.camera] for d in kept]
-    edges = _edges(pulses, flash_of, cameras)
+    edges = _edges(pulses, matching.flashes, cameras)
     if len(edges) == 0:
         raise NotEnoughDataError("no flash band with both edges inside the image is seen by two cameras; "
                              "record more flashes, away from the top and bottom of the image")
@@ -207,21 +200,6 @@ def _pulses(detection: CameraDetection) -> _Pulses:
     return _Pulses(events, bands, time_ms, clean)
 
 
-def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
-    """Cameras linked to the reference through chains of shared flashes."""
-    seen_by: dict[int, set[str]] = {}
-    for (camera, _), flash in flash_of.items():
-        seen_by.setdefault(flash, set()).add(camera)
-    tied, grew = {reference}, True
-    while grew:
-        grew = False
-        for group in seen_by.values():
-            if group & tied and not group <= tied:
-                tied |= group
-                grew = True
-    return tied
-
-
 def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[Camera, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
     camera, flash, frame, row, trailing = [], [], [], [], []
@@ -235,12 +213,9 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
                 frame.append(mine.events.frame[edge])
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
-    camera, flash = np.asarray(camera, dtype=np.int64), np.asarray(flash, dtype=np.int64)
-    seen_by = np.array([len(set(camera[flash == k])) for k in flash])
-    keep = seen_by >= 2
-    return Edges(camera[keep], np.unique(flash[keep], return_inverse=True)[1],
-                 np.asarray(frame, dtype=np.int64)[keep], np.asarray(row, dtype=np.float64)[keep],
-                 np.asarray(trailing, dtype=bool)[keep])
+    keep, flash = shared_flashes(camera, flash)
+    return Edges(np.asarray(camera, dtype=np.int64)[keep], flash, np.asarray(frame, dtype=np.int64)[keep],
+                 np.asarray(row, dtype=np.float64)[keep], np.asarray(trailing, dtype=bool)[keep])
 
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], pulses: list[_Pulses]) -> float:
