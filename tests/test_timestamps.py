@@ -70,3 +70,21 @@ def test_not_a_video_and_missing_file(tmp_path):
         video_timestamps(text)
     with pytest.raises(FlashsyncError, match="no such file"):
         video_timestamps(tmp_path / "missing.mp4")
+
+
+def test_frame_clock_behind_quantised_stamps_with_drops_and_its_parts():
+    """29.97 fps stamped on a 1 ms grid, two frames dropped: the clock finds the period and
+    the drops; each part switched off leaves what it explains."""
+    from flashsync.frame_clock import fit_frame_clock
+
+    period = 1000.0 / 29.97
+    slots = np.delete(np.arange(400), [100, 250])
+    true_ms = 5000.0 + slots * period
+    clock = fit_frame_clock(np.round(true_ms))
+    assert clock.steady and clock.dropped == 2 and clock.quantum_ms == 1.0
+    assert clock.period_ms == pytest.approx(period, abs=1e-4)
+    assert np.max(np.abs(clock.times_ms - true_ms)) < 0.05
+    index_only = fit_frame_clock(np.round(true_ms), count_gaps=False, smoothing=False)
+    assert not index_only.steady and index_only.missing == 0
+    median_step = fit_frame_clock(np.round(true_ms), least_squares=False, smoothing=False)
+    assert median_step.period_ms == median_step.median_step_ms == 33.0 and not median_step.steady

@@ -23,8 +23,8 @@ import numpy as np
 from flashsync.diagnose.effects import (CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLIPPED, FRAME_CLOCK,
                                         Features)
 from flashsync.diagnose.measure import Measurement
+from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.model import readout_rows
-from flashsync.timestamps import median_step_ms
 
 #: Floor of a fitted residual scale, ms (exact stamps would otherwise have zero scale).
 MIN_SCALE_MS = 1e-3
@@ -45,63 +45,6 @@ class Term:
 
 
 @dataclass(frozen=True)
-class ModelClock:
-    """A camera's frame times under a model of the ladder: ``offset + slot * period`` (the
-    pipeline's :class:`flashsync.frame_clock.FrameClock` is the full model; here each part
-    of it is an effect the workflow may or may not have added).
-
-    Attributes
-    ----------
-    offset_ms, period_ms : float
-        Time of slot 0 and frame period, ms.
-    slots : int array of shape (n_frames,)
-        Frame slot of each decoded frame (its index, or counted from the stamp gaps).
-    median_step_ms : float
-        The camera's median stamp step, ms.
-    """
-
-    offset_ms: float
-    period_ms: float
-    slots: np.ndarray
-    median_step_ms: float
-
-    @property
-    def times_ms(self) -> np.ndarray:
-        return self.offset_ms + self.slots * self.period_ms
-
-    @property
-    def missing(self) -> int:
-        """Frame slots without a decoded frame."""
-        return int(self.slots[-1] + 1 - len(self.slots))
-
-
-def model_clock(stamps_ms: np.ndarray, count_gaps: bool, least_squares: bool) -> ModelClock:
-    """The model's frame clock of one camera.
-
-    Parameters
-    ----------
-    stamps_ms : array of shape (n_frames,)
-        Container stamps, ms, increasing.
-    count_gaps : bool
-        Slots from the stamp gaps (a gap of two median steps skips a slot) instead of the
-        frame index.
-    least_squares : bool
-        Offset and period fitted to all stamps; else the median step and the median offset.
-    """
-    step = median_step_ms(stamps_ms)
-    if count_gaps:
-        gaps = np.maximum(np.round(np.diff(stamps_ms) / step), 1).astype(np.int64)
-        slots = np.concatenate([[0], np.cumsum(gaps)])
-    else:
-        slots = np.arange(len(stamps_ms))
-    if least_squares:
-        period, offset = np.polyfit(slots, stamps_ms, 1)
-    else:
-        period, offset = step, float(np.median(stamps_ms - slots * step))
-    return ModelClock(float(offset), float(period), slots, step)
-
-
-@dataclass(frozen=True)
 class Fit:
     """A model fitted to the measurement.
 
@@ -110,8 +53,8 @@ class Fit:
     measurement : Measurement
     terms : frozenset of Term
         The effects switched on.
-    clocks : list of ModelClock
-        Per camera.
+    clocks : list of FrameClock
+        Per camera, its frame clock under the model (never smoothed).
     flipped : list of bool
         Per camera: reads bottom-up under the model.
     features : Features
@@ -131,7 +74,7 @@ class Fit:
 
     measurement: Measurement
     terms: frozenset[Term]
-    clocks: list[ModelClock]
+    clocks: list[FrameClock]
     flipped: list[bool]
     features: Features
     coefficients: dict[tuple[str, int], float]
@@ -173,15 +116,16 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
-    clocks = [model_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
+    clocks = [fit_frame_clock(camera.stamps_ms, count_gaps=Term(DROPPED_FRAMES, c) in terms,
+                              least_squares=Term(FRAME_CLOCK, c) in terms, smoothing=False)
               for c, camera in enumerate(cameras)]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, clock) in enumerate(zip(cameras, clocks)):
         mine = edges.camera == c
-        frame_ms[mine] = clock.times_ms[edges.frame[mine]]
+        frame_ms[mine] = clock.ladder_ms[edges.frame[mine]]
         q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
         observed[mine] = frame_ms[mine] + q[mine] * clock.period_ms / camera.height
-        frame_ms[mine] -= 0.5 * (clock.times_ms[0] + clock.times_ms[-1])
+        frame_ms[mine] -= 0.5 * (clock.ladder_ms[0] + clock.ladder_ms[-1])
     features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
@@ -189,7 +133,7 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     if solved is None:
         return None
     parameters, residual, scale = solved
-    stamp_residuals = [camera.stamps_ms - clock.times_ms for camera, clock in zip(cameras, clocks)]
+    stamp_residuals = [clock.residual_ms for clock in clocks]
     log_likelihood = -cauchy_nll(residual, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
     n_parameters = design.shape[1] + 1 + 3 * len(cameras)      # + scales and frame clocks
     n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
