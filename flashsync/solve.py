@@ -30,10 +30,7 @@ from threadpoolctl import threadpool_limits
 
 from flashsync.errors import NotEnoughDataError
 from flashsync.model import hat_basis
-from flashsync.robust import mad_sigma
-
-#: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
-MIN_SIGMA_MS = 1e-3
+from flashsync.robust import MIN_SCALE_MS, cauchy_irls, mad_sigma
 
 
 @dataclass(frozen=True)
@@ -134,17 +131,15 @@ def solve_clocks(events: Observations, n_cameras: int, reference: int = 0,
 
 def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float,
            iterations: int) -> Solution:
-    """The robust iterations of :func:`solve_clocks` on a built system."""
-    weights = np.ones(system.n_equations)
-    for _ in range(iterations):
-        x = system.solve(weights)
-        residual = system.residuals(x)
-        sigma = mad_sigma(residual, MIN_SIGMA_MS)
-        weights = 1.0 / (1.0 + (residual / (cauchy_k * sigma)) ** 2)
+    """The robust iterations of :func:`solve_clocks` on a built system: Cauchy weights at
+    ``cauchy_k`` robust sigmas, ``iterations`` solves in all."""
+    _, residual, _ = cauchy_irls(system.solve, system.residuals, system.n_equations,
+                                 lambda residual, _: cauchy_k * mad_sigma(residual, MIN_SCALE_MS), iterations - 1)
+    sigma = mad_sigma(residual, MIN_SCALE_MS)
     inlier = np.abs(residual) <= reject_sigma * sigma
     x = system.solve(inlier.astype(np.float64))
     residual = system.residuals(x)
-    sigma = mad_sigma(residual[inlier], MIN_SIGMA_MS)
+    sigma = mad_sigma(residual[inlier], MIN_SCALE_MS)
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
     covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)

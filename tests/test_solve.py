@@ -128,3 +128,17 @@ def test_steady_clock_stays_affine():
     from flashsync.solve import solve_with_drift_model
     events, _ = drifting_observations(np.random.default_rng(9), 0.0)
     assert solve_with_drift_model(events, n_cameras=2).cameras[1].warp_ms.size == 0
+
+
+def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_columns():
+    from flashsync.robust import cauchy_fit
+
+    rng = np.random.default_rng(4)
+    x = np.linspace(-1.0, 1.0, 40)
+    design = np.column_stack([np.ones_like(x), x])
+    observed = 2.0 + 0.5 * x + rng.normal(0.0, 0.01, len(x))
+    observed[7] += 5.0
+    parameters, residual, scale = cauchy_fit(design, observed)
+    np.testing.assert_allclose(parameters, [2.0, 0.5], atol=0.01)
+    assert residual[7] > 4.9 and scale < 0.02
+    assert cauchy_fit(np.column_stack([x, 2 * x]), observed) is None

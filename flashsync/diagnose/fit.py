@@ -3,11 +3,12 @@
 The model is linear in its parameters once its frame clocks and readout rows are fixed:
 each edge gives one equation (see :mod:`flashsync.diagnose.effects`), unknowns are the
 flashes' global times, the cameras' shifts, the shared exposure and the effects' columns.
-It is solved by iteratively reweighted least squares under a Cauchy (Student-t, one degree
-of freedom) likelihood with a fitted scale, no smaller than the edge noise the band lengths
-show, so one bad edge neither moves the fit nor names an effect, while a step or a trend
-shared by many edges weighs in full. Each camera's stamps are a second stream: their
-residuals about the model's frame clock get a Cauchy likelihood of their own.
+It is solved by the pipeline's robust fit (:func:`flashsync.robust.cauchy_fit`: Cauchy IRLS
+with a fitted scale, here no smaller than the edge noise the band lengths show), so one bad
+edge neither moves the fit nor names an effect, while a step or a trend shared by many edges
+weighs in full. Each camera's stamps are a second stream: their residuals about the model's
+frame clock (:class:`flashsync.frame_clock.FrameClock` with the parts the model's effects
+switch on) get a Cauchy likelihood of their own.
 
 A model's score is its Bayesian information criterion over both streams::
 
@@ -25,15 +26,7 @@ from flashsync.diagnose.effects import (CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLI
 from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.model import readout_rows
-
-#: Floor of a fitted residual scale, ms (exact stamps would otherwise have zero scale).
-MIN_SCALE_MS = 1e-3
-#: Most reweighting rounds of the robust fit and of a scale estimate; they stop earlier once
-#: the scale changes by less than CONVERGED (relative).
-ITERATIONS = 100
-CONVERGED = 1e-5
-#: Columns whose smallest singular value (unit-norm columns) is below this are undetermined.
-MIN_SINGULAR = 1e-9
+from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
 
 
 @dataclass(frozen=True, order=True)
@@ -129,7 +122,7 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
-    solved = robust_fit(design, observed, noise if np.isfinite(noise) else MIN_SCALE_MS)
+    solved = cauchy_fit(design, observed, noise if np.isfinite(noise) else MIN_SCALE_MS)
     if solved is None:
         return None
     parameters, residual, scale = solved
@@ -161,63 +154,3 @@ def _design(measurement: Measurement, terms: frozenset[Term],
     flash = measurement.edges.flash
     columns += list((flash[None, :] == np.arange(measurement.n_flashes)[:, None]).astype(np.float64))
     return keys, np.column_stack(columns)
-
-
-def robust_fit(design: np.ndarray, observed: np.ndarray,
-               min_scale_ms: float = MIN_SCALE_MS) -> tuple[np.ndarray, np.ndarray, float] | None:
-    """Cauchy IRLS fit of ``observed ≈ design @ parameters``, the scale refined along.
-
-    Parameters
-    ----------
-    design : array of shape (n, p)
-    observed : array of shape (n,), ms
-    min_scale_ms : float
-        Floor of the scale, ms: with few observations per parameter (four edges per flash)
-        a free Cauchy scale collapses onto the few residuals the fit makes vanish.
-
-    Returns
-    -------
-    (parameters (p,), residuals (n,) in ms, Cauchy scale in ms), or None when the columns
-    are not independent.
-    """
-    norms = np.linalg.norm(design, axis=0)
-    if np.any(norms == 0):
-        return None
-    scaled = design / norms
-    singular = np.linalg.svd(scaled, compute_uv=False)
-    if singular[-1] < MIN_SINGULAR * singular[0]:
-        return None
-    solution = np.linalg.lstsq(scaled, observed, rcond=None)[0]
-    residual = observed - scaled @ solution
-    scale = max(float(np.median(np.abs(residual))), min_scale_ms)
-    for _ in range(ITERATIONS):
-        root = np.sqrt(1.0 / (1.0 + (residual / scale) ** 2))
-        solution = np.linalg.lstsq(scaled * root[:, None], observed * root, rcond=None)[0]
-        residual = observed - scaled @ solution
-        scale, previous = max(_scale_step(residual, scale), min_scale_ms), scale
-        if abs(scale - previous) <= CONVERGED * previous:
-            break
-    return solution / norms, residual, scale
-
-
-def cauchy_scale(residual: np.ndarray) -> float:
-    """Maximum-likelihood scale (ms) of a Cauchy distribution centred on zero, at least
-    :data:`MIN_SCALE_MS`: the fixed point of :func:`_scale_step`, started from the median
-    absolute residual."""
-    scale = max(float(np.median(np.abs(residual))), MIN_SCALE_MS)
-    for _ in range(ITERATIONS):
-        scale, previous = _scale_step(residual, scale), scale
-        if abs(scale - previous) <= CONVERGED * previous:
-            break
-    return scale
-
-
-def _scale_step(residual: np.ndarray, scale: float) -> float:
-    """``sqrt(2 * mean(w * r**2))`` with Cauchy weights ``w = 1 / (1 + (r / scale)**2)``."""
-    weights = 1.0 / (1.0 + (residual / scale) ** 2)
-    return max(float(np.sqrt(2.0 * np.mean(weights * residual**2))), MIN_SCALE_MS)
-
-
-def cauchy_nll(residual: np.ndarray, scale: float) -> float:
-    """Negative log-likelihood of residuals under a Cauchy distribution of scale ``scale``."""
-    return float(np.sum(np.log1p((residual / scale) ** 2)) + len(residual) * np.log(np.pi * scale))
