@@ -31,33 +31,6 @@ EDGE_MARGIN_ROWS = 6
 
 
 @dataclass(frozen=True)
-class Camera:
-    """One camera as measured.
-
-    Attributes
-    ----------
-    name : str
-        Camera name (video file stem).
-    stamps_ms : ndarray of shape (n_frames,)
-        Container stamps of the decoded frames, ms.
-    height : int
-        Stored image height, rows.
-    flipped : bool
-        Readout direction the detection was told (True: bottom-up).
-    """
-
-    name: str
-    stamps_ms: np.ndarray
-    height: int
-    flipped: bool
-
-    @property
-    def median_step_ms(self) -> float:
-        """The most common frame interval, ms: the nominal frame period."""
-        return median_step_ms(self.stamps_ms)
-
-
-@dataclass(frozen=True)
 class Edges:
     """Matched band edges, arrays of shape (n_edges,).
 
@@ -91,8 +64,9 @@ class Measurement:
 
     Attributes
     ----------
-    cameras : tuple of Camera
-        Cameras tied to the reference by shared flashes, in input order.
+    cameras : tuple of CameraDetection
+        Cameras tied to the reference by shared flashes, in input order, in the readout
+        direction each detection was told.
     reference : int
         Index of the reference camera (its clock is the global clock).
     edges : Edges
@@ -106,7 +80,7 @@ class Measurement:
         Cameras left out and why.
     """
 
-    cameras: tuple[Camera, ...]
+    cameras: tuple[CameraDetection, ...]
     reference: int
     edges: Edges
     noise_ms: float
@@ -151,14 +125,13 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
                                  "check that the videos overlap in time and saw the same flashes")
     warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other "
                      "cameras; left out" for d in detections if d.camera not in tied)
-    cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
-                           d.flipped) for d in kept)
+    cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
     edges = _edges(pulses, matching.flashes, cameras)
     if len(edges) == 0:
         raise NotEnoughDataError("no flash band with both edges inside the image is seen by two cameras; "
                              "record more flashes, away from the top and bottom of the image")
-    return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
+    return Measurement(cameras, [c.camera for c in cameras].index(reference), edges,
                        _edge_noise_ms(cameras, pulses), warnings)
 
 
@@ -200,16 +173,17 @@ def _pulses(detection: CameraDetection) -> _Pulses:
     return _Pulses(events, bands, time_ms, clean)
 
 
-def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[Camera, ...]) -> Edges:
+def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int],
+           cameras: tuple[CameraDetection, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
     camera, flash, frame, row, trailing = [], [], [], [], []
     for index, (named, mine) in enumerate(zip(cameras, pulses)):
         for band in np.flatnonzero(mine.clean):
-            if (named.name, band) not in flash_of:
+            if (named.camera, band) not in flash_of:
                 continue
             for is_trailing, edge in ((False, mine.bands.leading[band]), (True, mine.bands.trailing[band])):
                 camera.append(index)
-                flash.append(flash_of[(named.name, band)])
+                flash.append(flash_of[(named.camera, band)])
                 frame.append(mine.events.frame[edge])
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
@@ -218,7 +192,7 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
                  np.asarray(row, dtype=np.float64)[keep], np.asarray(trailing, dtype=bool)[keep])
 
 
-def _edge_noise_ms(cameras: tuple[Camera, ...], pulses: list[_Pulses]) -> float:
+def _edge_noise_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> float:
     """Std of one edge's time, ms, from the scatter of band lengths among the bands of one
     camera that span the same number of frames (a length holds two edges' errors). Every
     band counts, one whose edge a codec artefact moved too: the edge residuals this is
@@ -231,7 +205,7 @@ def _edge_noise_ms(cameras: tuple[Camera, ...], pulses: list[_Pulses]) -> float:
         for span in np.unique(frames):
             rows = lengths[frames == span]
             if len(rows) >= 3:
-                scale = camera.median_step_ms / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
+                scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
                 deviations.append((rows - np.median(rows)) * scale)
     if not deviations:
         return float("nan")

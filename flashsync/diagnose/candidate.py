@@ -1,4 +1,4 @@
-"""Fit a model (a set of effects) to the measurement and score it.
+"""A candidate model (a set of effects) fitted to the measurement, and its score.
 
 The model is linear in its parameters once its frame clocks and readout rows are fixed:
 each edge gives one equation (see :mod:`flashsync.diagnose.effects`), unknowns are the
@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.diagnose.effects import (CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLIPPED, FRAME_CLOCK,
-                                        Features)
+from flashsync.diagnose.effects import (CATALOGUE, DRIFT, DRIFT_RATE, DROPPED_FRAMES, EXPOSURE, FLIPPED,
+                                        FRAME_CLOCK, ROW_TIME, CameraEstimate, Features)
 from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.model import readout_rows
@@ -38,7 +38,7 @@ class Term:
 
 
 @dataclass(frozen=True)
-class Fit:
+class Candidate:
     """A model fitted to the measurement.
 
     Attributes
@@ -57,8 +57,6 @@ class Fit:
         shared one) and every effect column (see :mod:`flashsync.diagnose.effects`).
     residual_ms : ndarray of shape (n_edges,)
         Measured minus predicted edge times, ms.
-    stamp_residual_ms : list of ndarray
-        Per camera, stamps minus the model's frame clock, ms.
     scale_ms : float
         Cauchy scale of the edge residuals, ms.
     bic : float
@@ -72,7 +70,6 @@ class Fit:
     features: Features
     coefficients: dict[tuple[str, int], float]
     residual_ms: np.ndarray
-    stamp_residual_ms: list[np.ndarray]
     scale_ms: float
     bic: float
 
@@ -88,7 +85,7 @@ class Fit:
     @property
     def stamp_rms_ms(self) -> list[float]:
         """Per camera, RMS of the stamps about the model's frame clock, ms."""
-        return [float(np.sqrt(np.mean(r**2))) for r in self.stamp_residual_ms]
+        return [float(np.sqrt(np.mean(clock.residual_ms**2))) for clock in self.clocks]
 
     def coefficient(self, name: str, camera: int) -> float:
         """A parameter of the model; 0 where its effect is off."""
@@ -102,14 +99,27 @@ class Fit:
         """The camera's exposure (shared one plus its own offset), ms."""
         return self.coefficient(EXPOSURE, -1) + self.coefficient(EXPOSURE, camera)
 
+    def estimates(self) -> list[CameraEstimate]:
+        """Every camera under this model, in plain numbers."""
+        stamp_rms = self.stamp_rms_ms
+        return [CameraEstimate(
+            camera=camera.camera, reference=c == self.reference, flipped=self.flipped[c],
+            frame_period_ms=clock.period_ms, median_step_ms=clock.median_step_ms, missing_frames=clock.missing,
+            stamp_rms_ms=stamp_rms[c], drift_ppm=1e6 * self.coefficient(DRIFT, c),
+            drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c), shift_ms=self.coefficient("shift", c),
+            row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+            nominal_row_time_ms=self.nominal_row_time_ms(c), exposure_ms=self.exposure_ms(c),
+            effects=sorted(t.effect for t in self.terms if t.camera == c))
+            for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))]
 
-def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
+
+def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate | None:
     """Fit the model with the effects ``terms`` switched on; None when the measurement
     cannot determine its parameters."""
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
-    clocks = [fit_frame_clock(camera.stamps_ms, count_gaps=Term(DROPPED_FRAMES, c) in terms,
+    clocks = [fit_frame_clock(camera.frame_times_ms, count_gaps=Term(DROPPED_FRAMES, c) in terms,
                               least_squares=Term(FRAME_CLOCK, c) in terms, smoothing=False)
               for c, camera in enumerate(cameras)]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
@@ -131,8 +141,8 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     n_parameters = design.shape[1] + 1 + 3 * len(cameras)      # + scales and frame clocks
     n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
-    return Fit(measurement, terms, clocks, flipped, features, dict(zip(keys, parameters[:len(keys)].tolist())),
-               residual, stamp_residuals, scale, float(bic))
+    return Candidate(measurement, terms, clocks, flipped, features, dict(zip(keys, parameters[:len(keys)].tolist())),
+                     residual, scale, float(bic))
 
 
 def _design(measurement: Measurement, terms: frozenset[Term],
