@@ -84,7 +84,8 @@ def _parser() -> argparse.ArgumentParser:
     sync.add_argument("--row-time", action="append", default=[], metavar="CAMERA=MS",
                       help="known time per row of a camera in ms (datasheet); repeatable")
     sync.add_argument("--anchor", action="append", default=[], metavar="CAMERA:EVENT",
-                      help="events (0-based per camera) that are one flash; optional, repeatable")
+                      help="events that are one flash, by their event number in the events table "
+                      "(--events); optional, repeatable")
     sync.add_argument("--events", type=Path, help="also write the detected events table here")
     sync.add_argument("--pairwise", action="store_true",
                       help="also solve every pair of cameras on its own and print that table")

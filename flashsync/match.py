@@ -280,15 +280,30 @@ def shared_flashes(camera: np.ndarray, flash: np.ndarray) -> tuple[np.ndarray, n
     return keep, np.unique(flash[keep], return_inverse=True)[1]
 
 
-def parse_anchors(anchors: list[str], n_events: dict[str, int]) -> dict[str, int]:
-    """``['cam1:0', 'cam2:3']`` -> ``{'cam1': 0, 'cam2': 3}``: these events are one flash."""
+def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> dict[str, int]:
+    """``['cam1:0', 'cam2:3']``: these events are one flash.
+
+    Parameters
+    ----------
+    anchors : list of str
+        ``CAMERA:EVENT``, EVENT the detector's event number (the events table's ``event``).
+    event_numbers : dict of str to int array
+        Per camera, the event number of each of its sync events (leading edges).
+
+    Returns
+    -------
+    dict of str to int
+        Per anchored camera, the index of that event among its sync events.
+    """
     result = {}
     for text in anchors:
-        camera, _, index = text.rpartition(":")
-        if camera not in n_events or not index.isdigit():
-            raise InputError(f"{text}: expected CAMERA:EVENT_INDEX with a camera of {', '.join(n_events)} "
-                             "and a 0-based event index", parameter="anchors")
-        if int(index) >= n_events[camera]:
-            raise InputError(f"{text}: {camera} has only {n_events[camera]} sync events", parameter="anchors")
-        result[camera] = int(index)
+        camera, _, number = text.rpartition(":")
+        if camera not in event_numbers or not number.isdigit():
+            raise InputError(f"{text}: expected CAMERA:EVENT with a camera of {', '.join(event_numbers)} and an "
+                             "event number (the events table's event column)", parameter="anchors")
+        where = np.flatnonzero(np.asarray(event_numbers[camera]) == int(number))
+        if not where.size:
+            raise InputError(f"{text}: {camera} has no event {number} with a visible leading edge; anchor one "
+                             "of its events " + ", ".join(map(str, event_numbers[camera])), parameter="anchors")
+        result[camera] = int(where[0])
     return result

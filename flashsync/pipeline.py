@@ -126,7 +126,8 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
         up has its readout direction chosen here.
     reference : camera whose clock is the global clock; default the first.
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
-    anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional).
+    anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
+        the detector's event number, as in the events table and the model's events.
     """
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
@@ -157,7 +158,7 @@ def _best_readout(cameras: dict[str, CameraDetection], undecided: list[str],
                 trial[flip] = trial[flip].read_flipped(not trial[flip].flipped)
             try:
                 result = attempt(trial)
-            except NotEnoughDataError as error:
+            except FlashsyncError as error:
                 failure = failure or error
                 continue
             if best is None or result.score > best.score:
@@ -280,7 +281,7 @@ def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dic
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
         raise NotEnoughDataError(f"need two or more cameras with at least two flash events each; found "
                                  f"{counts}; check that the videos show flashes (or lights switching)")
-    anchor_events = parse_anchors(list(anchors), {n: len(sync_events[n]) for n in usable})
+    anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
     matching = match_events({n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance,
                             anchor_events)

@@ -118,3 +118,15 @@ def test_only_flashes_two_cameras_saw_are_kept_and_renumbered():
     keep, numbers = shared_flashes(camera=[0, 1, 0, 0, 2, 2], flash=[4, 4, 7, 9, 9, 9])
     assert list(keep) == [True, True, False, True, True, True]
     assert list(numbers) == [0, 0, 1, 1, 1]
+
+
+def test_anchors_name_the_detectors_event_numbers():
+    """cam1's event 2 has no leading edge (hidden): its sync events are events 0, 1, 3, 4."""
+    from flashsync.errors import InputError
+    from flashsync.match import parse_anchors
+
+    numbers = {"cam1": np.array([0, 1, 3, 4]), "cam2": np.array([0, 1, 2])}
+    assert parse_anchors(["cam1:3", "cam2:1"], numbers) == {"cam1": 2, "cam2": 1}
+    with pytest.raises(InputError, match="cam1:2: cam1 has no event 2") as error:
+        parse_anchors(["cam1:2"], numbers)
+    assert error.value.parameter == "anchors"
