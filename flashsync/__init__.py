@@ -3,18 +3,25 @@
 The library API (the ``flashsync`` command is a thin layer over it)::
 
     from flashsync import detect_videos, synchronize, save_model, load_model
-    detections = detect_videos(["cam1.mp4", "cam2.mkv"])
+    detections = detect_videos(["cam1.mp4", "cam2.mkv"])     # finds upside-down cameras too
     model, report = synchronize(detections)
     save_model(model, "sync.json")
     load_model("sync.json").camera("cam2").t_global_ms(frame=10, row=200.5)
+
+Every file format has its ``load_*`` / ``save_*`` in :mod:`flashsync.io`; the discrepancy
+workflow is :mod:`flashsync.diagnose`; docs/architecture.md maps the modules.
 """
 
-from flashsync.detect import DetectorSettings, EventDetector, detect_video
+from flashsync.detect import CameraDetection, DetectorSettings, EventDetector, detect_video
 from flashsync.errors import FlashsyncError, InputError, ModelFileError, NotEnoughDataError
-from flashsync.model import CameraClock, SyncModel
+from flashsync.events import Band, Bands, Edge, Events, Flag
+from flashsync.frame_clock import FrameClock
 from flashsync.io.model_file import load_model, save_model
-from flashsync.pipeline import all_events, detect_videos, synchronize
+from flashsync.match import PairAlignment
+from flashsync.model import CameraClock, SyncModel
+from flashsync.pipeline import SyncReport, all_events, detect_videos, solve_pairs, synchronize
 
-__all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "InputError", "ModelFileError",
-           "NotEnoughDataError", "SyncModel", "all_events", "detect_video", "detect_videos", "load_model",
-           "save_model", "synchronize"]
+__all__ = ["Band", "Bands", "CameraClock", "CameraDetection", "DetectorSettings", "Edge", "EventDetector", "Events",
+           "Flag", "FlashsyncError", "FrameClock", "InputError", "ModelFileError", "NotEnoughDataError",
+           "PairAlignment", "SyncModel", "SyncReport", "all_events", "detect_video", "detect_videos", "load_model",
+           "save_model", "solve_pairs", "synchronize"]

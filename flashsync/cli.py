@@ -199,7 +199,7 @@ def _run_detect(args) -> None:
     from flashsync.io import save_events
     from flashsync.pipeline import all_events, detect_videos
 
-    detections = detect_videos(args.videos, args.flipped, progress=_progress,
+    detections = detect_videos(args.videos, args.flipped, estimate_readout=False, progress=_progress,
                                timestamps=_timestamp_files(args.timestamps))
     save_events(all_events(detections), args.output)
     print(f"{sum(len(d.events) for d in detections)} edges of "
@@ -216,7 +216,7 @@ def _run_sync(args) -> None:
     from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
                                   sync_table)
 
-    detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
+    detections = detect_videos(args.videos, args.flipped, progress=_progress,
                                timestamps=_timestamp_files(args.timestamps))
     if args.events:
         save_events(all_events(detections), args.events)
@@ -338,8 +338,8 @@ def _run_diagnose(args) -> None:
     from flashsync.diagnose import diagnose, format_diagnosis
     from flashsync.pipeline import detect_videos
 
-    diagnosis = diagnose(detect_videos(args.videos, args.flipped, progress=_progress,
-                           timestamps=_timestamp_files(args.timestamps)), args.reference)
+    diagnosis = diagnose(detect_videos(args.videos, args.flipped, estimate_readout=False, progress=_progress,
+                                       timestamps=_timestamp_files(args.timestamps)), args.reference)
     print(format_diagnosis(diagnosis))
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))

@@ -37,7 +37,7 @@ def run_demo(samples: Path | None, output: Path,
         raise InputError(f"{samples}: no sample videos with truth.json; run the demo from the repository, "
                          "or on a folder that 'flashsync simulate sample' rendered", parameter="samples")
     started = time.perf_counter()
-    detections = detect_videos(videos, estimate_readout=True, progress=progress)
+    detections = detect_videos(videos, progress=progress)
     save_events(all_events(detections), output / "events.csv")
     model, report = synchronize(detections)
     save_model(model, output / "sync.json")

@@ -42,7 +42,7 @@ NOMINAL_ROW_TIME_STD = 0.08
 
 
 def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
-                  estimate_readout: bool = False, settings: DetectorSettings | None = None,
+                  estimate_readout: bool = True, settings: DetectorSettings | None = None,
                   progress: Callable[[str, int], Callable[[int], None]] | None = None,
                   timestamps: dict[str, Path] | None = None) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
@@ -51,8 +51,9 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     ----------
     paths : video files.
     flipped : cameras known to be mounted upside down.
-    estimate_readout : detect the other cameras' events both ways, so that
-        :func:`synchronize` can find an upside-down camera.
+    estimate_readout : read the other cameras both ways up, so that :func:`synchronize` can
+        find an upside-down camera (as ``flashsync sync`` does); False reads them top-down
+        only (``flashsync detect``, which writes one reading).
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
         per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
