@@ -25,13 +25,22 @@ def default_samples() -> Path:
     return shipped if shipped.is_dir() else Path("samples")
 
 
+def _below_working_directory(path: Path) -> Path:
+    """``path`` relative to the working directory where it lies below it (so that the report
+    names it as the user would), else as it is."""
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve())
+    except ValueError:
+        return path
+
+
 def run_demo(samples: Path | None, output: Path,
              progress: Callable[[str, int], Callable[[int], None]] | None = None,
              recording: Path | None = None) -> str:
     """Run the chain on ``samples`` (videos, ``truth.json``, ``detections.csv``), write
     ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output`` (and a Rerun
     recording to ``recording`` if given); return the report."""
-    samples = samples or default_samples()
+    samples = _below_working_directory(samples or default_samples())
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
         raise InputError(f"{samples}: no sample videos with truth.json; run the demo from the repository, "

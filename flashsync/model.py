@@ -6,7 +6,7 @@ reads bottom-up)::
 
     t_global_ms(f, row) = alpha * t_f + beta_ms + q * row_time_ms
 
-``t_global_ms`` is the end-of-exposure instant of that row (DESIGN.md, time convention).
+``t_global_ms`` is the end-of-exposure instant of that row (docs/architecture.md, time convention).
 This module knows no file format; :mod:`flashsync.io.model_file` reads and writes it.
 """
 

@@ -6,7 +6,7 @@ of them, so cameras need not share flashes with the reference directly)::
 
     alpha_c * t + beta_c + q * T_row_c - tau_k = 0          (reference: alpha = 1, beta = 0)
 
-Information inside one camera enters too (DESIGN.md, "a trap"): a band lasts the same
+Information inside one camera enters too (docs/architecture.md, "a trap"): a band lasts the same
 time ``D_c`` in every frame of a camera, so a band split across two frames, whose rows
 skip the hidden rows, ties ``T_row_c`` to the frame period::
 

@@ -3,8 +3,8 @@
 Every input row and column is kept, in order and unchanged, and new columns follow:
 
 ``t_global_ms``
-    End-of-exposure instant of the detection's row, reference clock, ms (DESIGN.md, time
-    convention); empty where the row cannot be stamped.
+    End-of-exposure instant of the detection's row, reference clock, ms
+    (docs/architecture.md, time convention); empty where the row cannot be stamped.
 ``t_global_std_ms``
     Its standard deviation from the solve's covariance, ms (only with ``with_std=True``).
 ``t_center_ms``
