@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from flashsync.detect import detect_video
+from flashsync.events import Edge, Flag
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 FPS, R0, R1, FLASHES = 25.0, 20, 60, 8
@@ -35,12 +36,12 @@ def edge_errors(width: int, height: int, crf: int, seed: int, folder: Path) -> t
                         n_frames=6 * FLASHES + 7, noise_std=1.0, crf=crf)
     truth = render_scenario(Scenario("edges", (camera,), flashes=flashes, n_players=4, seed=seed), folder)
     events = detect_video(folder / "cam.mp4").events
-    leading = events[events["edge"] == "leading"]
+    leading = events.take(events.edge == Edge.LEADING)
     if len(leading) != FLASHES:
         raise RuntimeError(f"seed {seed}: {len(leading)} leading edges for {FLASHES} flashes")
-    found = truth.global_time_ms("cam", leading["frame"].to_numpy(), leading["row"].to_numpy())
+    found = truth.global_time_ms("cam", leading.frame, leading.row)
     true = np.array([flash["half_rise_global_ms"] for flash in truth.flashes])
-    return (found - true) / row_ms, leading["flags"].str.contains("saturated").to_numpy()
+    return (found - true) / row_ms, leading.has_flag(Flag.SATURATED)
 
 
 def main() -> None:
@@ -65,7 +66,8 @@ def main() -> None:
             print(f"{size:<9} {crf:>3} {clean.size:>5} {np.sqrt(np.mean(clean**2)):>6.3f} "
                   f"{error[~flag].mean():>+7.3f} {np.median(clean):>7.3f} {np.percentile(clean, 95):>6.3f} "
                   f"{clean.max():>6.2f}"
-                  + (f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag]**2)):.3f}" if flag.any() else ""))
+                  + (f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag]**2)):.3f}"
+                     if flag.any() else ""))
 
 
 if __name__ == "__main__":

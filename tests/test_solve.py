@@ -94,7 +94,8 @@ def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.
     for index, (fps, row_time, k) in enumerate([(25.0, 0.037, 0.0), (30.0, 0.031, rate_change_ppm_per_hour)]):
         frames = np.arange(-1_000.0, span + 1_000.0, 1000.0 / fps)
         # drift 10 ppm, plus k ppm per hour of change: d(rate)/dt = k * 1e-6 / 3.6e6 per ms
-        starts = frames + (10e-6 if index else 0.0) * frames + 0.5 * k * 1e-6 / 3.6e6 * frames**2 + (-500.0 if index else 0.0)
+        starts = (frames + (10e-6 if index else 0.0) * frames + 0.5 * k * 1e-6 / 3.6e6 * frames**2
+                  + (-500.0 if index else 0.0))
         frame = np.searchsorted(starts, tau, side="right") - 1
         rows = (tau - starts[frame]) / row_time
         seen = rows <= 999
