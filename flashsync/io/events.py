@@ -48,8 +48,8 @@ def events_from_frame(table: pd.DataFrame, source: str = "events") -> Events:
             table["quality"].to_numpy(),
             [frozenset(Flag(flag) for flag in str(text).split(FLAG_SEPARATOR) if flag) for text in flags])
     except (TypeError, ValueError) as error:
-        raise InputError(f"{source}: not an events table ({first_line(error)}); 'flashsync detect' "
-                         "writes one") from None
+        raise InputError(f"{source}: not an events table ({first_line(error)}); give a table the "
+                         "detector wrote") from None
 
 
 def save_events(events: Events, path: str | Path) -> None:
