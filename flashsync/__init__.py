@@ -21,7 +21,29 @@ from flashsync.match import PairAlignment
 from flashsync.model import CameraClock, SyncModel
 from flashsync.pipeline import SyncReport, all_events, detect_videos, solve_pairs, synchronize
 
-__all__ = ["Band", "Bands", "CameraClock", "CameraDetection", "DetectorSettings", "Edge", "EventDetector", "Events",
-           "Flag", "FlashsyncError", "FrameClock", "InputError", "ModelFileError", "NotEnoughDataError",
-           "PairAlignment", "SyncModel", "SyncReport", "all_events", "detect_video", "detect_videos", "load_model",
-           "save_model", "solve_pairs", "synchronize"]
+__all__ = [
+    "Band",
+    "Bands",
+    "CameraClock",
+    "CameraDetection",
+    "DetectorSettings",
+    "Edge",
+    "EventDetector",
+    "Events",
+    "Flag",
+    "FlashsyncError",
+    "FrameClock",
+    "InputError",
+    "ModelFileError",
+    "NotEnoughDataError",
+    "PairAlignment",
+    "SyncModel",
+    "SyncReport",
+    "all_events",
+    "detect_video",
+    "detect_videos",
+    "load_model",
+    "save_model",
+    "solve_pairs",
+    "synchronize",
+]

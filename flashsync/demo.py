@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
+from flashsync.io import events_to_frame, load_detections, load_ground_truth, load_homographies, save_events, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
-from flashsync.io import (events_to_frame, load_detections, load_ground_truth, load_homographies, save_events,
-                          save_model)
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -34,17 +33,23 @@ def _below_working_directory(path: Path) -> Path:
         return path
 
 
-def run_demo(samples: Path | None, output: Path,
-             progress: Callable[[str, int], Callable[[int], None]] | None = None,
-             recording: Path | None = None) -> str:
+def run_demo(
+    samples: Path | None,
+    output: Path,
+    progress: Callable[[str, int], Callable[[int], None]] | None = None,
+    recording: Path | None = None,
+) -> str:
     """Run the chain on ``samples`` (videos, ``truth.json``, ``detections.csv``), write
     ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output`` (and a Rerun
     recording to ``recording`` if given); return the report."""
     samples = _below_working_directory(samples or default_samples())
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
-        raise InputError(f"{samples}: no sample videos with truth.json; run the demo from the repository, "
-                         "or on a folder that 'flashsync simulate sample' rendered", parameter="samples")
+        raise InputError(
+            f"{samples}: no sample videos with truth.json; run the demo from the repository, "
+            "or on a folder that 'flashsync simulate sample' rendered",
+            parameter="samples",
+        )
     started = time.perf_counter()
     detections = detect_videos(videos, progress=progress)
     save_events(all_events(detections), output / "events.csv")
@@ -57,8 +62,7 @@ def run_demo(samples: Path | None, output: Path,
     errors = sync_errors(model, truth)
     detection_error = stamp_errors(load_detections(output / "restamped.csv"), model, truth)
 
-    lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "",
-             sync_table(model, report), ""]
+    lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "", sync_table(model, report), ""]
     lines += [f"warning: {w}" for w in report.warnings]
     lines.append("synchronisation error against ground truth, every frame and row:")
     for row in errors.itertuples():
@@ -66,14 +70,18 @@ def run_demo(samples: Path | None, output: Path,
     overall = float(np.sqrt(np.mean(errors["rms_ms"] ** 2)))
     lines.append(f"  {'all':<10} RMS {overall:.4f} ms")
     lines.append(f"re-stamped {format_summary(summary)}")
-    lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms "
-                 "against truth")
+    lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms against truth")
     lines.append(f"outputs in {output}/: events.csv sync.json restamped.csv")
     if recording is not None:
         import viz
 
-        viz.save_recording(recording, model, videos=videos, events=events_to_frame(all_events(detections)),
-                           detections=load_detections(output / "restamped.csv"),
-                           homographies=load_homographies(samples / "homographies.json"))
+        viz.save_recording(
+            recording,
+            model,
+            videos=videos,
+            events=events_to_frame(all_events(detections)),
+            detections=load_detections(output / "restamped.csv"),
+            homographies=load_homographies(samples / "homographies.json"),
+        )
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

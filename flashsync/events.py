@@ -38,10 +38,10 @@ class Band(StrEnum):
 class Flag(StrEnum):
     """Something to know about an event (both its edges carry the same flags)."""
 
-    SPLIT = "split"                       # the band continues in the next frame
-    LEADING_HIDDEN = "leading_hidden"     # its leading edge fell into the blanking or dark rows
-    TRAILING_HIDDEN = "trailing_hidden"   # its trailing edge did (or the video ended)
-    SATURATED = "saturated"               # some of its rows clipped at white
+    SPLIT = "split"  # the band continues in the next frame
+    LEADING_HIDDEN = "leading_hidden"  # its leading edge fell into the blanking or dark rows
+    TRAILING_HIDDEN = "trailing_hidden"  # its trailing edge did (or the video ended)
+    SATURATED = "saturated"  # some of its rows clipped at white
 
 
 @dataclass(frozen=True)
@@ -84,16 +84,34 @@ class Events:
     flags: np.ndarray
 
     @classmethod
-    def from_columns(cls, camera: Sequence[str], event: Sequence[int], frame: Sequence[int],
-                     t_frame_ms: Sequence[float], row: Sequence[float], edge: Sequence[Edge],
-                     band: Sequence[Band], rise_rows: Sequence[float], strength: Sequence[float],
-                     quality: Sequence[float], flags: Sequence[frozenset[Flag]]) -> Events:
+    def from_columns(
+        cls,
+        camera: Sequence[str],
+        event: Sequence[int],
+        frame: Sequence[int],
+        t_frame_ms: Sequence[float],
+        row: Sequence[float],
+        edge: Sequence[Edge],
+        band: Sequence[Band],
+        rise_rows: Sequence[float],
+        strength: Sequence[float],
+        quality: Sequence[float],
+        flags: Sequence[frozenset[Flag]],
+    ) -> Events:
         """Events from one sequence per field (each of length n_edges), cast to their types."""
-        return cls(_objects(camera), np.asarray(event, dtype=np.int64), np.asarray(frame, dtype=np.int64),
-                   np.asarray(t_frame_ms, dtype=np.float64), np.asarray(row, dtype=np.float64),
-                   _objects(edge), _objects(band), np.asarray(rise_rows, dtype=np.float64),
-                   np.asarray(strength, dtype=np.float64), np.asarray(quality, dtype=np.float64),
-                   _objects(flags))
+        return cls(
+            _objects(camera),
+            np.asarray(event, dtype=np.int64),
+            np.asarray(frame, dtype=np.int64),
+            np.asarray(t_frame_ms, dtype=np.float64),
+            np.asarray(row, dtype=np.float64),
+            _objects(edge),
+            _objects(band),
+            np.asarray(rise_rows, dtype=np.float64),
+            np.asarray(strength, dtype=np.float64),
+            np.asarray(quality, dtype=np.float64),
+            _objects(flags),
+        )
 
     @classmethod
     def concat(cls, parts: Sequence[Events]) -> Events:

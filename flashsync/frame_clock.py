@@ -93,8 +93,9 @@ class FrameClock:
         return self.missing if self.steady else 0
 
 
-def fit_frame_clock(stamps_ms: np.ndarray, count_gaps: bool = True, least_squares: bool = True,
-                    smoothing: bool = True) -> FrameClock:
+def fit_frame_clock(
+    stamps_ms: np.ndarray, count_gaps: bool = True, least_squares: bool = True, smoothing: bool = True
+) -> FrameClock:
     """Fit a frame clock to container stamps (ms, increasing, shape (n_frames,)).
 
     Parameters

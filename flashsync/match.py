@@ -62,8 +62,13 @@ class PairAlignment:
     ambiguous: bool
 
 
-def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-               anchor: tuple[int, int] | None = None, n_candidates: int = 8) -> PairAlignment | None:
+def align_pair(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    tolerance_ms: float,
+    anchor: tuple[int, int] | None = None,
+    n_candidates: int = 8,
+) -> PairAlignment | None:
     """Coarse alignment of two cameras' event times (ms, own clocks).
 
     Parameters
@@ -93,13 +98,15 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
     if not results:
         return None
     best = results[0]
-    rivals = [r for r in results[1:] if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches))
-              and abs(r.beta - best.beta) > tolerance_ms]
+    rivals = [
+        r
+        for r in results[1:]
+        if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches)) and abs(r.beta - best.beta) > tolerance_ms
+    ]
     return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals))
 
 
-def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-                      n_candidates: int) -> np.ndarray:
+def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float, n_candidates: int) -> np.ndarray:
     """The shifts (ms) that line up most event pairs, strongest first."""
     differences = np.sort((times_a[:, None] - times_b[None, :]).ravel())
     span = max(np.ptp(times_a), np.ptp(times_b))
@@ -114,8 +121,12 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     return np.asarray(chosen)
 
 
-def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms: float,
-            ) -> PairAlignment | None:
+def _refine(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    shift: float,
+    tolerance_ms: float,
+) -> PairAlignment | None:
     """Alternate one-to-one matching and an affine fit, starting from ``shift``."""
     alpha, beta = 1.0, shift
     span = max(np.ptp(times_a), np.ptp(times_b))
@@ -153,8 +164,10 @@ def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) ->
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
 
 
-def group_flashes(n_events: dict[str, int], alignments: dict[tuple[str, str], PairAlignment],
-                  ) -> dict[tuple[str, int], int]:
+def group_flashes(
+    n_events: dict[str, int],
+    alignments: dict[tuple[str, str], PairAlignment],
+) -> dict[tuple[str, int], int]:
     """Merge pairwise matches into flashes: groups holding at most one event per camera.
 
     Pairs are merged strongest first (most matches); a merge that would put two events of one
@@ -227,8 +240,9 @@ class Matching:
         return tied
 
 
-def match_events(times_ms: dict[str, np.ndarray], tolerance_ms: float,
-                 anchors: dict[str, int] | None = None) -> Matching:
+def match_events(
+    times_ms: dict[str, np.ndarray], tolerance_ms: float, anchors: dict[str, int] | None = None
+) -> Matching:
     """Align every pair of cameras and merge the pairs that count into flashes.
 
     Parameters
@@ -250,7 +264,7 @@ def match_events(times_ms: dict[str, np.ndarray], tolerance_ms: float,
     names = list(times_ms)
     alignments = {}
     for i, name_a in enumerate(names):
-        for name_b in names[i + 1:]:
+        for name_b in names[i + 1 :]:
             anchor = (anchors[name_a], anchors[name_b]) if name_a in anchors and name_b in anchors else None
             alignment = align_pair(times_ms[name_a], times_ms[name_b], tolerance_ms, anchor)
             if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
@@ -299,11 +313,17 @@ def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> d
     for text in anchors:
         camera, _, number = text.rpartition(":")
         if camera not in event_numbers or not number.isdigit():
-            raise InputError(f"{text}: expected CAMERA:EVENT with a camera of {', '.join(event_numbers)} and an "
-                             "event number (the events table's event column)", parameter="anchors")
+            raise InputError(
+                f"{text}: expected CAMERA:EVENT with a camera of {', '.join(event_numbers)} and an "
+                "event number (the events table's event column)",
+                parameter="anchors",
+            )
         where = np.flatnonzero(np.asarray(event_numbers[camera]) == int(number))
         if not where.size:
-            raise InputError(f"{text}: {camera} has no event {number} with a visible leading edge; anchor one "
-                             "of its events " + ", ".join(map(str, event_numbers[camera])), parameter="anchors")
+            raise InputError(
+                f"{text}: {camera} has no event {number} with a visible leading edge; anchor one "
+                "of its events " + ", ".join(map(str, event_numbers[camera])),
+                parameter="anchors",
+            )
         result[camera] = int(where[0])
     return result

@@ -101,8 +101,9 @@ class CameraClock:
         t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
         q = self.readout_row(row)
         t_frame, q = np.broadcast_arrays(t_frame, q)
-        gradient = np.concatenate([np.stack([t_frame, np.ones_like(t_frame), q], axis=-1),
-                                   hat_basis(self.drift_knots_ms, t_frame)], axis=-1)
+        gradient = np.concatenate(
+            [np.stack([t_frame, np.ones_like(t_frame), q], axis=-1), hat_basis(self.drift_knots_ms, t_frame)], axis=-1
+        )
         variance = np.einsum("...i,ij,...j->...", gradient, self.covariance, gradient)
         return np.sqrt(np.maximum(variance, 0.0))
 
@@ -147,9 +148,17 @@ def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
 #: flash's number, the camera, the detector's event number, the frame and stored row of its
 #: leading edge, the frame's time (ms), the flash's global time (ms), the event's residual in
 #: the solve (ms) and whether the robust solve kept it.
-MATCHED_EVENT_COLUMNS = {"flash": "int64", "camera": "str", "event": "int64", "frame": "int64", "row": "float64",
-                         "t_frame_ms": "float64", "t_global_ms": "float64", "residual_ms": "float64",
-                         "inlier": "bool"}
+MATCHED_EVENT_COLUMNS = {
+    "flash": "int64",
+    "camera": "str",
+    "event": "int64",
+    "frame": "int64",
+    "row": "float64",
+    "t_frame_ms": "float64",
+    "t_global_ms": "float64",
+    "residual_ms": "float64",
+    "inlier": "bool",
+}
 
 
 @dataclass
@@ -177,4 +186,5 @@ class SyncModel:
         except KeyError:
             raise InputError(
                 f"camera {name!r} is not in the model (it has {', '.join(self.cameras)}); "
-                "sync its video too or fix the camera name") from None
+                "sync its video too or fix the camera name"
+            ) from None

@@ -14,26 +14,33 @@ direction of cameras where it is not given, and the joint robust solve.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import combinations
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
 
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
-from flashsync.events import Band, Edge, Events, Flag
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.match import (MIN_SHARED_FLASHES, PairAlignment, approximate_times_ms, match_events, match_tolerance_ms,
-                             parse_anchors, shared_flashes)
+from flashsync.io.timestamps import load_timestamps
+from flashsync.match import (
+    MIN_SHARED_FLASHES,
+    PairAlignment,
+    approximate_times_ms,
+    match_events,
+    match_tolerance_ms,
+    parse_anchors,
+    shared_flashes,
+)
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
-from flashsync.io.timestamps import load_timestamps
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
@@ -41,10 +48,14 @@ NOMINAL_HIDDEN_ROWS = 1.05
 NOMINAL_ROW_TIME_STD = 0.08
 
 
-def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
-                  estimate_readout: bool = True, settings: DetectorSettings | None = None,
-                  progress: Callable[[str, int], Callable[[int], None]] | None = None,
-                  timestamps: dict[str, Path] | None = None) -> list[CameraDetection]:
+def detect_videos(
+    paths: Sequence[str | Path],
+    flipped: Sequence[str] = (),
+    estimate_readout: bool = True,
+    settings: DetectorSettings | None = None,
+    progress: Callable[[str, int], Callable[[int], None]] | None = None,
+    timestamps: dict[str, Path] | None = None,
+) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
     Parameters
@@ -65,14 +76,14 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     stems = [p.stem for p in paths]
     duplicates = sorted({s for s in stems if stems.count(s) > 1})
     if duplicates:
-        raise InputError(f"camera names come from file stems and {', '.join(duplicates)} is "
-                             "given twice; rename one of the videos")
+        raise InputError(
+            f"camera names come from file stems and {', '.join(duplicates)} is given twice; rename one of the videos"
+        )
     timestamps = timestamps or {}
     for parameter, names in (("flipped", flipped), ("timestamps", timestamps)):
         unknown = sorted(set(names) - set(stems))
         if unknown:
-            raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}",
-                             parameter=parameter)
+            raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}", parameter=parameter)
     stamps = {camera: load_timestamps(path) for camera, path in timestamps.items()}
 
     def detect(path: Path) -> CameraDetection:
@@ -83,7 +94,8 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
             raise InputError(
                 f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
-                f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame")
+                f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
+            )
         return detection.retimed(stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
@@ -116,9 +128,12 @@ class SyncReport:
     sigma_ms: float = float("nan")
 
 
-def synchronize(detections: Sequence[CameraDetection], reference: str | None = None,
-                row_times: dict[str, float] | None = None, anchors: Sequence[str] = (),
-                ) -> tuple[SyncModel, SyncReport]:
+def synchronize(
+    detections: Sequence[CameraDetection],
+    reference: str | None = None,
+    row_times: dict[str, float] | None = None,
+    anchors: Sequence[str] = (),
+) -> tuple[SyncModel, SyncReport]:
     """Match events across cameras and solve every camera's clock.
 
     Parameters
@@ -133,8 +148,10 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
     if reference not in names:
-        raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
-                         "of them", parameter="reference")
+        raise InputError(
+            f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
+            parameter="reference",
+        )
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
@@ -145,8 +162,9 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     return best.model(reference), report
 
 
-def _best_readout(cameras: dict[str, CameraDetection], undecided: list[str],
-                  attempt: Callable[[dict[str, CameraDetection]], _Attempt]) -> _Attempt:
+def _best_readout(
+    cameras: dict[str, CameraDetection], undecided: list[str], attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> _Attempt:
     """The readout directions of the ``undecided`` cameras that explain the events best
     (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
     best of all single flips, until none helps. Raises the first failure if nothing solves."""
@@ -182,8 +200,9 @@ def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[
         except FlashsyncError as error:
             results.append((a.camera, b.camera, str(error)))
             continue
-        results.append((a.camera, b.camera, model if b.camera in model.cameras
-                        else f"{b.camera} could not be tied to {a.camera}"))
+        results.append(
+            (a.camera, b.camera, model if b.camera in model.cameras else f"{b.camera} could not be tied to {a.camera}")
+        )
     return results
 
 
@@ -227,10 +246,18 @@ class Matches:
     def table(self, solution: Solution) -> pd.DataFrame:
         """The matched events with the solve's results (:data:`~flashsync.model.MATCHED_EVENT_COLUMNS`)."""
         n_events = len(self)
-        return pd.DataFrame({
-            "flash": self.flash, "camera": list(self.camera), "event": self.event, "frame": self.frame,
-            "row": self.row, "t_frame_ms": self.t_frame_ms, "t_global_ms": solution.flash_ms[self.flash],
-            "residual_ms": solution.residual_ms[:n_events], "inlier": solution.inlier[:n_events]},
+        return pd.DataFrame(
+            {
+                "flash": self.flash,
+                "camera": list(self.camera),
+                "event": self.event,
+                "frame": self.frame,
+                "row": self.row,
+                "t_frame_ms": self.t_frame_ms,
+                "t_global_ms": solution.flash_ms[self.flash],
+                "residual_ms": solution.residual_ms[:n_events],
+                "inlier": solution.inlier[:n_events],
+            },
         ).astype(MATCHED_EVENT_COLUMNS)
 
 
@@ -257,48 +284,71 @@ class _Attempt:
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
         sigma = max(self.solution.sigma_ms, 1e-4)
         period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
-        return (n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5)
-                - (n_events - n_inliers) * np.log(period))
+        return n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_events - n_inliers) * np.log(period)
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}
         for index, name in enumerate(self.connected):
             d, s = self.cameras[name], self.solution.cameras[index]
-            clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
-                                       s.row_time_ms, d.flipped, s.covariance,
-                                       _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
-                                       str(d.video), s.knots_ms, s.warp_ms)
+            clocks[name] = CameraClock(
+                name,
+                d.frame_times_ms,
+                d.height,
+                d.width,
+                s.alpha,
+                s.beta_ms,
+                s.row_time_ms,
+                d.flipped,
+                s.covariance,
+                _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                str(d.video),
+                s.knots_ms,
+                s.warp_ms,
+            )
         return SyncModel(reference, clocks, self.matches.table(self.solution))
 
 
-def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None,
-             anchors: Sequence[str]) -> _Attempt:
+def _attempt(
+    cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None, anchors: Sequence[str]
+) -> _Attempt:
     """Match and solve with the cameras' current readout directions."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
-    warnings = [f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at "
-                "least 2); left out" for name in cameras if name not in usable]
+    warnings = [
+        f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at least 2); left out"
+        for name in cameras
+        if name not in usable
+    ]
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
-        raise NotEnoughDataError(f"need two or more cameras with at least two flash events each; found "
-                                 f"{counts}; check that the videos show flashes (or lights switching)")
+        raise NotEnoughDataError(
+            f"need two or more cameras with at least two flash events each; found "
+            f"{counts}; check that the videos show flashes (or lights switching)"
+        )
     anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
-    matching = match_events({n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance,
-                            anchor_events)
+    matching = match_events(
+        {n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events
+    )
     tied = matching.tied_to(reference)
     connected = [name for name in usable if name in tied]
-    warnings += [f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
-                 f"with the other cameras; cannot be tied to {reference}; left out"
-                 for name in usable if name not in connected]
+    warnings += [
+        f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
+        f"with the other cameras; cannot be tied to {reference}; left out"
+        for name in usable
+        if name not in connected
+    ]
     if reference not in connected or len(connected) < 2:
-        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
-                                 "check that the videos overlap in time and saw the same flashes")
+        raise NotEnoughDataError(
+            f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
+            "check that the videos overlap in time and saw the same flashes"
+        )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
-    solution = solve_with_drift_model(matches.observations(), len(connected), connected.index(reference),
-                                      durations=durations, priors=Priors(priors))
+    solution = solve_with_drift_model(
+        matches.observations(), len(connected), connected.index(reference), durations=durations, priors=Priors(priors)
+    )
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
 
@@ -344,8 +394,9 @@ def _durations(detections: list[CameraDetection]) -> Durations:
         events = detection.events
         bands = events.bands()
         first = bands.first_edges()
-        bands = bands.take(bands.complete & (events.band[first] == Band.PULSE)
-                           & ~events.has_flag(Flag.SATURATED)[first])
+        bands = bands.take(
+            bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.SATURATED)[first]
+        )
         q = _readout_rows(detection, events)
         camera += [index] * len(bands)
         dt += list(events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
@@ -353,8 +404,9 @@ def _durations(detections: list[CameraDetection]) -> Durations:
     return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
 
 
-def _matches(cameras: list[CameraDetection], sync_events: dict[str, Events],
-             flashes: dict[tuple[str, int], int]) -> Matches:
+def _matches(
+    cameras: list[CameraDetection], sync_events: dict[str, Events], flashes: dict[tuple[str, int], int]
+) -> Matches:
     """The sync events of ``cameras`` that belong to a flash seen by two or more of them."""
     chosen, flash, camera_index = [], [], []
     for index, detection in enumerate(cameras):
@@ -366,5 +418,13 @@ def _matches(cameras: list[CameraDetection], sync_events: dict[str, Events],
     q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
     camera_index = np.asarray(camera_index, dtype=np.int64)
     keep, flash = shared_flashes(camera_index, flash)
-    return Matches(flash, events.camera[keep], camera_index[keep], events.event[keep], events.frame[keep],
-                   events.row[keep], q[keep], events.t_frame_ms[keep])
+    return Matches(
+        flash,
+        events.camera[keep],
+        camera_index[keep],
+        events.event[keep],
+        events.frame[keep],
+        events.row[keep],
+        q[keep],
+        events.t_frame_ms[keep],
+    )

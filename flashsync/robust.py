@@ -33,9 +33,14 @@ def mad_sigma(values: np.ndarray, floor: float = 0.0) -> float:
     return max(MAD_TO_SIGMA * float(np.median(np.abs(values))), floor) if values.size else floor
 
 
-def cauchy_irls(solve: Callable[[np.ndarray], np.ndarray], residuals: Callable[[np.ndarray], np.ndarray],
-                n_observations: int, scale: Callable[[np.ndarray, float | None], float], iterations: int,
-                converged: float | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+def cauchy_irls(
+    solve: Callable[[np.ndarray], np.ndarray],
+    residuals: Callable[[np.ndarray], np.ndarray],
+    n_observations: int,
+    scale: Callable[[np.ndarray, float | None], float],
+    iterations: int,
+    converged: float | None = None,
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Iteratively reweighted least squares with Cauchy weights.
 
     Starts from the unweighted solution; each round weighs every observation by
@@ -74,8 +79,9 @@ def cauchy_irls(solve: Callable[[np.ndarray], np.ndarray], residuals: Callable[[
     return solution, residual, current
 
 
-def cauchy_fit(design: np.ndarray, observed: np.ndarray,
-               min_scale_ms: float = MIN_SCALE_MS) -> tuple[np.ndarray, np.ndarray, float] | None:
+def cauchy_fit(
+    design: np.ndarray, observed: np.ndarray, min_scale_ms: float = MIN_SCALE_MS
+) -> tuple[np.ndarray, np.ndarray, float] | None:
     """:func:`cauchy_irls` fit of ``observed ≈ design @ parameters`` (dense), with the
     maximum-likelihood Cauchy scale refined along.
 
@@ -109,8 +115,9 @@ def cauchy_fit(design: np.ndarray, observed: np.ndarray,
             return max(float(np.median(np.abs(residual))), min_scale_ms)
         return max(_scale_step(residual, previous), min_scale_ms)
 
-    solution, residual, final = cauchy_irls(solve, lambda x: observed - scaled @ x, len(observed), scale,
-                                            ITERATIONS, CONVERGED)
+    solution, residual, final = cauchy_irls(
+        solve, lambda x: observed - scaled @ x, len(observed), scale, ITERATIONS, CONVERGED
+    )
     return solution / norms, residual, final
 
 

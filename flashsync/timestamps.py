@@ -35,14 +35,16 @@ def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
     if not np.all(np.isfinite(times)):
         raise InputError(
             f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; "
-            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
+        )
     steps = np.diff(times)
     if np.any(steps <= 0):
         bad = int(np.argmax(steps <= 0)) + 1
         raise InputError(
             f"{source}: frame timestamps are not increasing at frame {bad} "
             f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); remux the file or give the "
-            "timestamps as CSV")
+            "timestamps as CSV"
+        )
     return times
 
 
@@ -65,7 +67,8 @@ def video_timestamps(path: str | Path) -> np.ndarray:
     if any(p is None for p in pts):
         raise InputError(
             f"{path}: {sum(p is None for p in pts)} frames have no timestamp; remux the file "
-            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
+        )
     times = np.sort(np.asarray(pts, dtype=np.float64)) * float(time_base) * 1000.0
     return check_timestamps(times, str(path))
 

@@ -13,11 +13,18 @@ def events() -> Events:
     """Three events of one camera: a split pulse, a pulse whose leading edge is hidden, a light
     switched on (a step: leading edge only)."""
     return Events.from_columns(
-        camera=["cam1"] * 4, event=[0, 0, 1, 2], frame=[3, 4, 9, 20], t_frame_ms=[100.0, 133.4, 300.2, 667.0],
-        row=[170.25, 12.5, 40.75, 0.5], edge=[Edge.LEADING, Edge.TRAILING, Edge.TRAILING, Edge.LEADING],
-        band=[Band.PULSE, Band.PULSE, Band.PULSE, Band.ON], rise_rows=[4.1, 4.3, 3.9, np.nan],
-        strength=[0.4, 0.4, 0.5, 0.6], quality=[400.0, 400.0, 500.0, 600.0],
-        flags=[frozenset({Flag.SPLIT, Flag.SATURATED})] * 2 + [frozenset({Flag.LEADING_HIDDEN}), frozenset()])
+        camera=["cam1"] * 4,
+        event=[0, 0, 1, 2],
+        frame=[3, 4, 9, 20],
+        t_frame_ms=[100.0, 133.4, 300.2, 667.0],
+        row=[170.25, 12.5, 40.75, 0.5],
+        edge=[Edge.LEADING, Edge.TRAILING, Edge.TRAILING, Edge.LEADING],
+        band=[Band.PULSE, Band.PULSE, Band.PULSE, Band.ON],
+        rise_rows=[4.1, 4.3, 3.9, np.nan],
+        strength=[0.4, 0.4, 0.5, 0.6],
+        quality=[400.0, 400.0, 500.0, 600.0],
+        flags=[frozenset({Flag.SPLIT, Flag.SATURATED})] * 2 + [frozenset({Flag.LEADING_HIDDEN}), frozenset()],
+    )
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])

@@ -14,5 +14,14 @@ Examples
 from tracking_adapter.restamp import RestampSummary, format_summary, restamp, restamp_file
 from tracking_adapter.validate import ErrorStats, PairValidation, ValidationReport, format_report, validate
 
-__all__ = ["ErrorStats", "PairValidation", "RestampSummary", "ValidationReport", "format_report", "format_summary",
-           "restamp", "restamp_file", "validate"]
+__all__ = [
+    "ErrorStats",
+    "PairValidation",
+    "RestampSummary",
+    "ValidationReport",
+    "format_report",
+    "format_summary",
+    "restamp",
+    "restamp_file",
+    "validate",
+]

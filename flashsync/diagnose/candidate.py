@@ -21,8 +21,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.diagnose.effects import (CATALOGUE, DRIFT, DRIFT_RATE, DROPPED_FRAMES, EXPOSURE, FLIPPED,
-                                        FRAME_CLOCK, ROW_TIME, CameraEstimate, Features)
+from flashsync.diagnose.effects import (
+    CATALOGUE,
+    DRIFT,
+    DRIFT_RATE,
+    DROPPED_FRAMES,
+    EXPOSURE,
+    FLIPPED,
+    FRAME_CLOCK,
+    ROW_TIME,
+    CameraEstimate,
+    Features,
+)
 from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.model import readout_rows
@@ -102,15 +112,25 @@ class Candidate:
     def estimates(self) -> list[CameraEstimate]:
         """Every camera under this model, in plain numbers."""
         stamp_rms = self.stamp_rms_ms
-        return [CameraEstimate(
-            camera=camera.camera, reference=c == self.reference, flipped=self.flipped[c],
-            frame_period_ms=clock.period_ms, median_step_ms=clock.median_step_ms, missing_frames=clock.missing,
-            stamp_rms_ms=stamp_rms[c], drift_ppm=1e6 * self.coefficient(DRIFT, c),
-            drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c), shift_ms=self.coefficient("shift", c),
-            row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
-            nominal_row_time_ms=self.nominal_row_time_ms(c), exposure_ms=self.exposure_ms(c),
-            effects=sorted(t.effect for t in self.terms if t.camera == c))
-            for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))]
+        return [
+            CameraEstimate(
+                camera=camera.camera,
+                reference=c == self.reference,
+                flipped=self.flipped[c],
+                frame_period_ms=clock.period_ms,
+                median_step_ms=clock.median_step_ms,
+                missing_frames=clock.missing,
+                stamp_rms_ms=stamp_rms[c],
+                drift_ppm=1e6 * self.coefficient(DRIFT, c),
+                drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c),
+                shift_ms=self.coefficient("shift", c),
+                row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+                nominal_row_time_ms=self.nominal_row_time_ms(c),
+                exposure_ms=self.exposure_ms(c),
+                effects=sorted(t.effect for t in self.terms if t.camera == c),
+            )
+            for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
+        ]
 
 
 def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate | None:
@@ -119,9 +139,15 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
-    clocks = [fit_frame_clock(camera.frame_times_ms, count_gaps=Term(DROPPED_FRAMES, c) in terms,
-                              least_squares=Term(FRAME_CLOCK, c) in terms, smoothing=False)
-              for c, camera in enumerate(cameras)]
+    clocks = [
+        fit_frame_clock(
+            camera.frame_times_ms,
+            count_gaps=Term(DROPPED_FRAMES, c) in terms,
+            least_squares=Term(FRAME_CLOCK, c) in terms,
+            smoothing=False,
+        )
+        for c, camera in enumerate(cameras)
+    ]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, clock) in enumerate(zip(cameras, clocks)):
         mine = edges.camera == c
@@ -138,15 +164,25 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
     parameters, residual, scale = solved
     stamp_residuals = [clock.residual_ms for clock in clocks]
     log_likelihood = -cauchy_nll(residual, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
-    n_parameters = design.shape[1] + 1 + 3 * len(cameras)      # + scales and frame clocks
+    n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
     n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
-    return Candidate(measurement, terms, clocks, flipped, features, dict(zip(keys, parameters[:len(keys)].tolist())),
-                     residual, scale, float(bic))
+    return Candidate(
+        measurement,
+        terms,
+        clocks,
+        flipped,
+        features,
+        dict(zip(keys, parameters[: len(keys)].tolist())),
+        residual,
+        scale,
+        float(bic),
+    )
 
 
-def _design(measurement: Measurement, terms: frozenset[Term],
-            features: Features) -> tuple[list[tuple[str, int]], np.ndarray]:
+def _design(
+    measurement: Measurement, terms: frozenset[Term], features: Features
+) -> tuple[list[tuple[str, int]], np.ndarray]:
     """Keys of the named columns and the design, shape (n_edges, n_columns): each other
     camera's shift, the shared exposure, the effects' columns, then one per flash."""
     keys, columns = [], []

@@ -21,8 +21,7 @@ import numpy as np
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Bands, Events
-from flashsync.match import (MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms,
-                             shared_flashes)
+from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
 from flashsync.timestamps import median_step_ms
 
 #: Bands with an edge this close (rows) to the top or bottom of the image are left out: the
@@ -109,30 +108,41 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
-        raise NotEnoughDataError(f"diagnose needs videos of two or more cameras, got {len(names)}; "
-                             "give every camera's video")
+        raise NotEnoughDataError(
+            f"diagnose needs videos of two or more cameras, got {len(names)}; give every camera's video"
+        )
     reference = reference or names[0]
     if reference not in names:
-        raise InputError(f"{reference}: no such camera among {', '.join(names)}; the reference must be one "
-                         "of them", parameter="reference")
+        raise InputError(
+            f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
+            parameter="reference",
+        )
     pulses = {d.camera: _pulses(d) for d in detections}
     tolerance = match_tolerance_ms([median_step_ms(d.frame_times_ms) for d in detections], readout_known=False)
     matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
     tied = matching.tied_to(reference)
     kept = [d for d in detections if d.camera in tied]
     if len(kept) < 2:
-        raise NotEnoughDataError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
-                                 "check that the videos overlap in time and saw the same flashes")
-    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other "
-                     "cameras; left out" for d in detections if d.camera not in tied)
+        raise NotEnoughDataError(
+            f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
+            "check that the videos overlap in time and saw the same flashes"
+        )
+    warnings = tuple(
+        f"{d.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other cameras; left out"
+        for d in detections
+        if d.camera not in tied
+    )
     cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
     edges = _edges(pulses, matching.flashes, cameras)
     if len(edges) == 0:
-        raise NotEnoughDataError("no flash band with both edges inside the image is seen by two cameras; "
-                             "record more flashes, away from the top and bottom of the image")
-    return Measurement(cameras, [c.camera for c in cameras].index(reference), edges,
-                       _edge_noise_ms(cameras, pulses), warnings)
+        raise NotEnoughDataError(
+            "no flash band with both edges inside the image is seen by two cameras; "
+            "record more flashes, away from the top and bottom of the image"
+        )
+    return Measurement(
+        cameras, [c.camera for c in cameras].index(reference), edges, _edge_noise_ms(cameras, pulses), warnings
+    )
 
 
 @dataclass(frozen=True)
@@ -166,15 +176,17 @@ def _pulses(detection: CameraDetection) -> _Pulses:
     bands = bands.take(events.band[bands.first_edges()] == Band.PULSE)
     times = approximate_times_ms(detection, events)
     lead, trail = bands.leading >= 0, bands.trailing >= 0
-    time_ms = np.where(lead & trail, (times[bands.leading] + times[bands.trailing]) / 2,
-                       np.where(lead, times[bands.leading], times[bands.trailing]))
+    time_ms = np.where(
+        lead & trail,
+        (times[bands.leading] + times[bands.trailing]) / 2,
+        np.where(lead, times[bands.leading], times[bands.trailing]),
+    )
     inside = (events.row >= EDGE_MARGIN_ROWS) & (events.row <= detection.height - 1 - EDGE_MARGIN_ROWS)
     clean = lead & trail & inside[bands.leading] & inside[bands.trailing]
     return _Pulses(events, bands, time_ms, clean)
 
 
-def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int],
-           cameras: tuple[CameraDetection, ...]) -> Edges:
+def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[CameraDetection, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
     camera, flash, frame, row, trailing = [], [], [], [], []
     for index, (named, mine) in enumerate(zip(cameras, pulses)):
@@ -188,8 +200,13 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int],
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
     keep, flash = shared_flashes(camera, flash)
-    return Edges(np.asarray(camera, dtype=np.int64)[keep], flash, np.asarray(frame, dtype=np.int64)[keep],
-                 np.asarray(row, dtype=np.float64)[keep], np.asarray(trailing, dtype=bool)[keep])
+    return Edges(
+        np.asarray(camera, dtype=np.int64)[keep],
+        flash,
+        np.asarray(frame, dtype=np.int64)[keep],
+        np.asarray(row, dtype=np.float64)[keep],
+        np.asarray(trailing, dtype=bool)[keep],
+    )
 
 
 def _edge_noise_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> float:

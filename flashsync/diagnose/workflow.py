@@ -21,8 +21,8 @@ from itertools import combinations
 import numpy as np
 
 from flashsync.detect import CameraDetection
-from flashsync.diagnose.effects import CATALOGUE, OTHER_CAMERAS
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
+from flashsync.diagnose.effects import CATALOGUE, OTHER_CAMERAS
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.errors import NotEnoughDataError
 
@@ -124,13 +124,16 @@ class Diagnosis:
     def verdict(self) -> str:
         """One line on the final residuals against the noise."""
         if not np.isfinite(self.expected_ms):
-            return (f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three "
-                    "bands of a kind per camera)")
+            return (
+                f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three bands of a kind per camera)"
+            )
         numbers = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
         if self.consistent:
             return f"residuals consistent with noise ({numbers})"
-        return (f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
-                "outside the catalogue remains, or the measurement cannot separate the ones it has")
+        return (
+            f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
+            "outside the catalogue remains, or the measurement cannot separate the ones it has"
+        )
 
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence, the verdict and the
@@ -138,10 +141,18 @@ class Diagnosis:
         data = asdict(self)
         for step, record in zip(self.steps, data["steps"]):
             record["evidence"] = step.evidence
-        catalogue = [{"effect": e.name, "title": e.title, "explains": e.explains, "changes": e.changes,
-                      "scope": e.scope, "implies": list(e.implies)} for e in CATALOGUE.values()]
-        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR,
-                    catalogue=catalogue)
+        catalogue = [
+            {
+                "effect": e.name,
+                "title": e.title,
+                "explains": e.explains,
+                "changes": e.changes,
+                "scope": e.scope,
+                "implies": list(e.implies),
+            }
+            for e in CATALOGUE.values()
+        ]
+        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR, catalogue=catalogue)
         return _finite(data)
 
 
@@ -172,7 +183,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     if plain is None:
         raise NotEnoughDataError(
             f"{measurement.n_flashes} flashes seen by several cameras cannot determine even the "
-            "plain model; record more flashes")
+            "plain model; record more flashes"
+        )
     current, steps, removed, fits = plain, [], set(), [plain]
     while (addition := _best_addition(measurement, current, removed)) is not None:
         terms, better = addition
@@ -188,19 +200,27 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     return _diagnosis(measurement, fits, steps)
 
 
-def _best_addition(measurement: Measurement, current: Candidate,
-                   removed: set[Term]) -> tuple[tuple[Term, ...], Candidate] | None:
+def _best_addition(
+    measurement: Measurement, current: Candidate, removed: set[Term]
+) -> tuple[tuple[Term, ...], Candidate] | None:
     """The effect, else the pair of effects on one camera, whose model has the lowest BIC
     among those that lower it by more than :data:`THRESHOLD` and shrink the RMS."""
     singles = _candidates(measurement, current.terms | removed)
-    pairs = [(a, b) for a, b in combinations(singles, 2) if a.camera == b.camera
-             and b not in _with_implied(a) and a not in _with_implied(b)]
+    pairs = [
+        (a, b)
+        for a, b in combinations(singles, 2)
+        if a.camera == b.camera and b not in _with_implied(a) and a not in _with_implied(b)
+    ]
     for groups in ([(term,) for term in singles], pairs):
         best = None
         for group in groups:
             trial = fit_candidate(measurement, current.terms.union(*map(_with_implied, group)))
-            if (trial is not None and current.bic - trial.bic > THRESHOLD and trial.rms_ms < current.rms_ms
-                    and (best is None or trial.bic < best[1].bic)):
+            if (
+                trial is not None
+                and current.bic - trial.bic > THRESHOLD
+                and trial.rms_ms < current.rms_ms
+                and (best is None or trial.bic < best[1].bic)
+            ):
                 best = (group, trial)
         if best is not None:
             return best
@@ -213,10 +233,18 @@ def _step(terms: tuple[Term, ...], without: Candidate, with_terms: Candidate, re
     before, after = (with_terms, without) if removed else (without, with_terms)
     camera = terms[0].camera
     estimates = with_terms.estimates()
-    return Step("+".join(e.name for e in effects), " + ".join(e.title for e in effects),
-                estimates[camera].camera, without.bic - with_terms.bic,
-                "; ".join(e.describe(estimates[camera], estimates[with_terms.reference]) for e in effects),
-                before.rms_ms, after.rms_ms, before.stamp_rms_ms[camera], after.stamp_rms_ms[camera], removed)
+    return Step(
+        "+".join(e.name for e in effects),
+        " + ".join(e.title for e in effects),
+        estimates[camera].camera,
+        without.bic - with_terms.bic,
+        "; ".join(e.describe(estimates[camera], estimates[with_terms.reference]) for e in effects),
+        before.rms_ms,
+        after.rms_ms,
+        before.stamp_rms_ms[camera],
+        after.stamp_rms_ms[camera],
+        removed,
+    )
 
 
 def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, ...]) -> tuple[Term, Candidate] | None:
@@ -226,17 +254,23 @@ def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, .
     weakest = None
     for term in sorted(current.terms - implied - frozenset().union(*map(_with_implied, newest))):
         without = fit_candidate(measurement, current.terms - {term})
-        if (without is not None and without.bic - current.bic <= THRESHOLD
-                and (weakest is None or without.bic < weakest[1].bic)):
+        if (
+            without is not None
+            and without.bic - current.bic <= THRESHOLD
+            and (weakest is None or without.bic < weakest[1].bic)
+        ):
             weakest = (term, without)
     return weakest
 
 
 def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
     """Every effect on every camera it applies to, not yet in the model, catalogue order."""
-    return [Term(effect.name, c) for effect in CATALOGUE.values() for c in range(len(measurement.cameras))
-            if Term(effect.name, c) not in terms
-            and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)]
+    return [
+        Term(effect.name, c)
+        for effect in CATALOGUE.values()
+        for c in range(len(measurement.cameras))
+        if Term(effect.name, c) not in terms and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)
+    ]
 
 
 def _with_implied(term: Term) -> frozenset[Term]:
@@ -251,30 +285,50 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
     return Diagnosis(
         cameras=[c.camera for c in measurement.cameras],
         reference=measurement.cameras[measurement.reference].camera,
-        n_flashes=measurement.n_flashes, n_edges=n_edges, steps=steps,
-        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, expected_ms=float(expected),
+        n_flashes=measurement.n_flashes,
+        n_edges=n_edges,
+        steps=steps,
+        initial_rms_ms=plain.rms_ms,
+        final_rms_ms=final.rms_ms,
+        expected_ms=float(expected),
         consistent=bool(final.rms_ms <= NOISE_FACTOR * expected),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         edge_residuals=_edge_residuals(measurement, fits),
-        warnings=list(measurement.warnings))
+        warnings=list(measurement.warnings),
+    )
 
 
 def _edge_residuals(measurement: Measurement, fits: list[Candidate]) -> dict:
     """Every edge's residual (ms) under the plain model and after each step, with its
     camera, flash and kind: what ``flashsync diagnose --rrd`` plots."""
     edges = measurement.edges
-    return {"camera": [measurement.cameras[c].camera for c in edges.camera],
-            "flash": edges.flash.tolist(), "trailing": edges.trailing.tolist(),
-            "residual_ms": [fit.residual_ms.tolist() for fit in fits]}
+    return {
+        "camera": [measurement.cameras[c].camera for c in edges.camera],
+        "flash": edges.flash.tolist(),
+        "trailing": edges.trailing.tolist(),
+        "residual_ms": [fit.residual_ms.tolist() for fit in fits],
+    }
 
 
 def _camera_models(fit: Candidate) -> list[dict]:
     """The fitted model per camera, in plain numbers."""
-    return [{"camera": e.camera, "reference": e.reference, "readout": e.readout, "frame_period_ms": e.frame_period_ms,
-             "missing_frames": e.missing_frames, "drift_ppm": e.drift_ppm,
-             "drift_rate_ppm_per_s": e.drift_rate_ppm_per_s, "shift_ms": e.shift_ms, "row_time_ms": e.row_time_ms,
-             "exposure_ms": e.exposure_ms, "effects": e.effects} for e in fit.estimates()]
+    return [
+        {
+            "camera": e.camera,
+            "reference": e.reference,
+            "readout": e.readout,
+            "frame_period_ms": e.frame_period_ms,
+            "missing_frames": e.missing_frames,
+            "drift_ppm": e.drift_ppm,
+            "drift_rate_ppm_per_s": e.drift_rate_ppm_per_s,
+            "shift_ms": e.shift_ms,
+            "row_time_ms": e.row_time_ms,
+            "exposure_ms": e.exposure_ms,
+            "effects": e.effects,
+        }
+        for e in fit.estimates()
+    ]
 
 
 def residual_structure(fit: Candidate) -> list[dict]:
@@ -293,15 +347,19 @@ def residual_structure(fit: Candidate) -> list[dict]:
         mine = fit.features.camera == c
         residual, trailing = fit.residual_ms[mine], fit.features.trailing[mine]
         steps = np.diff(camera.frame_times_ms)
-        structure.append({
-            "camera": camera.camera, "edges": int(mine.sum()),
-            "rms_ms": float(np.sqrt(np.mean(residual**2))),
-            "time_slope_ppm": 1e6 * _slope(fit.features.t_ms[mine], residual),
-            "row_slope_us_per_row": 1e3 * _slope(fit.features.q[mine], residual),
-            "trailing_minus_leading_ms": float(np.mean(residual[trailing]) - np.mean(residual[~trailing])),
-            "median_step_ms": clock.median_step_ms,
-            "long_intervals": int(np.count_nonzero(steps > 1.5 * clock.median_step_ms)),
-            "stamp_rms_ms": fit.stamp_rms_ms[c]})
+        structure.append(
+            {
+                "camera": camera.camera,
+                "edges": int(mine.sum()),
+                "rms_ms": float(np.sqrt(np.mean(residual**2))),
+                "time_slope_ppm": 1e6 * _slope(fit.features.t_ms[mine], residual),
+                "row_slope_us_per_row": 1e3 * _slope(fit.features.q[mine], residual),
+                "trailing_minus_leading_ms": float(np.mean(residual[trailing]) - np.mean(residual[~trailing])),
+                "median_step_ms": clock.median_step_ms,
+                "long_intervals": int(np.count_nonzero(steps > 1.5 * clock.median_step_ms)),
+                "stamp_rms_ms": fit.stamp_rms_ms[c],
+            }
+        )
     return structure
 
 

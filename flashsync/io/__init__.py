@@ -32,6 +32,22 @@ from flashsync.io.timestamps import load_timestamps
 from flashsync.io.truth import load_ground_truth, save_ground_truth
 from flashsync.io.validation import load_validation, save_validation
 
-__all__ = ["events_from_frame", "events_to_frame", "load_detections", "load_events", "load_ground_truth",
-           "load_homographies", "load_model", "load_mot", "load_scenario", "load_timestamps", "load_validation",
-           "save_detections", "save_events", "save_ground_truth", "save_model", "save_validation", "write_table"]
+__all__ = [
+    "events_from_frame",
+    "events_to_frame",
+    "load_detections",
+    "load_events",
+    "load_ground_truth",
+    "load_homographies",
+    "load_model",
+    "load_mot",
+    "load_scenario",
+    "load_timestamps",
+    "load_validation",
+    "save_detections",
+    "save_events",
+    "save_ground_truth",
+    "save_model",
+    "save_validation",
+    "write_table",
+]

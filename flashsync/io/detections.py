@@ -40,15 +40,14 @@ def detections_format(path: str | Path, input_format: str | None = None) -> str:
     """
     if input_format is not None:
         if input_format not in set(_EXTENSIONS.values()):
-            raise InputError(f"{path}: unknown detections format {input_format!r}; "
-                                 "use csv, parquet or mot")
+            raise InputError(f"{path}: unknown detections format {input_format!r}; use csv, parquet or mot")
         return input_format
     try:
         return _EXTENSIONS[Path(path).suffix.lower()]
     except KeyError:
         raise InputError(
-            f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet "
-            "or .txt (MOTChallenge)") from None
+            f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet or .txt (MOTChallenge)"
+        ) from None
 
 
 def require_columns(columns: Iterable[str], required: Iterable[str], source: str | Path) -> None:
@@ -57,18 +56,19 @@ def require_columns(columns: Iterable[str], required: Iterable[str], source: str
     columns = list(columns)
     duplicates = sorted({str(name) for name in columns if columns.count(name) > 1})
     if duplicates:
-        raise InputError(f"{source}: duplicate column names {', '.join(duplicates)}; "
-                             "rename them so that every column name is unique")
+        raise InputError(
+            f"{source}: duplicate column names {', '.join(duplicates)}; rename them so that every column name is unique"
+        )
     missing = [name for name in required if name not in columns]
     if missing:
         raise InputError(
             f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
             f"(it has {', '.join(map(str, columns)) or 'no columns'}); detections need "
-            f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file")
+            f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file"
+        )
 
 
-def load_detections(path: str | Path, *, camera: str | None = None,
-                    input_format: str | None = None) -> pd.DataFrame:
+def load_detections(path: str | Path, *, camera: str | None = None, input_format: str | None = None) -> pd.DataFrame:
     """Read a detections file into a DataFrame (column types inferred).
 
     Parameters
@@ -99,16 +99,14 @@ def load_detections(path: str | Path, *, camera: str | None = None,
             return pd.read_parquet(path)
         return pd.read_csv(path)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
-                             "check the file") from None
+        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
 
 
 def save_detections(table: pd.DataFrame, path: str | Path) -> None:
     """Write ``table`` to ``path`` (CSV or Parquet by extension) atomically, without index."""
     kind = detections_format(path)
     if kind == "mot":
-        raise InputError(f"{path}: detections are written as .csv or .parquet, not .txt; "
-                             "change the output extension")
+        raise InputError(f"{path}: detections are written as .csv or .parquet, not .txt; change the output extension")
     write_table(table, path)
 
 
@@ -144,29 +142,35 @@ def load_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     try:
         table = pd.read_csv(path, header=0 if has_header else None, skipinitialspace=True)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise InputError(f"{path}: cannot read it as a MOTChallenge file "
-                             f"({first_line(error)}); check the file") from None
+        raise InputError(
+            f"{path}: cannot read it as a MOTChallenge file ({first_line(error)}); check the file"
+        ) from None
     if not has_header:
         if table.shape[1] < len(MOT_COLUMNS) - 1:
             raise InputError(
                 f"{path}: {table.shape[1]} columns, a MOTChallenge file has at least 6 "
-                f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format")
-        table.columns = [MOT_COLUMNS[i] if i < len(MOT_COLUMNS) else f"mot_{i + 1}"
-                         for i in range(table.shape[1])]
+                f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format"
+            )
+        table.columns = [MOT_COLUMNS[i] if i < len(MOT_COLUMNS) else f"mot_{i + 1}" for i in range(table.shape[1])]
     table.columns = [str(name).strip() for name in table.columns]
     require_mot = MOT_COLUMNS[:6]
     missing = [name for name in require_mot if name not in table.columns]
     if missing:
-        raise InputError(f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
-                             f"columns {', '.join(MOT_COLUMNS)} or remove the header line")
+        raise InputError(
+            f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
+            f"columns {', '.join(MOT_COLUMNS)} or remove the header line"
+        )
     numbers = {name: pd.to_numeric(table[name], errors="coerce") for name in require_mot}
-    new = pd.DataFrame({
-        "camera": camera if camera is not None else path.stem,
-        "frame": numbers["frame"] - 1,
-        "object": table["id"],
-        "x": numbers["bb_left"] + numbers["bb_width"] / 2,
-        "y": numbers["bb_top"] + numbers["bb_height"] / 2,
-    }, index=table.index)
+    new = pd.DataFrame(
+        {
+            "camera": camera if camera is not None else path.stem,
+            "frame": numbers["frame"] - 1,
+            "object": table["id"],
+            "x": numbers["bb_left"] + numbers["bb_width"] / 2,
+            "y": numbers["bb_top"] + numbers["bb_height"] / 2,
+        },
+        index=table.index,
+    )
     rest = table.drop(columns=["frame", "id"])
     rest.columns = [f"mot_{name}" if name in new.columns else name for name in rest.columns]
     return pd.concat([new, rest], axis=1)
@@ -200,16 +204,17 @@ def read_csv_header(path: str | Path) -> CsvHeader:
     with open(path, "rb") as file:
         line = file.readline()
     if not line.strip():
-        raise InputError(f"{path}: empty file or empty first line; a detections CSV starts "
-                             "with a header line such as camera,frame,x,y")
+        raise InputError(
+            f"{path}: empty file or empty first line; a detections CSV starts "
+            "with a header line such as camera,frame,x,y"
+        )
     eol = b"\r\n" if line.endswith(b"\r\n") else b"\n"
-    raw = line[:-len(eol)] if line.endswith(eol) else line
-    text = raw[len(_UTF8_BOM):] if raw.startswith(_UTF8_BOM) else raw
+    raw = line[: -len(eol)] if line.endswith(eol) else line
+    text = raw[len(_UTF8_BOM) :] if raw.startswith(_UTF8_BOM) else raw
     try:
         names = next(csv.reader([text.decode("utf-8")]))
     except UnicodeDecodeError:
-        raise InputError(f"{path}: the header line is not UTF-8 text; save the file as "
-                             "UTF-8 CSV") from None
+        raise InputError(f"{path}: the header line is not UTF-8 text; save the file as UTF-8 CSV") from None
     return CsvHeader(names=names, raw=raw, eol=eol, size=len(line))
 
 
@@ -237,4 +242,3 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
-

@@ -23,20 +23,22 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
     try:
         document = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise InputError(f"{path}: not a JSON file ({first_line(error)}); give "
-                         "{\"camera\": [[...], [...], [...]]} with 3x3 matrices") from None
+        raise InputError(
+            f'{path}: not a JSON file ({first_line(error)}); give {{"camera": [[...], [...], [...]]}} with 3x3 matrices'
+        ) from None
     if not isinstance(document, dict) or not document:
-        raise InputError(f"{path}: expected a JSON object {{camera: 3x3 matrix}}; "
-                         "write one 3x3 image->plane homography per camera")
+        raise InputError(
+            f"{path}: expected a JSON object {{camera: 3x3 matrix}}; write one 3x3 image->plane homography per camera"
+        )
     homographies = {}
     for name, matrix in document.items():
         try:
             matrix = np.asarray(matrix, dtype=np.float64)
         except (TypeError, ValueError):
             matrix = np.empty(0)
-        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) \
-                or abs(np.linalg.det(matrix)) < 1e-300:
-            raise InputError(f"{path}: the homography of camera {name!r} is not an "
-                             "invertible 3x3 matrix of numbers; fix that entry")
+        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-300:
+            raise InputError(
+                f"{path}: the homography of camera {name!r} is not an invertible 3x3 matrix of numbers; fix that entry"
+            )
         homographies[str(name)] = matrix
     return homographies

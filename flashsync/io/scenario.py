@@ -15,8 +15,7 @@ from pathlib import Path
 import yaml
 
 from flashsync.errors import InputError
-from flashsync.simulation.scenario import (PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, check_scenario,
-                                           preset)
+from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, check_scenario, preset
 
 
 def _build(cls: type, data: object, where: str, source: str):
@@ -26,8 +25,7 @@ def _build(cls: type, data: object, where: str, source: str):
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
-            raise InputError(
-                f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
+            raise InputError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
     try:
         return cls(**data)
     except TypeError as err:
@@ -78,8 +76,7 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
     names = [f.name for f in dataclasses.fields(Scenario)]
     for key in data:
         if key not in names:
-            raise InputError(
-                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
+            raise InputError(f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
     if "cameras" in data:
         cams = data["cameras"]
         if not isinstance(cams, list):

@@ -30,8 +30,7 @@ def load_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
     candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
     found = [name for name in candidates if name in table.columns]
     if not found:
-        raise InputError(
-            f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
+        raise InputError(f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
     values = pd.to_numeric(table[found[0]], errors="coerce").to_numpy()
     if found[0] == "rtp":
         if np.any(~np.isfinite(values)):

@@ -19,9 +19,15 @@ VERSION = 1
 
 def save_ground_truth(truth: GroundTruth, path: str | Path) -> None:
     """Write ``truth`` to ``path`` as JSON, atomically."""
-    document = {"format": FORMAT, "version": VERSION, "reference": truth.reference,
-                "cameras": {name: asdict(camera) for name, camera in truth.cameras.items()},
-                "flashes": truth.flashes, "switches": truth.switches, "scenario": truth.scenario}
+    document = {
+        "format": FORMAT,
+        "version": VERSION,
+        "reference": truth.reference,
+        "cameras": {name: asdict(camera) for name, camera in truth.cameras.items()},
+        "flashes": truth.flashes,
+        "switches": truth.switches,
+        "scenario": truth.scenario,
+    }
     write_text(path, json.dumps(document, indent=1))
 
 
@@ -45,8 +51,7 @@ def load_ground_truth(path: str | Path) -> GroundTruth:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(f"{path}: not a flashsync ground-truth file")
     if data.get("version") != VERSION:
-        raise InputError(
-            f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})")
+        raise InputError(f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})")
     cameras = {}
     for name, c in data["cameras"].items():
         c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})

@@ -29,6 +29,8 @@ def load_validation(path: str | Path) -> pd.DataFrame:
     try:
         triples = json.loads(path.read_text())["triples"]
     except (OSError, ValueError, KeyError, TypeError) as error:
-        raise InputError(f"{path}: not the JSON of a validation report ({type(error).__name__}: "
-                         f"{error}); give the JSON a validation saved") from None
+        raise InputError(
+            f"{path}: not the JSON of a validation report ({type(error).__name__}: "
+            f"{error}); give the JSON a validation saved"
+        ) from None
     return pd.DataFrame.from_records(triples)

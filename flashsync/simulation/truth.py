@@ -112,13 +112,27 @@ def camera_truth(camera, file, frame_index, frame_times_ms, stamps_ms, flashes_s
     """
     alpha, beta, row = _params(reference, camera)
     return CameraTruth(
-        name=camera.name, file=file, width=camera.width, height=camera.height, fps=camera.fps,
-        r0=camera.r0, r1=camera.r1, flipped=camera.flipped, exposure_ms=camera.exposure_ms,
-        drift_ppm=camera.drift_ppm, drift_rate_ppm_per_s=camera.drift_rate_ppm_per_s,
-        offset_ms=camera.offset_ms, start_ms=camera.start_ms, alpha=alpha, beta_ms=beta, row_time_ms=row,
-        frame_index=[int(f) for f in frame_index], frame_times_ms=[float(t) for t in frame_times_ms],
+        name=camera.name,
+        file=file,
+        width=camera.width,
+        height=camera.height,
+        fps=camera.fps,
+        r0=camera.r0,
+        r1=camera.r1,
+        flipped=camera.flipped,
+        exposure_ms=camera.exposure_ms,
+        drift_ppm=camera.drift_ppm,
+        drift_rate_ppm_per_s=camera.drift_rate_ppm_per_s,
+        offset_ms=camera.offset_ms,
+        start_ms=camera.start_ms,
+        alpha=alpha,
+        beta_ms=beta,
+        row_time_ms=row,
+        frame_index=[int(f) for f in frame_index],
+        frame_times_ms=[float(t) for t in frame_times_ms],
         stamps_ms=[float(t) for t in stamps_ms],
-        flashes_seen={int(k): [int(f) for f in v] for k, v in flashes_seen.items()})
+        flashes_seen={int(k): [int(f) for f in v] for k, v in flashes_seen.items()},
+    )
 
 
 @dataclass(frozen=True)
@@ -156,8 +170,9 @@ class GroundTruth:
     def global_from_world_ms(self, w_ms):
         """Global time (ms) of world times `w_ms` (ms)."""
         ref = self.cameras[self.reference]
-        return ((np.asarray(w_ms, dtype=float) - ref.offset_ms) / (1.0 + ref.drift_ppm * 1e-6)
-                - ref.r0 * ref.sensor_row_ms)
+        return (np.asarray(w_ms, dtype=float) - ref.offset_ms) / (
+            1.0 + ref.drift_ppm * 1e-6
+        ) - ref.r0 * ref.sensor_row_ms
 
     def global_time_ms(self, camera, frame, row):
         """Global time of the end of exposure of stored-image rows.
@@ -211,12 +226,18 @@ def ground_truth(scenario, cameras):
     partial = GroundTruth(cameras[0].name, {c.name: c for c in cameras}, [], [], scenario.to_dict())
     flashes = []
     for k, fl in enumerate(scenario.flashes):
-        flashes.append({
-            "world_ms": fl.world_ms,
-            "global_ms": float(partial.global_from_world_ms(fl.world_ms)),
-            "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + fl.decay_ms * np.log(2.0))),
-            "strength": fl.strength, "decay_ms": fl.decay_ms,
-            "seen_by": [c.name for c in cameras if c.flashes_seen.get(k)]})
-    switches = [{"world_ms": s.world_ms, "global_ms": float(partial.global_from_world_ms(s.world_ms)),
-                 "factor": s.factor} for s in scenario.switches]
+        flashes.append(
+            {
+                "world_ms": fl.world_ms,
+                "global_ms": float(partial.global_from_world_ms(fl.world_ms)),
+                "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + fl.decay_ms * np.log(2.0))),
+                "strength": fl.strength,
+                "decay_ms": fl.decay_ms,
+                "seen_by": [c.name for c in cameras if c.flashes_seen.get(k)],
+            }
+        )
+    switches = [
+        {"world_ms": s.world_ms, "global_ms": float(partial.global_from_world_ms(s.world_ms)), "factor": s.factor}
+        for s in scenario.switches
+    ]
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
