@@ -7,6 +7,9 @@ The library API (the ``flashsync`` command is a thin layer over it)::
     model, report = synchronize(detections)
     save_model(model, "sync.json")
     load_model("sync.json").camera("cam2").t_global_ms(frame=10, row=200.5)
+    model = load_model("sync.json")
+    frame_table(model, model_ticks_ms(model, rate_hz=100.0))      # (frame, row) at common ticks
+    write_montage(["cam1.mp4", "cam2.mkv"], model, "synced.mp4", rate_hz=25.0)
 
 Every file format has its ``load_*`` / ``save_*`` in :mod:`flashsync.io`; the discrepancy
 workflow is :mod:`flashsync.diagnose`; docs/architecture.md maps the modules.
@@ -19,7 +22,9 @@ from flashsync.frame_clock import FrameClock
 from flashsync.io.model_file import load_model, save_model
 from flashsync.match import PairAlignment
 from flashsync.model import CameraClock, SyncModel
+from flashsync.montage import MontageSummary, write_montage
 from flashsync.pipeline import SyncReport, all_events, detect_videos, solve_pairs, synchronize
+from flashsync.ticks import frame_table, model_ticks_ms
 
 __all__ = [
     "Band",
@@ -35,6 +40,7 @@ __all__ = [
     "FrameClock",
     "InputError",
     "ModelFileError",
+    "MontageSummary",
     "NotEnoughDataError",
     "PairAlignment",
     "SyncModel",
@@ -42,8 +48,11 @@ __all__ = [
     "all_events",
     "detect_video",
     "detect_videos",
+    "frame_table",
     "load_model",
+    "model_ticks_ms",
     "save_model",
     "solve_pairs",
     "synchronize",
+    "write_montage",
 ]

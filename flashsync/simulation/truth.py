@@ -20,6 +20,7 @@ import numpy as np
 
 from flashsync.errors import FlashsyncError
 from flashsync.simulation.scenario import clock_world_ms
+from flashsync.simulation.scene import make_scene
 
 
 @dataclass(frozen=True)
@@ -241,3 +242,32 @@ def ground_truth(scenario, cameras):
         for s in scenario.switches
     ]
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
+
+
+def puck_image_px(truth, homography, t_global_ms):
+    """Where the scenario's puck is in a camera's image at instants of the true global
+    clock: its rink position then, through the inverse of the camera's image -> rink
+    homography (``homographies.json``).
+
+    Parameters
+    ----------
+    truth : GroundTruth
+    homography : array of shape (3, 3)
+        The camera's image px -> rink m.
+    t_global_ms : ndarray, shape (n,)
+        Instants, true global clock, ms.
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        Image x (column) and stored-image row, px.
+    """
+    ref = truth.cameras[truth.reference]
+    world = (np.asarray(t_global_ms, dtype=float) + ref.r0 * ref.sensor_row_ms) * (
+        1.0 + ref.drift_ppm * 1e-6
+    ) + ref.offset_ms
+    scenario = truth.scenario
+    puck = make_scene(scenario["seed"], scenario["n_players"], scenario["puck_speed_mps"]).puck
+    rink = puck.position(world)
+    image = np.linalg.inv(np.asarray(homography, dtype=float)) @ np.vstack([rink.T, np.ones(len(rink))])
+    return (image[:2] / image[2]).T
