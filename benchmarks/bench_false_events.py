@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 
 from flashsync.detect import detect_video
+from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, Scenario, render_scenario
 
 #: name: (fps, exposure ms, flicker depth, flicker Hz)
@@ -121,11 +122,11 @@ def main() -> None:
         events = detection.events
         frames = len(detection.frame_times_ms)
         print(
-            f"{case:<22} {frames:>7} {events['event'].nunique() if len(events) else 0:>12} {frames / elapsed:>10.0f}",
+            f"{case:<22} {frames:>7} {len(set(events.event.tolist())):>12} {frames / elapsed:>10.0f}",
             flush=True,
         )
         if len(events):
-            print(events.to_string())
+            print(events_to_frame(events).to_string())
 
 
 if __name__ == "__main__":

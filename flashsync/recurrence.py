@@ -36,10 +36,10 @@ MIN_TOLERANCE_ROWS = 4
 
 
 @dataclass(frozen=True)
-class Band:
-    """Rows ``[start, stop)`` of one frame that changed by ``level`` (relative, signed);
-    ``cut_start`` / ``cut_stop``: it runs into the first / last lit row of the frame, so that
-    end is the frame's, not the band's."""
+class Stripe:
+    """A band as the filter sees it: rows ``[start, stop)`` of one frame that changed by
+    ``level`` (relative, signed); ``cut_start`` / ``cut_stop``: it runs into the first / last
+    lit row of the frame, so that end is the frame's, not the band's."""
 
     frame: int
     start: int
@@ -48,14 +48,14 @@ class Band:
     cut_start: bool = False
     cut_stop: bool = False
 
-    def within(self, other: Band) -> bool:
+    def within(self, other: Stripe) -> bool:
         """Same sign and at least :data:`ECHO_OVERLAP` of its rows among ``other``'s: where
         an echo of ``other`` would be (often only its middle, moved a few rows where the
         codec predicted it along a rolling flicker)."""
         shared = min(self.stop, other.stop) - max(self.start, other.start)
         return self.level * other.level > 0 and shared >= ECHO_OVERLAP * (self.stop - self.start)
 
-    def same_rows(self, other: Band) -> bool:
+    def same_rows(self, other: Stripe) -> bool:
         """Same sign, and both ends within :func:`tolerance` rows of ``other``'s: where a
         repeat of it would be (another flash that overlaps it does not end where it ends)."""
         slack = tolerance(self, other)
@@ -63,15 +63,15 @@ class Band:
         stop = self._stop_near(other, slack) or (self.cut_stop and other.cut_stop)
         return self.level * other.level > 0 and start and stop and not (self.cut_start and self.cut_stop)
 
-    def _start_near(self, other: Band, slack: float) -> bool:
+    def _start_near(self, other: Stripe, slack: float) -> bool:
         """Both start at the same row, and it is a band's end in both, not the frame's."""
         return not (self.cut_start or other.cut_start) and abs(self.start - other.start) <= slack
 
-    def _stop_near(self, other: Band, slack: float) -> bool:
+    def _stop_near(self, other: Stripe, slack: float) -> bool:
         return not (self.cut_stop or other.cut_stop) and abs(self.stop - other.stop) <= slack
 
 
-def tolerance(a: Band, b: Band) -> float:
+def tolerance(a: Stripe, b: Stripe) -> float:
     """Rows two bands' ends may differ by and still be at the same rows."""
     return max(MIN_TOLERANCE_ROWS, EDGE_TOLERANCE * min(a.stop - a.start, b.stop - b.start))
 
@@ -80,7 +80,7 @@ def tolerance(a: Band, b: Band) -> float:
 class Candidate:
     """A band waiting for its verdict: its segments' bands, its strength and what to emit."""
 
-    bands: list[Band]
+    bands: list[Stripe]
     strength: float
     payload: object
     checked: bool = True
@@ -107,18 +107,18 @@ class RecurrenceFilter:
     def __init__(self, frames: int = 6, echo_frames: int = 3):
         self.frames = frames
         self.echo_frames = echo_frames
-        self._seen: deque[Band] = deque()
+        self._seen: deque[Stripe] = deque()
         self._held: deque[Candidate] = deque()
         self.dropped = 0
         self.recent_dropped: deque[float] = deque(maxlen=25)
 
-    def see(self, band: Band) -> None:
+    def see(self, band: Stripe) -> None:
         """A band of some frame (frames in increasing order); old ones are forgotten."""
         self._seen.append(band)
         while self._seen and self._seen[0].frame < band.frame - 3 * self.frames:
             self._seen.popleft()
 
-    def hold(self, bands: list[Band], strength: float, payload: object, checked: bool = True) -> None:
+    def hold(self, bands: list[Stripe], strength: float, payload: object, checked: bool = True) -> None:
         """A candidate made of ``bands`` (its segments, already :meth:`see`-n); ``checked``
         False lets it through unexamined (a light switched on is a step, not a band)."""
         self._held.append(Candidate(bands, strength, payload, checked))

@@ -11,6 +11,7 @@ import pytest
 
 from flashsync.detect import detect_video
 from flashsync.flicker import FlickerRemover
+from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
@@ -96,8 +97,9 @@ def test_short_exposure_under_rolling_flicker(tmp_path_factory):
         folder = tmp_path_factory.mktemp(f"flicker{depth}")
         truth = render_flicker_clip(folder, depth, flashes)
         detection = detect_video(folder / "cam.mp4")
-        leading = detection.events[detection.events["edge"] == "leading"]
-        assert list(leading["frame"]) == [12 + 22 * i for i in range(len(rows))], detection.events
+        events = events_to_frame(detection.events)
+        leading = events[events["edge"] == "leading"]
+        assert list(leading["frame"]) == [12 + 22 * i for i in range(len(rows))], events
         edge_ms = truth.global_time_ms("cam", leading["frame"].to_numpy(), leading["row"].to_numpy())
         errors[depth] = (edge_ms - [f["half_rise_global_ms"] for f in truth.flashes]) / ROW_MS
         if depth:

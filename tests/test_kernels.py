@@ -157,5 +157,5 @@ def test_a_stream_of_odd_profiles_never_stops_the_detector(height, frames, fill,
     for frame, (t_ms, profile) in enumerate(remover(zip(np.arange(frames) * 40.0, profiles))):
         detector.push(frame, t_ms, profile)
     events = detector.finish()
-    assert set(events["edge"]) <= {"leading", "trailing"}
+    assert set(events.edge.tolist()) <= {"leading", "trailing"}
     remover.estimate()

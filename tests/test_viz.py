@@ -20,10 +20,9 @@ import rerun.chunk
 
 import viz
 from flashsync.errors import FlashsyncError
-from flashsync.model_file import save_model
+from flashsync.io import events_to_frame, load_homographies, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.timestamps import video_timestamps
-from tracking_adapter.formats import load_homographies
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import image_to_plane
 from viz.events import event_table
@@ -69,7 +68,7 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
             "error_m": np.hypot(0.1, 0.2),
         }
     )
-    events = all_events(detections)
+    events = events_to_frame(all_events(detections))
     spurious = events.iloc[[0]].assign(
         camera="cam1", event=events["event"].max() + 1, frame=10, row=50.25
     )  # an event no other camera saw
@@ -377,7 +376,7 @@ def free_port() -> int:
 def test_serve_hosts_the_web_viewer_until_ctrl_c(tiny):
     web_port, grpc_port = free_port(), free_port()
     script = (
-        "import viz; from flashsync.model_file import load_model; "
+        "import viz; from flashsync.io import load_model; "
         f"viz.serve(load_model({str(tiny['directory'] / 'sync.json')!r}), "
         f"web_port={web_port}, grpc_port={grpc_port})"
     )
