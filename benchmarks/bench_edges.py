@@ -1,9 +1,10 @@
 """Leading-edge precision against simulation truth, in rows (units of T_row).
 
-Run: python benchmarks/bench_edges.py [--clips N] [--sizes 320x180,640x360] [--crf 0,23]
+Run: python benchmarks/bench_edges.py [--clips N] [--sizes 320x180,640x360] [--crf 0,23] [--strengths 0.25,0.45]
 
 For each frame size and H.264 quality it renders ``--clips`` rink clips (25 fps, 20 + 60
-hidden rows, 8 flashes each at random rows and strengths 0.25-0.45, exposure 4, 8 or 16 ms,
+hidden rows, 8 flashes each at random rows and strengths 0.25-0.45 (``--strengths``; 1-2
+clips the ice: saturated edges), exposure 4, 8 or 16 ms,
 four players), detects them with ``flashsync.detect_video`` and compares every leading
 edge with the instant the flash had given half its light (the simulator's truth), mapped
 into the frame's rows. Saturated edges (flagged) are counted apart. Prints RMS, mean,
@@ -25,11 +26,13 @@ from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenari
 FPS, R0, R1, FLASHES = 25.0, 20, 60, 8
 
 
-def edge_errors(width: int, height: int, crf: int, seed: int, folder: Path) -> tuple[np.ndarray, np.ndarray]:
+def edge_errors(
+    width: int, height: int, crf: int, seed: int, folder: Path, strengths: tuple[float, float] = (0.25, 0.45)
+) -> tuple[np.ndarray, np.ndarray]:
     """Leading-edge errors (rows) of one rendered clip and which edges are saturated."""
     rng = np.random.default_rng(seed)
     row_ms = 1000.0 / FPS / (R0 + height + R1)
-    rows, strengths = rng.uniform(0.1 * height, 0.97 * height, FLASHES), rng.uniform(0.25, 0.45, FLASHES)
+    rows, strengths = rng.uniform(0.1 * height, 0.97 * height, FLASHES), rng.uniform(*strengths, FLASHES)
     flashes = tuple(
         FlashSpec(world_ms=(4 + 6 * i) * 1000.0 / FPS + (R0 + row) * row_ms, strength=strength)
         for i, (row, strength) in enumerate(zip(rows, strengths))
@@ -61,7 +64,9 @@ def main() -> None:
     parser.add_argument("--clips", type=int, default=10)
     parser.add_argument("--sizes", default="320x180,640x360")
     parser.add_argument("--crf", default="0,23")
+    parser.add_argument("--strengths", default="0.25,0.45", help="range of the flashes' strengths")
     args = parser.parse_args()
+    strengths = tuple(map(float, args.strengths.split(",")))
     print(
         f"{'size':<9} {'crf':>3} {'edges':>5} {'rms':>6} {'mean':>7} {'median':>7} {'p95':>6} {'max':>6}"
         "  (rows, |error| but the mean; saturated apart)"
@@ -72,21 +77,23 @@ def main() -> None:
             errors, saturated = [], []
             for seed in range(args.clips):
                 with tempfile.TemporaryDirectory() as folder:
-                    error, flag = edge_errors(width, height, crf, seed, Path(folder))
+                    error, flag = edge_errors(width, height, crf, seed, Path(folder), strengths)
                 errors.append(error)
                 saturated.append(flag)
             error, flag = np.concatenate(errors), np.concatenate(saturated)
             clean = np.abs(error[~flag])
-            print(
-                f"{size:<9} {crf:>3} {clean.size:>5} {np.sqrt(np.mean(clean**2)):>6.3f} "
-                f"{error[~flag].mean():>+7.3f} {np.median(clean):>7.3f} {np.percentile(clean, 95):>6.3f} "
-                f"{clean.max():>6.2f}"
-                + (
-                    f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag] ** 2)):.3f}"
-                    if flag.any()
-                    else ""
+            line = f"{size:<9} {crf:>3} {clean.size:>5} "
+            if clean.size:
+                line += (
+                    f"{np.sqrt(np.mean(clean**2)):>6.3f} {error[~flag].mean():>+7.3f} {np.median(clean):>7.3f} "
+                    f"{np.percentile(clean, 95):>6.3f} {clean.max():>6.2f}"
                 )
-            )
+            if flag.any():
+                line += (
+                    f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag] ** 2)):.3f}, "
+                    f"mean {error[flag].mean():+.3f}"
+                )
+            print(line)
 
 
 if __name__ == "__main__":

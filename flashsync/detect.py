@@ -41,8 +41,15 @@ from flashsync.recurrence import RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
 
-#: Profile level (fraction of white) of a row whose pixels are clipped.
+#: Profile level (fraction of white) of a clipped column block; a band saturates where half
+#: a row's blocks do (the median over blocks, and with it the band's level, is clipped; a few
+#: clipped blocks do not move it).
 SATURATED = 0.98
+#: Noise of a saturated band's leading edge in units of a clean one's: a clipped plateau
+#: pulls the half-level crossing early (``python benchmarks/bench_edges.py --crf 23
+#: --strengths 1.0,2.5``: 1.2-2.1 rows RMS, mean -1.2 to -2.0 rows, against 0.10-0.13 rows
+#: for unsaturated edges at crf 23); the solve weighs such edges down by its square.
+SATURATED_EDGE_SIGMA = 12.0
 #: Fewest profiles in the baseline before a frame is searched for bands (the first frames of
 #: a video, or after a light switch, compare with one or two frames only: codec and flicker
 #: differences between two frames are not averaged out).
@@ -197,7 +204,7 @@ class EventDetector:
                             int(start),
                             int(stop),
                             sign,
-                            bool(np.max(readout[start:stop]) >= SATURATED),
+                            bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
                             sigma,
                             Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop),
                         )

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flashsync.detect import CameraDetection, DetectorSettings, detect_video
+from flashsync.detect import SATURATED_EDGE_SIGMA, CameraDetection, DetectorSettings, detect_video
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.frame_clock import FrameClock, fit_frame_clock
@@ -225,6 +225,8 @@ class Matches:
         Stored-image row and readout row of the edge.
     t_frame_ms : float array
         The frame's time (frame clock), ms.
+    saturated : bool array
+        The band clipped at white (its edge is noisier: :data:`~flashsync.detect.SATURATED_EDGE_SIGMA`).
     """
 
     flash: np.ndarray
@@ -235,13 +237,16 @@ class Matches:
     row: np.ndarray
     q: np.ndarray
     t_frame_ms: np.ndarray
+    saturated: np.ndarray
 
     def __len__(self) -> int:
         return len(self.flash)
 
     def observations(self) -> Observations:
-        """What the solve needs of them."""
-        return Observations(self.camera_index, self.flash, self.t_frame_ms, self.q)
+        """What the solve needs of them: saturated edges count as :data:`SATURATED_EDGE_SIGMA`
+        times noisier."""
+        sigma_factor = np.where(self.saturated, SATURATED_EDGE_SIGMA, 1.0)
+        return Observations(self.camera_index, self.flash, self.t_frame_ms, self.q, sigma_factor)
 
     def table(self, solution: Solution) -> pd.DataFrame:
         """The matched events with the solve's results (:data:`~flashsync.model.MATCHED_EVENT_COLUMNS`)."""
@@ -429,4 +434,5 @@ def _matches(
         events.row[keep],
         q[keep],
         events.t_frame_ms[keep],
+        events.has_flag(Flag.SATURATED)[keep],
     )

@@ -93,8 +93,9 @@ class RecurrenceFilter:
     Parameters
     ----------
     frames : int
-        Frames after a band searched for its repeat (a flicker pattern returns to the same
-        rows after 2 to 6 frames at 25-60 fps).
+        Frames after a band searched for its repeat: a mains flicker pattern returns to the
+        same rows after 3 frames (30, 59.94 and 60 fps under 50 Hz mains) or 5 (25 and 50 fps
+        under 60 Hz), the P-frames of a codec with up to three B-frames between come every 4.
     echo_frames : int
         Frames before a band searched for the band it echoes (the codec's references reach
         back this far: the previous P-frame, with two B-frames between).
@@ -104,7 +105,7 @@ class RecurrenceFilter:
     ones in :attr:`dropped` and keeps the strengths of the last ones in :attr:`recent_dropped`.
     """
 
-    def __init__(self, frames: int = 6, echo_frames: int = 3):
+    def __init__(self, frames: int = 5, echo_frames: int = 3):
         self.frames = frames
         self.echo_frames = echo_frames
         self._seen: deque[Stripe] = deque()

@@ -38,13 +38,15 @@ class Observations:
     """Matched sync events: one entry per (camera, flash) observation.
 
     ``camera``, ``flash``: int arrays (n,); ``t_frame_ms``: frame timestamps (n,), ms;
-    ``q``: readout rows (n,).
+    ``q``: readout rows (n,); ``sigma_factor``: each event's noise in units of a clean
+    edge's (n,; None: all 1), e.g. :data:`flashsync.detect.SATURATED_EDGE_SIGMA` for a clipped band.
     """
 
     camera: np.ndarray
     flash: np.ndarray
     t_frame_ms: np.ndarray
     q: np.ndarray
+    sigma_factor: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -85,9 +87,10 @@ class CameraSolution:
 class Solution:
     """Result of :func:`solve_clocks`.
 
-    ``residual_ms`` and ``inlier`` have one entry per event then one per duration;
-    ``flash_ms`` the global time of each flash index (NaN for an index no inlier event names);
-    ``sigma_ms`` is the robust residual scale.
+    ``residual_ms``, ``inlier`` and ``sigma_factor`` (the equations' noise in units of a
+    clean edge's) have one entry per event then one per duration; ``flash_ms`` the global
+    time of each flash index (NaN for an index no inlier event names); ``sigma_ms`` is the
+    robust scale of the residuals over their sigma factors.
     """
 
     cameras: list[CameraSolution]
@@ -96,6 +99,7 @@ class Solution:
     inlier: np.ndarray
     sigma_ms: float
     n_unknowns: int
+    sigma_factor: np.ndarray
 
 
 def solve_clocks(
@@ -165,10 +169,11 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     return Solution(
         [system.camera_solution(x, covariance, c) for c in range(n_cameras)],
         flash_ms,
-        residual,
+        residual * system.sigma_factor,
         inlier,
         sigma,
         system.n_unknowns,
+        system.sigma_factor,
     )
 
 
@@ -213,7 +218,7 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
 
 def _bic(solution: Solution) -> float:
     """Bayesian information criterion of a solution on its inlier equations."""
-    residual = solution.residual_ms[solution.inlier]
+    residual = (solution.residual_ms / solution.sigma_factor)[solution.inlier]
     n = len(residual)
     return n * np.log(max(float(np.mean(residual**2)), 1e-18)) + solution.n_unknowns * np.log(n)
 
@@ -224,7 +229,8 @@ class _System:
     Columns: per camera (drift about mid time, shift at mid time, row time), the
     reference's first two left out; the warp values of cameras with drift knots; one band
     duration per camera that has informative durations; one global time per flash. Rows:
-    events, durations, then priors.
+    events, durations, then priors; each row divided by its sigma factor (priors carry
+    their own weight).
     """
 
     def __init__(
@@ -296,8 +302,11 @@ class _System:
             triplets.add(np.array([self.n_equations + i]), np.array([column]), np.array([weight]))
         rhs.append(np.array([weight * mean for _, weight, mean in prior_rows]))
         self.n_priors = len(prior_rows)
-        self.rhs = np.concatenate(rhs)
-        matrix = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
+        factor = np.ones(n_events) if events.sigma_factor is None else np.asarray(events.sigma_factor, np.float64)
+        self.sigma_factor = np.concatenate([factor, np.ones(self.n_equations - n_events)])
+        row_weight = np.concatenate([1.0 / self.sigma_factor, np.ones(self.n_priors)])
+        self.rhs = np.concatenate(rhs) * row_weight
+        matrix = sparse.diags(row_weight) @ triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
             raise NotEnoughDataError(
@@ -356,7 +365,8 @@ class _System:
         return np.concatenate([x_cams, x_flashes]) * self.column_scale
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        """Residuals of the events and durations, ms."""
+        """Residuals of the events and durations over their sigma factors, ms (what a clean
+        edge off by as much would be)."""
         return ((self.matrix @ (x / self.column_scale)) - self.rhs)[: self.n_equations]
 
     def covariance(self, weights: np.ndarray, scale: float) -> np.ndarray:
