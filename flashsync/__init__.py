@@ -18,6 +18,7 @@ workflow is :mod:`flashsync.diagnose`; docs/architecture.md maps the modules.
 from flashsync.detect import CameraDetection, DetectorSettings, EventDetector, detect_video
 from flashsync.errors import FlashsyncError, InputError, ModelFileError, NotEnoughDataError
 from flashsync.events import Band, Bands, Edge, Events, Flag
+from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.frame_clock import FrameClock
 from flashsync.io.model_file import load_model, save_model
 from flashsync.match import PairAlignment
@@ -37,6 +38,8 @@ __all__ = [
     "Events",
     "Flag",
     "FlashsyncError",
+    "Flicker",
+    "FlickerRemover",
     "FrameClock",
     "InputError",
     "ModelFileError",

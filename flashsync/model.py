@@ -136,12 +136,18 @@ def readout_rows(rows: np.ndarray, height: int, flipped: bool) -> np.ndarray:
 
 def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
     """Piecewise-linear hat functions of the interior ``knots_ms`` (shape (k + 2,)) at
-    ``t_ms``: shape ``t_ms.shape + (k,)``; zero at and beyond the end knots."""
+    ``t_ms``: shape ``t_ms.shape + (k,)``; zero at the end knots, and beyond them the outermost
+    segments' lines continued: a clock whose rate changes keeps the rate it had at its first
+    and last events before and after them, not its mean rate."""
     t = np.asarray(t_ms, dtype=np.float64)
-    interior = len(knots_ms) - 2
+    knots = np.asarray(knots_ms, dtype=np.float64)
+    interior = len(knots) - 2
     if interior <= 0:
         return np.zeros(t.shape + (0,))
-    return np.stack([np.interp(t, knots_ms, np.eye(interior + 2)[j + 1]) for j in range(interior)], axis=-1)
+    hats = np.stack([np.interp(t, knots, np.eye(interior + 2)[j + 1]) for j in range(interior)], axis=-1)
+    hats[..., 0] += np.minimum(t - knots[0], 0.0) / (knots[1] - knots[0])
+    hats[..., -1] += np.minimum(knots[-1] - t, 0.0) / (knots[-1] - knots[-2])
+    return hats
 
 
 #: The columns of :attr:`SyncModel.events`, one row per sync event matched into a flash: the
