@@ -191,11 +191,12 @@ class EventDetector:
         for sign in (1, -1) if peak > threshold and self._n_history >= MIN_BASELINE else ():
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
-                if (
-                    stop - start >= max(self.settings.min_rows, self.height // 100)
-                    and np.median(agree[start:stop]) >= self.settings.agreement
-                ):
-                    level = sign * float(np.median(signed[start:stop]))
+                if stop - start < max(self.settings.min_rows, self.height // 100):
+                    continue
+                level = sign * float(np.median(signed[start:stop]))
+                stripe = Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop)
+                self._recurrence.see(stripe)  # evidence of recurrence, whether or not it is light
+                if np.median(agree[start:stop]) >= self.settings.agreement:
                     segments.append(
                         _Segment(
                             frame,
@@ -206,12 +207,10 @@ class EventDetector:
                             sign,
                             bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
                             sigma,
-                            Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop),
+                            stripe,
                         )
                     )
         self._remember(readout)
-        for segment in segments:
-            self._recurrence.see(segment.stripe)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
         self._number(self._recurrence.release(frame))
 
