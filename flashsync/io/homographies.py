@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from flashsync.errors import InputError
+from flashsync.io.fields import Fields
 from flashsync.io.files import existing_file, first_line
 
 
@@ -21,7 +22,7 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
     """
     path = existing_file(path)
     try:
-        document = json.loads(path.read_text())
+        document = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise InputError(
             f'{path}: not a JSON file ({first_line(error)}); give {{"camera": [[...], [...], [...]]}} with 3x3 matrices'
@@ -30,15 +31,11 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
         raise InputError(
             f"{path}: expected a JSON object {{camera: 3x3 matrix}}; write one 3x3 image->plane homography per camera"
         )
+    fields = Fields(document, str(path), fix="write one 3x3 image->plane homography of numbers per camera")
     homographies = {}
-    for name, matrix in document.items():
-        try:
-            matrix = np.asarray(matrix, dtype=np.float64)
-        except (TypeError, ValueError):
-            matrix = np.empty(0)
-        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-300:
-            raise InputError(
-                f"{path}: the homography of camera {name!r} is not an invertible 3x3 matrix of numbers; fix that entry"
-            )
+    for name in document:
+        matrix = fields.matrix(name, (3, 3))
+        if abs(np.linalg.det(matrix)) < 1e-300:
+            fields.fail(name, "is not invertible (its determinant is 0)")
         homographies[str(name)] = matrix
     return homographies

@@ -15,33 +15,57 @@ from pathlib import Path
 import yaml
 
 from flashsync.errors import InputError
+from flashsync.io.fields import check_types, describe, is_number
+from flashsync.io.files import existing_file
 from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, check_scenario, preset
 
 
 def _build(cls: type, data: object, where: str, source: str):
-    """Instantiate dataclass `cls` from dict `data`, refusing unknown keys."""
+    """Instantiate dataclass `cls` from dict `data`, refusing unknown keys and values of
+    the wrong type (:func:`_check_types`)."""
     if not isinstance(data, dict):
         raise InputError(f"{source}: {where} must be a mapping of field names to values")
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
             raise InputError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
+    check_types(cls, data, where, source, skip=_RECORDS)
     try:
         return cls(**data)
     except TypeError as err:
         raise InputError(f"{source}: {where}: {err}") from None
 
 
+#: Fields holding records of their own, checked by their own dataclass.
+_RECORDS = ("cameras", "flashes", "switches")
+
+
+#: Fields holding records of their own, checked by their own dataclass.
+_RECORDS = ("cameras", "flashes", "switches")
+
+
 def _camera(data: object, where: str, source: str) -> CameraSpec:
     cam = _build(CameraSpec, data, where, source)
-    return dataclasses.replace(
-        cam,
-        dropped_frames=tuple(int(f) for f in cam.dropped_frames),
-        missed_flashes=tuple(int(k) for k in cam.missed_flashes),
-        gain_steps=tuple(tuple(float(v) for v in s) for s in cam.gain_steps),
-        position_m=tuple(float(v) for v in cam.position_m),
-        look_at_m=tuple(float(v) for v in cam.look_at_m),
-    )
+    try:
+        return dataclasses.replace(
+            cam,
+            dropped_frames=tuple(_whole(f) for f in cam.dropped_frames),
+            missed_flashes=tuple(_whole(k) for k in cam.missed_flashes),
+            gain_steps=tuple(tuple(float(v) for v in s) for s in cam.gain_steps),
+            position_m=tuple(float(v) for v in cam.position_m),
+            look_at_m=tuple(float(v) for v in cam.look_at_m),
+        )
+    except (TypeError, ValueError) as err:
+        raise InputError(
+            f"{source}: {where}: a list holds a value of the wrong kind ({err}); fix the scenario"
+        ) from None
+
+
+def _whole(value: object) -> int:
+    """A whole number (a frame or flash index), else a ValueError."""
+    if not is_number(value) or value != int(value):
+        raise ValueError(f"{value!r} is not a whole number")
+    return int(value)
 
 
 def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
@@ -71,7 +95,10 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
     data = dict(data)
     base = None
     if "preset" in data:
-        base = preset(data.pop("preset"))
+        name = data.pop("preset")
+        if not isinstance(name, str) or name not in PRESETS:
+            raise InputError(f"{source}: 'preset' is {describe(name)}, expected one of {', '.join(PRESETS)}")
+        base = preset(name)
         data.setdefault("name", base.name)
     names = [f.name for f in dataclasses.fields(Scenario)]
     for key in data:
@@ -89,6 +116,7 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
                 raise InputError(f"{source}: '{key}' must be a list")
             data[key] = tuple(_build(cls, d, f"{key}[{i}]", source) for i, d in enumerate(items))
     if base is not None:
+        check_types(Scenario, data, "the scenario", source, skip=_RECORDS)
         scenario = dataclasses.replace(base, **data)
     else:
         if "name" not in data or "cameras" not in data:
@@ -96,8 +124,8 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
         scenario = _build(Scenario, data, "the scenario", source)
     try:
         check_scenario(scenario, source)
-    except TypeError as err:
-        raise InputError(f"{source}: a value has the wrong type ({err})") from None
+    except (TypeError, ValueError, IndexError) as err:
+        raise InputError(f"{source}: a value has the wrong type or shape ({err}); fix the scenario") from None
     return scenario
 
 
@@ -125,12 +153,16 @@ def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     if str(path) in PRESETS and not path.is_file():
         return preset(str(path))
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"{path}: no such scenario file, nor a preset ({', '.join(PRESETS)})")
     suffix = path.suffix.lower()
     if suffix not in (".yaml", ".yml", ".json"):
         raise InputError(f"{path}: unknown scenario format '{suffix}'; use .yaml, .yml or .json")
-    text = path.read_text(encoding="utf-8")
+    path = existing_file(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise InputError(f"{path}: not UTF-8 text (byte {err.start}); save the scenario as UTF-8") from None
     try:
         data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as err:
