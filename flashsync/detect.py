@@ -28,9 +28,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numba
 import numpy as np
 
+from flashsync.compiled import njit
 from flashsync.errors import NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.model import readout_rows
@@ -254,7 +254,7 @@ class EventDetector:
         self._n_events += 1
 
 
-@numba.njit(cache=True, nogil=True)
+@njit
 def _relative_change(history, current, min_level, min_step):  # pragma: no cover - compiled
     """One frame's relative change against the baseline, with what the detector needs of it.
 
@@ -304,14 +304,14 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     return change, noise, peak, lit_start, lit_stop
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def _median5(a, b, c, d, e):  # pragma: no cover - compiled
     """Median of five values by eight comparisons (no sorting)."""
     low, high = max(min(a, b), min(c, d)), min(max(a, b), max(c, d))
     return max(min(e, low), min(max(e, low), high))
 
 
-@numba.njit(cache=True, nogil=True)
+@njit
 def _median_in_place(values, n):  # pragma: no cover - compiled
     """Median of ``values[:n]`` by insertion sort (n is small); reorders them."""
     for i in range(1, n):

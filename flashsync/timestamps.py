@@ -91,7 +91,10 @@ def open_video(path: Path) -> av.container.InputContainer:
     except av.FFmpegError as error:
         if error.errno == errno.EACCES:
             raise InputError(f"{path}: cannot be read (permission denied); check its permissions") from None
-        raise InputError(f"{path}: not a video file FFmpeg can open ({error.strerror})") from None
+        raise InputError(
+            f"{path}: not a video file FFmpeg can open ({error.strerror}); if it is one, it may be cut short "
+            "(an MP4 keeps its index at the end): copy the whole file again"
+        ) from None
     if not container.streams.video:
         container.close()
         raise InputError(f"{path}: has no video stream; give a video file")
