@@ -61,9 +61,9 @@ def _existing_parent(path: Path) -> Path:
 def atomic_output(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
 
-    An exception (or an interrupt) inside the block removes the temporary file, so a
-    failed run never leaves a half-written output behind. A path that cannot be written
-    is an :class:`~flashsync.errors.InputError` naming it.
+    An exception (or an interrupt) inside the block removes the temporary file (and the
+    folders made for it), so a failed run never leaves a half-written output behind. A path
+    that cannot be written is an :class:`~flashsync.errors.InputError` naming it.
 
     Examples
     --------
@@ -73,6 +73,7 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
     path = Path(path)
     if path.is_dir():
         raise InputError(f"{path}: is a folder; give a file name for the output")
+    created = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]  # deepest first
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with _signals_held():
@@ -81,13 +82,16 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
             temporary = Path(name)
             _TEMPORARIES.add(temporary)
     except OSError as error:
+        _remove_empty(created)
         raise InputError(f"{path}: cannot be written ({error.strerror}); choose another path") from None
+    done = False
     try:
         yield temporary
         with _signals_held():
             os.chmod(temporary, 0o666 & ~_umask())
             os.replace(temporary, path)
             _TEMPORARIES.discard(temporary)
+            done = True
     except OSError as error:
         if error.filename in (str(temporary), str(path)):
             raise InputError(f"{path}: cannot be written ({error.strerror}); choose another path") from None
@@ -96,6 +100,18 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         with _signals_held():
             temporary.unlink(missing_ok=True)
             _TEMPORARIES.discard(temporary)
+            if not done:
+                _remove_empty(created)
+
+
+def _remove_empty(folders: list[Path]) -> None:
+    """Remove the folders (deepest first) that are empty: the ones made for an output that
+    was not written."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            return
 
 
 def remove_temporaries() -> list[Path]:

@@ -518,11 +518,12 @@ def _run_sync(args) -> None:
 
     from flashsync.atomic import write_text
     from flashsync.io import events_to_frame, save_events, save_model
-    from flashsync.pipeline import all_events, check_anchors, detect_videos, solve_pairs, synchronize
+    from flashsync.pipeline import all_events, check_anchors, check_row_times, detect_videos, solve_pairs, synchronize
     from flashsync.report import pairwise_table, pairwise_text, rejected_events, sync_summary, sync_table
 
     timestamps = _timestamp_files(args.timestamps)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
+    check_row_times(options["row_times"], [video.stem for video in args.videos])
     check_anchors(args.anchor)
     outputs = {"--events": args.events, "-o": args.output, "--json": args.json, "--rrd": args.rrd}
     _files({"VIDEO": args.videos, "--timestamps": timestamps.values()}, outputs)

@@ -14,6 +14,7 @@ direction of cameras where it is not given, and the joint robust solve.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -85,10 +86,23 @@ def detect_videos(
         if unknown:
             raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}", parameter=parameter)
     stamps = {camera: load_timestamps(path) for camera, path in timestamps.items()}
+    cancelled = threading.Event()
+
+    def watched(camera: str, total: int) -> Callable[[int], None]:
+        """The progress callback, which also stops a decoding thread once the run is cancelled."""
+        update = progress(camera, total) if progress else None
+
+        def step(frames: int) -> None:
+            if cancelled.is_set():
+                raise _Cancelled()
+            if update is not None:
+                update(frames)
+
+        return step
 
     def detect(path: Path) -> CameraDetection:
         direction = True if path.stem in flipped else (None if estimate_readout else False)
-        detection = detect_video(path, flipped=direction, settings=settings, progress=progress)
+        detection = detect_video(path, flipped=direction, settings=settings, progress=watched)
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
@@ -99,7 +113,16 @@ def detect_videos(
         return detection.retimed(stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
-        return list(pool.map(detect, paths))
+        try:
+            return list(pool.map(detect, paths))
+        except BaseException:  # an error or an interrupt: the other threads stop at their next frame
+            cancelled.set()
+            pool.shutdown(cancel_futures=True)
+            raise
+
+
+class _Cancelled(Exception):
+    """Raised in a decoding thread once :func:`detect_videos` is cancelled."""
 
 
 def all_events(detections: Sequence[CameraDetection]) -> Events:

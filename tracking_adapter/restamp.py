@@ -402,9 +402,10 @@ def _stamp(
         if clock is None or not len(rows):
             continue
         frames = frame[rows].astype(np.int64)
-        columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
-        if "t_global_std_ms" in columns:
-            columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
+        with np.errstate(over="ignore", invalid="ignore"):  # a time that overflows gets a reason below
+            columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
+            if "t_global_std_ms" in columns:
+                columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
         if "t_center_ms" in columns and exposures[clock.name] is not None:
             columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposures[clock.name] / 2
     computed = [columns[name] for name in ("t_global_ms", "t_global_std_ms") if name in columns]
