@@ -77,6 +77,8 @@ class ClockSegment:
         RMS of the stamps about the clock, ms (quantisation and jitter; outliers left out).
     white : bool
         The stamps scatter about the clock as white noise: no structure is left in them.
+    period_std_ms : float
+        Standard error of the period, ms (the jitter over the root of the slots' spread).
     """
 
     start: int
@@ -85,6 +87,7 @@ class ClockSegment:
     period_ms: float
     jitter_ms: float
     white: bool
+    period_std_ms: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -145,6 +148,13 @@ class FrameClock:
         lengths = np.array([s.stop - s.start for s in self.segments])
         jitter = np.array([s.jitter_ms for s in self.segments])
         return float(np.sqrt(np.sum(lengths * jitter**2) / max(lengths.sum(), 1)))
+
+    @property
+    def rate_std(self) -> float:
+        """Relative standard error of the frame rate the clock gives the frame times (the main
+        segment's period's; 0 where the stamps are kept): an error of the camera's clock rate
+        the solve's drift must take up."""
+        return self.main.period_std_ms / self.main.period_ms if self.steady and self.main.period_ms > 0 else 0.0
 
     @property
     def steady(self) -> bool:
@@ -262,7 +272,7 @@ def fit_frame_clock(
         return FrameClock(stamps, np.arange(n), (segment,), np.zeros(n), step, quantum, np.zeros(n))
     fitter = _Fitter(stamps, step, quantum, smoothing)
     if count_gaps:
-        fits = _merge(fitter, [fitter.fit(lo, hi) for lo, hi in _split(fitter)])
+        fits = _refine(fitter, _merge(fitter, [fitter.fit(lo, hi) for lo, hi in _split(fitter)]))
     else:
         fits = [fitter.fit(0, n, np.arange(n))]
     slots = _joined_slots(stamps, fits)
@@ -300,7 +310,8 @@ class _SegmentFit:
     def segment(self, slots: np.ndarray) -> ClockSegment:
         """The clock in terms of the recording's ``slots``."""
         offset = self.intercept - self.slope * slots[self.start]
-        return ClockSegment(self.start, self.stop, offset, self.slope, self.jitter_ms, self.white)
+        period_std = self.period_se_ms if np.isfinite(self.period_se_ms) else 0.0
+        return ClockSegment(self.start, self.stop, offset, self.slope, self.jitter_ms, self.white, period_std)
 
 
 class _Fitter:
@@ -397,6 +408,33 @@ def _merge(fitter: _Fitter, fits: list[_SegmentFit]) -> list[_SegmentFit]:
                 continue
         merged.append(b)
     return merged
+
+
+def _refine(fitter: _Fitter, fits: list[_SegmentFit]) -> list[_SegmentFit]:
+    """Each boundary between segments moved to where the stamps leave one clock for the
+    other: within :data:`MIN_SEGMENT_FRAMES` of where the split put it, the frame that
+    minimises the distance of the stamps before it to the earlier clock's ladder and of
+    those from it on to the later one's."""
+    fits = list(fits)
+    for k in range(1, len(fits)):
+        a, b = fits[k - 1], fits[k]
+        lo = max(b.start - MIN_SEGMENT_FRAMES, a.start + MIN_SEGMENT_FRAMES // 2)
+        hi = min(b.start + MIN_SEGMENT_FRAMES, b.stop - MIN_SEGMENT_FRAMES // 2)
+        if hi <= lo:
+            continue
+        stamps = fitter.stamps[lo:hi]
+        before = np.concatenate([[0.0], np.cumsum(_ladder_distance(stamps, a.intercept, a.slope))])
+        after = np.concatenate([np.cumsum(_ladder_distance(stamps, b.intercept, b.slope)[::-1])[::-1], [0.0]])
+        boundary = lo + int(np.argmin(before + after))
+        if boundary != b.start:
+            fits[k - 1], fits[k] = fitter.fit(a.start, boundary), fitter.fit(boundary, b.stop)
+    return fits
+
+
+def _ladder_distance(stamps: np.ndarray, offset: float, period: float) -> np.ndarray:
+    """Distance (ms) of each stamp to the nearest time ``offset + k * period``."""
+    phase = (stamps - offset) / period
+    return np.abs(phase - np.round(phase)) * period
 
 
 def _joined_slots(stamps: np.ndarray, fits: list[_SegmentFit]) -> np.ndarray:

@@ -185,8 +185,10 @@ def synchronize(
     cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
 
+    rate_std = {name: clock.rate_std for name, clock in report.frame_clocks.items()}
+
     def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
-        return _attempt(trial, reference, row_times, anchors)
+        return _attempt(trial, reference, row_times, anchors, rate_std)
 
     best = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
@@ -431,9 +433,15 @@ class _Attempt:
 
 
 def _attempt(
-    cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None, anchors: Sequence[str]
+    cameras: dict[str, CameraDetection],
+    reference: str,
+    row_times: dict[str, float] | None,
+    anchors: Sequence[str],
+    rate_std: dict[str, float] | None = None,
 ) -> _Attempt:
-    """Match and solve with the cameras' current readout directions."""
+    """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
+    the relative standard error of its frame clock's rate (it and the reference's widen the
+    prior on its drift)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
     warnings = [
@@ -469,8 +477,14 @@ def _attempt(
     durations = _durations([cameras[name] for name in connected])
     chosen = [cameras[name] for name in connected]
 
+    rate_std = rate_std or {}
+    wider = {
+        index: float(np.hypot(rate_std.get(name, 0.0), rate_std.get(reference, 0.0)) * DRIFT_PRIOR_WIDENING)
+        for index, name in enumerate(connected)
+    }
+
     def solve(given: dict[str, float]) -> Solution:
-        priors = Priors(_row_time_priors(chosen, given))
+        priors = Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
         return solve_with_drift_model(
             matches.observations(), len(connected), connected.index(reference), durations=durations, priors=priors
         )
@@ -488,6 +502,10 @@ def _attempt(
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
+
+#: A camera's drift prior is at least this many times the relative standard error of its and
+#: the reference's frame-clock rates: the drift must take up the rate the stamps give the frames.
+DRIFT_PRIOR_WIDENING = 3.0
 
 #: A datasheet time per row is contradicted by the events when it is this many of their
 #: standard deviations and this fraction of itself away from their own estimate.
