@@ -164,11 +164,13 @@ class FrameClock:
 
     @property
     def ladder_ms(self) -> np.ndarray:
-        """The clock's time of each decoded frame, ms."""
+        """The clock's time of each decoded frame, ms (a stamp within a nanosecond of it is
+        taken as it is, free of the line's rounding)."""
         ladder = np.empty(len(self.stamps_ms))
         for s in self.segments:
             ladder[s.start : s.stop] = s.offset_ms + self.slots[s.start : s.stop] * s.period_ms
-        return ladder + self.wander_ms
+        ladder += self.wander_ms
+        return np.where(np.abs(self.stamps_ms - ladder) < 1e-6, self.stamps_ms, ladder)
 
     @property
     def times_ms(self) -> np.ndarray:
