@@ -35,6 +35,15 @@ def temporaries(folder: Path) -> list[Path]:
     return [path for path in folder.rglob(".*") if path.is_file()]
 
 
+def open_files(pid: int, folder: Path) -> list[str]:
+    """Files under ``folder`` the process has open (Linux: /proc/PID/fd)."""
+    try:
+        links = [os.readlink(entry) for entry in Path(f"/proc/{pid}/fd").iterdir()]
+    except OSError:
+        return []
+    return [link for link in links if link.startswith(str(folder))]
+
+
 def last_line(err: str) -> str:
     lines = [line for line in err.splitlines() if line.strip()]
     assert lines and "Traceback" not in err, err
@@ -130,6 +139,7 @@ def test_sync_interrupted_after_the_model_says_the_model_was_written(synced_scen
         assert "the --pairwise table not printed" in line
 
 
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc to see when decoding starts")
 def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_scenario, tmp_path):
     """SIGTERM while 45 videos decode (in threads, some seconds of work): exit 143 within a
     second or two, no output."""
@@ -140,7 +150,11 @@ def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_sce
             (videos / f"{Path(name).stem}{copy}{Path(name).suffix}").write_bytes((synced_scenario / name).read_bytes())
     out = tmp_path / "out"
     process = start("sync", *sorted(videos.iterdir()), "-o", out / "sync.json", "--events", out / "e.csv", cwd=tmp_path)
-    time.sleep(2.5)  # imports done, decoding under way
+    deadline = time.monotonic() + 60
+    while not open_files(process.pid, videos) and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)  # until a video is open: decoding has started
+    assert open_files(process.pid, videos), "no video was opened"
+    time.sleep(0.2)
     sent = time.monotonic()
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=60)
