@@ -18,7 +18,14 @@ EXAMPLES = {
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
     "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
-    "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
+    "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
+            "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+            "  flashsync validate restamped.csv --model sync.json --homographies homographies.json "
+            "--json validation.json\n"
+            "  flashsync view --model sync.json --videos cam1.mp4 cam2.mkv cam3.mp4 --events events.csv \\\n"
+            "      --detections restamped.csv --homographies homographies.json "
+            "--validation validation.json --save sync.rrd\n"
+            "  rerun sync.rrd        (or: ... --serve, then open the address it prints)",
     "simulate": "flashsync simulate sample -o sim/",
     "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
@@ -104,13 +111,21 @@ def _parser() -> argparse.ArgumentParser:
 
     view = command("view", "Show a synchronisation in the Rerun viewer: events, residuals, "
                    "videos in sync, trajectories, on one global timeline.", _run_view)
+    view.epilog += VIEW_UNITS
     view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
     output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
     output.add_argument("--serve", action="store_true",
-                        help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C")
+                        help="serve the web viewer (default http://127.0.0.1:9090) until Ctrl-C")
+    view.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
+                      help="IP address --serve listens on (default 127.0.0.1: this machine only; "
+                      "0.0.0.0: every IPv4 interface, reachable from other machines)")
+    view.add_argument("--port", type=int, default=9090, help="HTTP port of --serve's web viewer "
+                      "(default 9090)")
+    view.add_argument("--grpc-port", type=int, default=9876,
+                      help="port --serve streams the recording from (default 9876)")
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
     simulate.add_argument("scenario", nargs="?", default="sample",
@@ -136,12 +151,30 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+VIEW_UNITS = """
+
+units: the time axis (global_time) is seconds from the start of the recordings, the
+earliest first frame of any camera; the recording's description and the first lines of
+the flash log give that instant's t_global_ms (ms, the reference camera's clock).
+Residuals and their +-1 sigma band are in ms; plane positions and validation errors in
+metres (error arrows are drawn enlarged: the factor is in the plane view's title and on
+its scale bar); image positions in px. The plane view is a top view turned as the first
+camera with a homography sees it."""
+
+
 def _view_inputs(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--videos", nargs="+", type=Path, default=[], metavar="VIDEO",
                         help="videos to show in sync (camera = file stem)")
-    parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
+    parser.add_argument("--events", type=Path,
+                        help="events table from detect or sync --events (adds unmatched events)")
     parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
-    parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
+    parser.add_argument("--homographies", type=Path,
+                        help="JSON {camera: 3x3 image px -> plane m matrix}, optionally with "
+                        "\"plane\": {\"outline_m\": [[x, y], ...]}, the plane's outline (m)")
+    parser.add_argument("--plane", type=float, nargs=4, metavar=("X0", "Y0", "X1", "Y1"),
+                        help="the plane's outline as the rectangle with corners (X0, Y0) and "
+                        "(X1, Y1), m (e.g. 0 0 60 30); replaces one in --homographies. "
+                        "Without either, no outline is drawn")
     parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
 
 
@@ -282,18 +315,22 @@ def _run_validate(args) -> None:
 
 def _run_view(args) -> None:
     import json
+    import warnings
 
     import pandas as pd
 
     import viz
     from flashsync.model_file import load_model
-    from tracking_adapter.formats import load_homographies, read_detections
+    from tracking_adapter.formats import load_homographies, load_plane_outline, read_detections
 
     model = load_model(args.model)
     data = {"videos": args.videos or None,
             "events": read_detections(args.events) if args.events else None,
             "detections": read_detections(args.detections) if args.detections else None,
-            "homographies": load_homographies(args.homographies) if args.homographies else None}
+            "homographies": load_homographies(args.homographies) if args.homographies else None,
+            "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None}
+    if args.plane:
+        data["plane_outline_m"] = viz.rectangle_outline(*args.plane)
     if args.validation:
         try:
             triples = json.loads(args.validation.read_text())["triples"]
@@ -301,13 +338,23 @@ def _run_view(args) -> None:
             raise FlashsyncError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
                                  f"({type(error).__name__}: {error})") from None
         data["validation"] = pd.DataFrame.from_records(triples)
-    if args.save:
-        viz.save_recording(args.save, model, **data)
-        print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
-    elif args.spawn:
-        viz.spawn(model, **data)
-    else:
-        viz.serve(model, **data)
+    show = warnings.showwarning
+
+    def plane_warning(message, category, *rest, **options):
+        if not issubclass(category, viz.PlaneWarning):
+            return show(message, category, *rest, **options)
+        print(f"flashsync view: warning: {args.homographies}: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", viz.PlaneWarning)
+        warnings.showwarning = plane_warning
+        if args.save:
+            viz.save_recording(args.save, model, **data)
+            print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
+        elif args.spawn:
+            viz.spawn(model, **data)
+        else:
+            viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
 
 
 def _run_simulate(args) -> None:

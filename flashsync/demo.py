@@ -15,7 +15,7 @@ from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
 from flashsync.simulation import load_ground_truth
 from flashsync.tables import write_table
-from tracking_adapter.formats import load_homographies, read_detections
+from tracking_adapter.formats import load_homographies, load_plane_outline, read_detections
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -67,6 +67,7 @@ def run_demo(samples: Path | None, output: Path,
 
         viz.save_recording(recording, model, videos=videos, events=all_events(detections),
                            detections=read_detections(output / "restamped.csv"),
-                           homographies=load_homographies(samples / "homographies.json"))
+                           homographies=load_homographies(samples / "homographies.json"),
+                           plane_outline_m=load_plane_outline(samples / "homographies.json"))
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)
