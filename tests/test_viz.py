@@ -39,6 +39,25 @@ from viz.video import NOW_RATE_HZ, viewer_mp4
 RERUN = Path(sys.executable).with_name("rerun")
 ERRORS_M = np.array([0.002, 0.003, 0.0025, 0.5, 0.004, 0.002])
 """Made-up validation errors: a few millimetres, and one bounce of half a metre."""
+CLOCK_OFFSET_MS = 50_000.0
+"""The reference camera's container clock reads this at its first frame (as real cameras'
+often do), so ``global_time`` 0 is far from ``t_global_ms`` 0."""
+
+
+def with_clock_offset(model, offset_ms: float):
+    """``model`` with the reference camera's container clock ``offset_ms`` ahead: every
+    ``t_global_ms`` grows by ``offset_ms``, every frame and row keeps its instant."""
+    model = copy.deepcopy(model)
+    for name, camera in model.cameras.items():
+        if name == model.reference:
+            camera.frame_times_ms = camera.frame_times_ms + offset_ms
+            camera.drift_knots_ms = camera.drift_knots_ms + offset_ms
+        else:
+            camera.beta_ms += offset_ms
+    model.events["t_global_ms"] += offset_ms
+    reference = model.events["camera"] == model.reference
+    model.events.loc[reference, "t_frame_ms"] += offset_ms
+    return model
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -59,7 +78,7 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
     ``sync.json`` and ``tiny.rrd`` in ``directory``."""
     videos = [tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv"]
     detections = detect_videos(videos)
-    model, _ = synchronize(detections)
+    model = with_clock_offset(synchronize(detections)[0], CLOCK_OFFSET_MS)
     restamped = restamp(pd.read_csv(tiny_scenario / "detections.csv"), model)
     puck = restamped[restamped["restamp_error"].isna() & (restamped["camera"] == "cam2")]
     puck = puck.iloc[:len(ERRORS_M)]
@@ -170,6 +189,7 @@ def test_timeline_starts_at_the_earliest_first_frame_and_says_so(tiny, recording
     starts = {name: readout_start_ms(camera, [0])[0] for name, camera in model.cameras.items()}
     assert timeline.origin_ms == min(starts.values())
     assert timeline.first_camera == min(starts, key=starts.get)
+    assert timeline.origin_ms > CLOCK_OFFSET_MS - 1000
     ends = [readout_end_ms(camera, [camera.n_frames - 1])[0] for camera in model.cameras.values()]
     assert timeline.duration_ms == pytest.approx(max(ends) - timeline.origin_ms)
     logged = np.concatenate([nanos(table["global_time"]) for table in temporal.values()
