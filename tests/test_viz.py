@@ -751,6 +751,15 @@ def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
         server.send_signal(signal.SIGINT)
         assert server.wait(timeout=60) == 0
         assert not listening_addresses(web_port) and not listening_addresses(grpc_port)
+        # kill (SIGTERM) stops the server too, instead of leaving it behind.
+        server = subprocess.Popen(command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE,
+                                  text=True, start_new_session=True)
+        while not listening_addresses(web_port):
+            assert server.poll() is None and time.monotonic() < deadline + 120, "no second start"
+            time.sleep(0.5)
+        server.send_signal(signal.SIGTERM)
+        server.wait(timeout=60)
+        assert not listening_addresses(web_port) and not listening_addresses(grpc_port)
     finally:
         if server.poll() is None:
             os.killpg(server.pid, signal.SIGKILL)

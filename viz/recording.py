@@ -33,15 +33,18 @@ Rerun's automatic ``log_time``/``log_tick``.
 
 from __future__ import annotations
 
+import contextlib
 import re
+import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import urllib.parse
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -239,7 +242,8 @@ def serve(model: SyncModel, *, bind: str = BIND, web_port: int = WEB_PORT,
     file from a gRPC server on ``grpc_port``, both listening on ``bind`` only (default
     127.0.0.1: this machine; ``0.0.0.0`` is every IPv4 interface). The address
     (:func:`viewer_url`) is printed on stderr once both listen. Returns after Ctrl-C
-    (KeyboardInterrupt), having stopped the server and removed the file.
+    (KeyboardInterrupt; SIGTERM and SIGHUP too), having stopped the server and removed the
+    file.
 
     Parameters
     ----------
@@ -253,7 +257,7 @@ def serve(model: SyncModel, *, bind: str = BIND, web_port: int = WEB_PORT,
     **data
         The keyword arguments of :func:`log_sync` but ``recording``.
     """
-    with tempfile.TemporaryDirectory(prefix="flashsync-serve-") as folder:
+    with tempfile.TemporaryDirectory(prefix="flashsync-serve-") as folder, _stopped_as_by_ctrl_c():
         recording = Path(folder) / "recording.rrd"
         save_recording(recording, model, **data)
         log = Path(folder) / "rerun.log"
@@ -271,6 +275,26 @@ def serve(model: SyncModel, *, bind: str = BIND, web_port: int = WEB_PORT,
             pass
         finally:
             _stop(server)
+
+
+@contextlib.contextmanager
+def _stopped_as_by_ctrl_c() -> Iterator[None]:
+    """Within: SIGTERM and SIGHUP (``kill``, a closed terminal) raise KeyboardInterrupt like
+    Ctrl-C, so that the server is stopped, not left behind (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(number, frame):
+        raise KeyboardInterrupt(signal.Signals(number).name)
+
+    kinds = [kind for kind in ("SIGTERM", "SIGHUP") if hasattr(signal, kind)]
+    previous = {kind: signal.signal(getattr(signal, kind), interrupt) for kind in kinds}
+    try:
+        yield
+    finally:
+        for kind, handler in previous.items():
+            signal.signal(getattr(signal, kind), handler)
 
 
 def rerun_program() -> Path:
