@@ -116,7 +116,8 @@ def _parser() -> argparse.ArgumentParser:
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
-    output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
+    output.add_argument("--spawn", action="store_true",
+                        help="open the native viewer (needs a display; it listens on 127.0.0.1)")
     output.add_argument("--serve", action="store_true",
                         help="serve the web viewer (default http://127.0.0.1:9090) until Ctrl-C")
     view.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
@@ -125,7 +126,8 @@ def _parser() -> argparse.ArgumentParser:
     view.add_argument("--port", type=int, default=9090, help="HTTP port of --serve's web viewer "
                       "(default 9090)")
     view.add_argument("--grpc-port", type=int, default=9876,
-                      help="port --serve streams the recording from (default 9876)")
+                      help="port --serve streams the recording from, or --spawn's viewer listens on "
+                      "(default 9876)")
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
     simulate.add_argument("scenario", nargs="?", default="sample",
@@ -352,7 +354,7 @@ def _run_view(args) -> None:
             viz.save_recording(args.save, model, **data)
             print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
         elif args.spawn:
-            viz.spawn(model, **data)
+            viz.spawn(model, grpc_port=args.grpc_port, **data)
         else:
             viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
 

@@ -764,3 +764,13 @@ def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
         if server.poll() is None:
             os.killpg(server.pid, signal.SIGKILL)
             server.wait()
+
+
+def test_spawn_without_a_display_is_one_clear_line(tiny, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    code = main(["view", "--model", str(tiny["directory"] / "sync.json"), "--spawn",
+                 "--grpc-port", str(free_port())])
+    err = capsys.readouterr().err
+    assert code == 1 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert "needs a display" in err

@@ -34,6 +34,7 @@ Rerun's automatic ``log_time``/``log_tick``.
 from __future__ import annotations
 
 import contextlib
+import os
 import re
 import signal
 import socket
@@ -200,19 +201,41 @@ def save_recording(path: str | Path, model: SyncModel, **data) -> None:
         recording.disconnect()
 
 
-def spawn(model: SyncModel, **data) -> rr.RecordingStream:
+def spawn(model: SyncModel, *, grpc_port: int = GRPC_PORT, **data) -> rr.RecordingStream:
     """Start the native Rerun viewer (or use the one running) and stream the recording to it.
 
-    The viewer listens on port 9876 and outlives this process. Needs a display.
+    The viewer (the ``rerun`` program of rerun-sdk) listens on 127.0.0.1 only, port
+    ``grpc_port``, and outlives this process; one already listening there is used. It
+    needs a display.
 
     Parameters
     ----------
     model : SyncModel
+    grpc_port : int
+        TCP port of the viewer.
     **data
         The keyword arguments of :func:`log_sync` but ``recording``.
     """
+    if not _listening(BIND, grpc_port):
+        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                     or os.environ.get("WAYLAND_DISPLAY")):
+            raise FlashsyncError("the native Rerun viewer needs a display, and neither DISPLAY "
+                                 "nor WAYLAND_DISPLAY is set; save the recording to a file or "
+                                 "serve it to a web browser instead")
+        _check_free(BIND, grpc_port)
+        viewer = subprocess.Popen([str(rerun_program()), "--bind", BIND, "--port", str(grpc_port),
+                                   "--expect-data-soon"], stdin=subprocess.DEVNULL,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                  start_new_session=True)
+        deadline = time.monotonic() + SERVER_START_S
+        while not _listening(BIND, grpc_port):
+            if viewer.poll() is not None or time.monotonic() > deadline:
+                _stop(viewer)
+                raise FlashsyncError(f"the native Rerun viewer did not start (exit code "
+                                     f"{viewer.returncode}); try rerun --port {grpc_port} to see why")
+            time.sleep(0.2)
     recording = rr.RecordingStream(APPLICATION_ID)
-    recording.spawn()
+    recording.connect_grpc(f"rerun+http://{BIND}:{grpc_port}/proxy")
     log_sync(model, recording=recording, **data)
     recording.flush()
     return recording
