@@ -7,13 +7,19 @@ The library API (the ``flashsync`` command is a thin layer over it)::
     model, report = synchronize(detections)
     save_model(model, "sync.json")
     load_model("sync.json").camera("cam2").t_global_ms(frame=10, row=200.5)
+    model = load_model("sync.json")
+    frame_table(model, model_ticks_ms(model, rate_hz=100.0))      # (frame, row) at common ticks
+    write_montage(["cam1.mp4", "cam2.mkv"], model, "synced.mp4", rate_hz=25.0)
 """
 
 from flashsync.detect import DetectorSettings, EventDetector, detect_video
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
 from flashsync.model_file import load_model, save_model
+from flashsync.montage import write_montage
 from flashsync.pipeline import all_events, detect_videos, synchronize
+from flashsync.ticks import frame_table, model_ticks_ms
 
 __all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "SyncModel",
-           "all_events", "detect_video", "detect_videos", "load_model", "save_model", "synchronize"]
+           "all_events", "detect_video", "detect_videos", "frame_table", "load_model",
+           "model_ticks_ms", "save_model", "synchronize", "write_montage"]

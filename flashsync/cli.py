@@ -29,6 +29,9 @@ EXAMPLES = {
     "simulate": "flashsync simulate sample -o sim/",
     "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
+    "frames": "flashsync frames --model sync.json --rate 100 -o frames.csv",
+    "resample": "flashsync resample restamped.csv --model sync.json --rate 100 -o tracks.csv",
+    "montage": "flashsync montage cam1.mp4 cam2.mkv --model sync.json --rate 25 -o synced.mp4",
 }
 
 
@@ -150,7 +153,47 @@ def _parser() -> argparse.ArgumentParser:
                       help="folder for the demo's outputs (default: flashsync-demo)")
     demo.add_argument("--rrd", type=Path, metavar="OUT.rrd",
                       help="also write a Rerun recording of the demo (videos, events, puck)")
+    frames = command("frames", "Which frame and row of each camera is exposed at common instants "
+                     "(ticks) of the global clock.", _run_frames)
+    frames.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(frames, rate_default=None)
+    frames.add_argument("-o", "--output", type=Path, default=Path("frames.csv"),
+                        help="table, .csv or .parquet (default: frames.csv)")
+
+    resample = command("resample", "Each (camera, object) track interpolated at common instants of "
+                       "the global clock (input for triangulation).", _run_resample)
+    resample.add_argument("detections", type=Path, metavar="DETECTIONS")
+    resample.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(resample, rate_default=None)
+    resample.add_argument("--max-gap-ms", type=float,
+                          help="longest time between the two detections a tick is interpolated "
+                          "between (default 2.5 frame periods of the camera)")
+    resample.add_argument("--exposure", action="append", default=[], metavar="CAMERA=MS",
+                          help="exposure time of a camera in ms (mid-exposure instants); repeatable")
+    resample.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
+    resample.add_argument("-o", "--output", type=Path, default=Path("tracks.csv"),
+                          help="table, .csv or .parquet (default: tracks.csv)")
+
+    montage = command("montage", "The videos tiled in one H.264 video, in sync, with the row "
+                      "exposed at each instant drawn on every tile.", _run_montage)
+    montage.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
+    montage.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(montage, rate_default="the highest frame rate of the videos")
+    montage.add_argument("--cell", metavar="WIDTHxHEIGHT",
+                         help="size of each camera's cell, px (default: the largest width and height)")
+    montage.add_argument("-o", "--output", type=Path, default=Path("synced.mp4"),
+                         help="video, .mp4, .mkv or .mov (default: synced.mp4)")
     return parser
+
+
+def _tick_options(parser: argparse.ArgumentParser, rate_default: str | None) -> None:
+    parser.add_argument("--rate", type=float, required=rate_default is None, metavar="HZ",
+                        help="ticks per second" + (f" (default: {rate_default})" if rate_default else ""))
+    parser.add_argument("--start-ms", type=float, metavar="MS",
+                        help="first tick, global clock (default: the first tick on the rate's grid "
+                        "in the span covered by any camera)")
+    parser.add_argument("--end-ms", type=float, metavar="MS",
+                        help="end of the ticks, exclusive (default: the end of the last recording)")
 
 
 VIEW_UNITS = """
@@ -389,3 +432,56 @@ def _run_demo(args) -> None:
     from flashsync.demo import run_demo
 
     print(run_demo(args.samples, args.output, progress=_progress, recording=args.rrd))
+
+
+def _run_frames(args) -> None:
+    from flashsync.model_file import load_model
+    from flashsync.tables import table_format, write_table
+    from flashsync.ticks import frame_table, model_ticks_ms
+
+    table_format(args.output)
+    model = load_model(args.model)
+    table = frame_table(model, model_ticks_ms(model, args.rate, args.start_ms, args.end_ms))
+    write_table(table, args.output)
+    shown = table["reason"] == ""
+    print(f"{table['t_global_ms'].nunique()} ticks x {len(model.cameras)} cameras -> {args.output}: "
+          f"{int(shown.sum())} located" + "".join(
+              f", {count} {reason}" for reason, count in table.loc[~shown, "reason"].value_counts().items()),
+          file=sys.stderr)
+
+
+def _run_resample(args) -> None:
+    from flashsync.model_file import load_model
+    from flashsync.tables import table_format, write_table
+    from flashsync.ticks import model_ticks_ms
+    from tracking_adapter.formats import read_detections
+    from tracking_adapter.resample import format_resampled, resample
+
+    table_format(args.output)
+    model = load_model(args.model)
+    ticks = model_ticks_ms(model, args.rate, args.start_ms, args.end_ms)
+    result = resample(read_detections(args.detections, camera=args.camera), model, ticks,
+                      max_gap_ms=args.max_gap_ms, exposure_ms=_per_camera_ms("--exposure", args.exposure),
+                      source=str(args.detections))
+    write_table(result.tracks, args.output)
+    print(format_resampled(result, str(args.detections), str(args.output)), file=sys.stderr)
+
+
+def _run_montage(args) -> None:
+    from flashsync.model_file import load_model
+    from flashsync.montage import write_montage
+
+    summary = write_montage(args.videos, load_model(args.model), args.output, args.rate,
+                            args.start_ms, args.end_ms, cell=_cell(args.cell), progress=_progress)
+    print(f"{summary.frames} frames of {summary.width}x{summary.height} at {summary.rate_hz:g} Hz "
+          f"from {summary.start_ms:.1f} ms -> {summary.path}", file=sys.stderr)
+
+
+def _cell(text: str | None) -> tuple[int, int] | None:
+    """``'640x360'`` -> ``(640, 360)``."""
+    if text is None:
+        return None
+    width, _, height = text.lower().partition("x")
+    if not (width.isdigit() and height.isdigit() and int(width) >= 16 and int(height) >= 16):
+        raise FlashsyncError(f"--cell {text}: expected WIDTHxHEIGHT in px, at least 16x16, e.g. 640x360")
+    return int(width), int(height)

@@ -8,26 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from flashsync.cli import main
 from flashsync.evaluate import sync_errors
 from flashsync.model_file import load_model
 from flashsync.simulation import (CameraSpec, FlashSpec, Scenario, load_ground_truth,
                                   render_scenario)
 
-
-def run(capsys, *args):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    code = main([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def one_error_line(err: str, *words: str) -> None:
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err and "error:" in lines[0]
-    for word in words:
-        assert word in lines[0], lines[0]
+from cli_run import one_error_line, run
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +74,8 @@ def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, 
 
 
 def test_help_of_every_command_has_an_example():
-    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo"):
+    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo", "frames", "resample",
+                    "montage"):
         result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"],
                                 capture_output=True, text=True)
         assert result.returncode == 0 and "example:" in result.stdout and "flashsync " + command in result.stdout

@@ -23,6 +23,7 @@ import numpy as np
 from flashsync.errors import FlashsyncError
 from flashsync.atomic import write_text
 from flashsync.simulation.scenario import clock_world_ms
+from flashsync.simulation.scene import make_scene
 
 FORMAT = "flashsync-truth"
 VERSION = 1
@@ -263,3 +264,31 @@ def load_ground_truth(path):
         c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})
         cameras[name] = CameraTruth(**c)
     return GroundTruth(data["reference"], cameras, data["flashes"], data["switches"], data["scenario"])
+
+
+def puck_image_px(truth, homography, t_global_ms):
+    """Where the scenario's puck is in a camera's image at instants of the true global
+    clock: its rink position then, through the inverse of the camera's image -> rink
+    homography (``homographies.json``).
+
+    Parameters
+    ----------
+    truth : GroundTruth
+    homography : array of shape (3, 3)
+        The camera's image px -> rink m.
+    t_global_ms : ndarray, shape (n,)
+        Instants, true global clock, ms.
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        Image x (column) and stored-image row, px.
+    """
+    ref = truth.cameras[truth.reference]
+    world = ((np.asarray(t_global_ms, dtype=float) + ref.r0 * ref.sensor_row_ms)
+             * (1.0 + ref.drift_ppm * 1e-6) + ref.offset_ms)
+    scenario = truth.scenario
+    puck = make_scene(scenario["seed"], scenario["n_players"], scenario["puck_speed_mps"]).puck
+    rink = puck.position(world)
+    image = np.linalg.inv(np.asarray(homography, dtype=float)) @ np.vstack([rink.T, np.ones(len(rink))])
+    return (image[:2] / image[2]).T
