@@ -44,7 +44,7 @@ VIEWPORT = {"width": 1600, "height": 1000}
 CONTENT_Y = (35, 971)
 """Rows of the viewer's panels at this viewport: below its top bar, above the time slider."""
 TITLE_PX, LOG_FIRST_ROW_PX, LOG_ROW_PX = 26, 82, 19.9
-SETTLE_S, TIMEOUT_S = 10.0, 150.0
+SETTLE_S, TIMEOUT_S = 5.0, 150.0
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("playwright") is None or not CHROMIUM.exists(),

@@ -651,6 +651,29 @@ def test_model_alone_with_a_rejected_event(tiny, tmp_path):
     assert not [path for path in {*temporal, *static} if path.startswith(("/cameras", "/plane"))]
 
 
+def test_a_flash_the_solve_could_not_place(tiny, tmp_path):
+    """Every event of a flash rejected: the model has no time for it (NaN) and residuals
+    of seconds; it keeps its place in time, and the residual plot's range the inliers'."""
+    model = copy.deepcopy(tiny["model"])
+    flashes = model.events.groupby("flash")["t_global_ms"].min().sort_values().index
+    lost = model.events["flash"] == flashes[1]
+    model.events.loc[lost, ["inlier", "t_global_ms", "residual_ms"]] = [False, np.nan, 3387.0]
+    viz.save_recording(tmp_path / "lost.rrd", model)
+    temporal, _ = read_recording(tmp_path / "lost.rrd")
+    timeline = Timeline.of(model)
+    for entity in ("/events/log", "/residuals/cam1/rejected", "/residuals/cam2/rejected"):
+        instants = nanos(temporal[entity]["global_time"])
+        assert (instants >= 0).all() and (instants <= timeline.duration_ms * 1e6).all(), entity
+    assert flash_numbers(model)[flashes[1]] == 1
+    log = temporal["/events/log"]
+    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"])
+              if level[0] == "WARN"]
+    assert len(warned) == 2 and all(line.startswith("flash 1  ") for line in warned)
+    residuals = next(v for k, v in views(read_blueprint(tmp_path / "lost.rrd")).items()
+                     if k.startswith("residuals"))
+    assert residuals["ScalarAxis:range"][0][1] < 1.0
+
+
 def test_mkv_is_remuxed_packet_for_packet(tiny, tmp_path):
     source = tiny["videos"][1]
     remuxed = viewer_mp4(source, tmp_path)

@@ -45,9 +45,25 @@ def lane_entity(camera: str) -> str:
     return f"{ROOT}/{rr.escape_entity_path_part(camera)}"
 
 
+def flash_instants_ms(model: SyncModel) -> np.ndarray:
+    """The global time (ms) of each of ``model.events``, shape (n,): its flash's
+    (``t_global_ms``); where the solve placed no flash (every event of it rejected), the
+    earliest of the flash's events on their cameras' clocks."""
+    events = model.events
+    own = np.full(len(events), np.nan)
+    frames = events["frame"].to_numpy(dtype=np.int64)
+    rows = events["row"].to_numpy(dtype=np.float64)
+    for name, index in events.groupby("camera", sort=False).indices.items():
+        own[index] = model.camera(name).t_global_ms(frames[index], rows[index])
+    earliest = pd.Series(own, index=events.index).groupby(events["flash"]).transform("min")
+    fitted = events["t_global_ms"].to_numpy(dtype=np.float64)
+    return np.where(np.isfinite(fitted), fitted, earliest.to_numpy())
+
+
 def flash_numbers(model: SyncModel) -> dict[int, int]:
     """Model flash id -> flash number in time order (0 = the earliest flash)."""
-    times = model.events.groupby("flash")["t_global_ms"].min().sort_values(kind="stable")
+    instants = pd.Series(flash_instants_ms(model), index=model.events.index)
+    times = instants.groupby(model.events["flash"]).min().sort_values(kind="stable")
     return {int(flash): number for number, flash in enumerate(times.index)}
 
 
@@ -190,9 +206,10 @@ def _event_lines(model: SyncModel, events: pd.DataFrame) -> pd.DataFrame:
     """
     colors = camera_colors(model.cameras)
     matched = model.events.reindex(columns=["flash", "camera", "event", "frame", "row",
-                                            "t_global_ms", "residual_ms", "inlier"])
+                                            "residual_ms", "inlier"])
     numbers = flash_numbers(model)
-    flash_ms = matched.groupby("flash")["t_global_ms"].transform("min")
+    flash_ms = pd.Series(flash_instants_ms(model), index=matched.index).groupby(
+        matched["flash"]).transform("min")
     camera_order = {name: i for i, name in enumerate(model.cameras)}
     rows = []
     for e, t_ms in zip(matched.itertuples(), flash_ms):

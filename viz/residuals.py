@@ -4,8 +4,11 @@ Per camera, on ``global_time``, every series named after the camera (one legend 
 per camera):
 
 ``residuals/<camera>/matched``, ``residuals/<camera>/rejected``
-    The residual (ms) of each matched event at its flash's global time: inliers (in the
-    camera's colour) and outliers (red crosses) of the solve.
+    The residual (ms) of each matched event at its flash's global time
+    (:func:`viz.events.flash_instants_ms`): inliers (in the camera's colour) and outliers
+    (red crosses) of the solve. The plot's range is set by the inliers and the bands
+    (:func:`residual_extent_ms`): an outlier far off, e.g. a flash the solve could not
+    place, is beyond it (zoom out to see it; the flash log and the lanes name it).
 ``residuals/<camera>/sigma_plus``, ``residuals/<camera>/sigma_minus``
     ``+-`` the standard deviation (ms) of the camera's global time of its middle row
     (``height // 2``) from the solve's covariance, at up to :data:`BAND_SAMPLES` frames
@@ -19,6 +22,7 @@ import numpy as np
 import rerun as rr
 
 from flashsync.model import CameraClock, SyncModel
+from viz.events import flash_instants_ms
 from viz.palette import Color, camera_colors, status_style
 from viz.series import log_series
 from viz.timeline import Timeline
@@ -43,8 +47,9 @@ def uncertainty_band(camera: CameraClock) -> tuple[np.ndarray, np.ndarray]:
 
 
 def residual_extent_ms(model: SyncModel) -> float:
-    """The largest absolute value the residual plot holds (residuals and bands), ms."""
-    values = [np.abs(model.events["residual_ms"].to_numpy(dtype=np.float64))]
+    """The largest absolute value the residual plot shows (inliers' residuals and bands), ms."""
+    inliers = model.events[model.events["inlier"].astype(bool)]
+    values = [np.abs(inliers["residual_ms"].to_numpy(dtype=np.float64))]
     values += [uncertainty_band(camera)[1] for camera in model.cameras.values()]
     finite = np.concatenate(values)
     finite = finite[np.isfinite(finite)]
@@ -58,12 +63,13 @@ def log_residuals(recording: rr.RecordingStream, model: SyncModel, timeline: Tim
     ----------
     recording : RecordingStream
     model : SyncModel
-        Its events (``camera, t_global_ms, residual_ms, inlier``) give the residuals,
-        each at its flash's global time; its cameras' covariances the bands.
+        Its events (``camera, residual_ms, inlier``) give the residuals, each at its
+        flash's global time; its cameras' covariances the bands.
     timeline : Timeline
     """
     colors = camera_colors(model.cameras)
-    matched = model.events.reindex(columns=["camera", "t_global_ms", "residual_ms", "inlier"])
+    matched = model.events.reindex(columns=["camera", "residual_ms", "inlier"]).assign(
+        t_global_ms=flash_instants_ms(model))
     for name, camera in model.cameras.items():
         for status, inlier in (("matched", True), ("rejected", False)):
             rows = matched[(matched["camera"] == name) & (matched["inlier"] == inlier)]
