@@ -44,7 +44,9 @@ VIEWPORT = {"width": 1600, "height": 1000}
 CONTENT_Y = (35, 971)
 """Rows of the viewer's panels at this viewport: below its top bar, above the time slider."""
 TITLE_PX, LOG_FIRST_ROW_PX, LOG_ROW_PX = 26, 82, 19.9
-SETTLE_S, TIMEOUT_S = 5.0, 150.0
+SETTLE_S, TIMEOUT_S = 12.0, 150.0
+"""Seconds for the viewer to load before a first screenshot (each takes seconds in software),
+and at most."""
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("playwright") is None or not CHROMIUM.exists(),
@@ -172,7 +174,7 @@ def screenshot(page, until, path: Path) -> np.ndarray:
         if until(image) or time.monotonic() - started > TIMEOUT_S:
             path.write_bytes(png)
             return image
-        time.sleep(3)
+        time.sleep(1)
 
 
 def test_default_layout_reads_at_first_glance(sample, served, tmp_path):
@@ -203,6 +205,7 @@ def test_default_layout_reads_at_first_glance(sample, served, tmp_path):
             x0, y0, _, _ = rects[title["flash log"]]
             row = 2 + 4 * 2                     # two lines on time 0, then four per flash
             page.mouse.click(x0 + 52, y0 + LOG_FIRST_ROW_PX + row * LOG_ROW_PX)
+            time.sleep(SETTLE_S / 2)            # the videos seek and decode
             flash = screenshot(page, lambda image: all(busy_fraction(crop(image, rects[name])) > 0.3
                                                        for name in cameras),
                                tmp_path / "flash2.png")

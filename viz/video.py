@@ -222,8 +222,7 @@ def log_flash_rows(recording: rr.RecordingStream, timeline: Timeline, camera: Ca
     events = events.iloc[order]
     y = events["row"].to_numpy(dtype=np.float64) + PIXEL_CENTRE
     trailing = events["edge"].eq("trailing").fillna(False).to_numpy(dtype=bool)
-    strips = np.stack([np.stack([np.zeros_like(y), y], axis=1),
-                       np.stack([np.full_like(y, camera.width), y], axis=1)], axis=1)
+    strips = _across(y, camera.width)
     colors = [STATUS_COLORS[status] for status in events["status"]]
     radii = np.where(trailing, rr.Radius.ui_points(0.75), rr.Radius.ui_points(1.5))
     recording.send_columns(flash_rows_entity(camera.name), indexes=indexes,
@@ -263,26 +262,30 @@ def log_now_line(recording: rr.RecordingStream, timeline: Timeline, camera: Came
     rate_hz : float
         Ticks per second of ``global_time``.
     """
-    start = readout_start_ms(camera, [0])[0] - timeline.origin_ms
-    end = readout_end_ms(camera, [camera.n_frames - 1])[0] - timeline.origin_ms
-    period_ms = 1000.0 / rate_hz
-    ticks = timeline.origin_ms + period_ms * np.arange(np.ceil(start / period_ms),
-                                                       np.floor(end / period_ms) + 1)
+    start = readout_start_ms(camera, [0])[0]
+    end = readout_end_ms(camera, [camera.n_frames - 1])[0]
+    period_ms, origin = 1000.0 / rate_hz, timeline.origin_ms
+    grid = origin + period_ms * np.arange(np.ceil((start - origin) / period_ms),
+                                          np.floor((end - origin) / period_ms) + 1)
     also = np.asarray(also_at_ms, dtype=np.float64)
-    ticks = np.concatenate([ticks, also[(also >= start + timeline.origin_ms)
-                                        & (also <= end + timeline.origin_ms)]])
-    ticks = timeline.origin_ms + np.unique(np.round((ticks - timeline.origin_ms) * 1e6)) / 1e6
+    ticks = np.concatenate([grid, also[(also >= start) & (also <= end)]])
+    ticks = origin + np.unique(np.round((ticks - origin) * 1e6)) / 1e6       # whole ns, once
     _, rows = camera.locate(ticks)
     shown = np.isfinite(rows)
     keep = shown | np.concatenate([[False], shown[:-1]])      # a tick that clears the line
     ticks, rows, shown = ticks[keep], rows[keep], shown[keep]
-    y = rows[shown] + PIXEL_CENTRE
-    strips = np.stack([np.stack([np.zeros_like(y), y], axis=1),
-                       np.stack([np.full_like(y, camera.width), y], axis=1)], axis=1)
     entity = now_entity(camera.name)
     recording.log(entity, rr.LineStrips2D.from_fields(colors=[NOW_COLOR],
                                                       radii=[rr.Radius.ui_points(1.0)]),
                   static=True)
     recording.send_columns(entity, indexes=[timeline.column(ticks)],
-                           columns=rr.LineStrips2D.columns(strips=strips)
+                           columns=rr.LineStrips2D.columns(
+                               strips=_across(rows[shown] + PIXEL_CENTRE, camera.width))
                            .partition(shown.astype(np.int64)))
+
+
+def _across(y: np.ndarray, width: int) -> np.ndarray:
+    """Horizontal lines across an image of ``width`` px at heights ``y`` (Rerun image
+    coordinates), shape (n, 2, 2)."""
+    return np.stack([np.stack([np.zeros_like(y), y], axis=1),
+                     np.stack([np.full_like(y, width), y], axis=1)], axis=1)
