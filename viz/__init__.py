@@ -1,9 +1,10 @@
 """Rerun visualisation of a flashsync synchronisation.
 
 Events, residuals, videos in sync, trajectories in the plane and validation errors in
-one Rerun recording on the reference clock (timeline ``global_time``). Only this package
-imports Rerun. See :mod:`viz.recording` for the entity paths and :mod:`viz.timeline` for
-the timelines.
+one Rerun recording on one timeline, ``global_time``: the global clock from the start of
+the recordings. Only this package imports Rerun. See :mod:`viz.recording` for the entity
+paths, :mod:`viz.timeline` for the timelines, :mod:`viz.blueprint` for the default layout
+and :mod:`viz.plane` for the plane view.
 
 Examples
 --------
