@@ -32,7 +32,7 @@ from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import image_to_plane
 from viz.events import event_table, flash_numbers, lane_events
 from viz.plane import display_transform, plane_view
-from viz.scales import FROM_ZERO, SYMMETRIC, format_length, nice_ceiling, nice_floor
+from viz.scales import format_length, nice_ceiling, nice_floor, ticked_range
 from viz.timeline import Timeline, readout_end_ms, readout_start_ms
 from viz.video import NOW_RATE_HZ, viewer_mp4
 
@@ -521,11 +521,11 @@ def test_blueprint_reads_at_first_glance(tiny):
     assert max(starts) == 0 and starts[0] == min(starts) > -0.05 * ranges[0]["end"]
     for plot in (residuals, errors):
         assert plot["PlotLegend:visible"] == [True]
-    # Value ranges hold a labelled tick besides 0 (a power of ten step, at most 8 steps).
+    # Value ranges hold a labelled tick besides 0: a power of ten, few enough times in range.
     for plot in (residuals, errors):
         low, high = plot["ScalarAxis:range"][0]
         step = 10.0 ** np.floor(np.log10(max(abs(low), abs(high)) / 1.1 * 1.0001))
-        assert (high - low) / step <= 8.5 and max(abs(low), abs(high)) >= step
+        assert (high - low) / step <= 7 and max(abs(low), abs(high)) >= step
     top = residuals["ScalarAxis:range"][0][1]
     assert top >= viz.residuals.residual_extent_ms(model)
     assert errors["ScalarAxis:range"][0][1] >= ERRORS_M.max()
@@ -536,9 +536,12 @@ def test_blueprint_reads_at_first_glance(tiny):
 
 def test_nice_numbers():
     assert nice_ceiling(0.07) == 0.1 and nice_ceiling(0.012) == 0.02 and nice_ceiling(3.0) == 5.0
-    assert nice_ceiling(0.035, SYMMETRIC) == pytest.approx(0.1)
-    assert nice_ceiling(0.025, SYMMETRIC) == pytest.approx(0.03)
-    assert nice_ceiling(0.55, FROM_ZERO) == pytest.approx(0.6)
+    # Ranges whose power-of-ten ticks are 25 px or more apart on the plot's height.
+    assert ticked_range(0.025, 200, symmetric=True) == pytest.approx((-0.033, 0.033))
+    assert ticked_range(0.035, 200, symmetric=True) == pytest.approx((-0.11, 0.11))
+    assert ticked_range(0.74, 170, symmetric=False) == pytest.approx((-0.1, 1.1))
+    assert ticked_range(0.74, 300, symmetric=False) == pytest.approx((-0.08, 0.88))
+    assert ticked_range(0.55, 200, symmetric=False) == pytest.approx((-0.06, 0.66))
     assert nice_floor(670.0) == 500.0 and nice_floor(1.0) == 1.0
     assert format_length(0.02) == "2 cm" and format_length(0.005) == "5 mm"
     assert format_length(12.0) == "12 m" and format_length(32530.5) == "32.5 km"
@@ -550,13 +553,34 @@ def test_nice_numbers():
 def test_no_outline_unless_given(tiny, tmp_path):
     data = {key: tiny[key] for key in ("model", "detections", "homographies")}
     viz.save_recording(tmp_path / "none.rrd", **data)
-    _, static = read_recording(tmp_path / "none.rrd")
+    temporal, static = read_recording(tmp_path / "none.rrd")
     assert "/plane/map/outline" not in static and "/plane/map/grid" in static
+    # The view holds every observation (the data's extent, as the reference camera sees it).
+    points = np.concatenate([np.stack(list(p)) for path, table in temporal.items()
+                             if path.startswith("/plane/observations/")
+                             for p in table["Points2D:positions"]])
+    transform = np.asarray(list(static["/plane"]["Transform3D:mat3x3"][0][0])).reshape(3, 3).T
+    shown = points @ transform[:2, :2].T
+    plane = next(v for k, v in views(read_blueprint(tmp_path / "none.rrd")).items()
+                 if k.startswith("plane"))
+    bounds = plane["VisualBounds2D:range"][0]
+    assert bounds["x_range"][0] < shown[:, 0].min() and shown[:, 0].max() < bounds["x_range"][1]
+    assert bounds["y_range"][0] < shown[:, 1].min() and shown[:, 1].max() < bounds["y_range"][1]
     viz.save_recording(tmp_path / "box.rrd", plane_outline_m=viz.rectangle_outline(0, 0, 60, 30),
                        **data)
     _, static = read_recording(tmp_path / "box.rrd")
     outline = np.stack(static["/plane/map/outline"]["LineStrips2D:strips"][0][0])
     np.testing.assert_array_equal(outline, [[0, 0], [60, 0], [60, 30], [0, 30], [0, 0]])
+
+
+def test_plane_extent_without_outline_holds_the_data_but_stray_points(tiny):
+    rng = np.random.default_rng(1)
+    points = np.concatenate([rng.uniform([0, 0], [50, 20], (1000, 2)),
+                             [[-8.0, 10.0]] * 8,                     # a few at the edge
+                             [[1e6, 10.0]]])                         # one far off
+    view = plane_view(tiny["model"], None, None, points, np.zeros(0))
+    assert view.low_m[0] == -8.0 and 50 < view.high_m[0] < 60
+    assert 0 <= view.low_m[1] < 0.5 and 19.5 < view.high_m[1] <= 20
 
 
 def test_plane_outline_in_the_homographies_file(tmp_path):

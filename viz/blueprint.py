@@ -26,27 +26,27 @@ import rerun.blueprint as rrb
 from flashsync.model import SyncModel
 from viz import events, residuals, validation
 from viz.plane import PLANE, PlaneView
-from viz.scales import FROM_ZERO, SYMMETRIC, nice_ceiling
+from viz.scales import ticked_range
 from viz.timeline import GLOBAL_TIMELINE, Timeline
 from viz.video import camera_entity
 
 TRAIL_S = 0.5
 VIDEO_COLUMNS = 4
-WINDOW_PX = 1600.0
-"""Width of the viewer's window the layout is made for, px."""
+WINDOW_PX = (1600.0, 1000.0)
+"""Width and height of the viewer's window the layout is made for, px."""
 _LEGEND_PX = (28.0, 7.0)
 """Width of a legend: marker and padding, and per character of the longest name, px."""
 _VIDEO_SHARE = 0.28
 _LEFT_SHARE = 0.33
-PLOT_WIDTH_PX = WINDOW_PX * (1 - _LEFT_SHARE)
-"""Width of the stacked plots in a :data:`WINDOW_PX` wide window, px."""
+PLOT_WIDTH_PX = WINDOW_PX[0] * (1 - _LEFT_SHARE)
+"""Width of the stacked plots in a :data:`WINDOW_PX` window, px."""
+_CHROME_PX = (65.0, 56.0)
+"""Heights of the viewer's top bar and time slider, and of a plot's title and time axis, px."""
 _DIGIT_PX, _CHAR_PX, _AXIS_PAD_PX, _LANES_GUTTER_PX = 6.0, {"-": 5.0, ".": 4.0}, 12.0, 1.0
 """Widths in the viewer's default font: a digit, a minus sign and a point; the padding of a
 plot's value axis; the left edge of the event lanes."""
 _LANE_SHARE = (0.06, 0.062)
 """Height of the event lanes among the plots: a share, plus one per camera."""
-_PAD = 1.1
-"""Value ranges reach this far beyond their round limit, so its tick label is not cut."""
 
 
 def legend_margin(names: Collection[str]) -> float:
@@ -78,11 +78,15 @@ def sync_blueprint(model: SyncModel, timeline: Timeline, *, video_cameras: Colle
     legend_names = [f"at {name}" if errors_max_m is not None else name for name in model.cameras]
     end_s = timeline.duration_ms / 1000 * (1 + legend_margin(legend_names))
     legend = rrb.PlotLegend(corner=rrb.Corner2D.RightTop, visible=True)
-    residual_top = _PAD * nice_ceiling(max(residuals.residual_extent_ms(model), 1e-6), SYMMETRIC)
-    value_ranges = [(-residual_top, residual_top)]
+    videos = [name for name in model.cameras if name in video_cameras]
+    n_plots = 1 if errors_max_m is None else 2
+    lanes = min(0.4, _LANE_SHARE[0] + _LANE_SHARE[1] * len(model.cameras))
+    plot_px = ((WINDOW_PX[1] - _CHROME_PX[0]) * (1 - _VIDEO_SHARE if videos else 1)
+               * (1 - lanes) / n_plots - _CHROME_PX[1])
+    value_ranges = [ticked_range(max(residuals.residual_extent_ms(model), 1e-6), plot_px,
+                                 symmetric=True)]
     if errors_max_m is not None:
-        error_top = nice_ceiling(max(errors_max_m, 1e-6), FROM_ZERO)
-        value_ranges.append(((1 - _PAD) * error_top, _PAD * error_top))
+        value_ranges.append(ticked_range(max(errors_max_m, 1e-6), plot_px, symmetric=False))
     gutters = [_LANES_GUTTER_PX] + [value_axis_px(*value_range) for value_range in value_ranges]
     time_axes = [_time_axis(end_s, gutter, max(gutters)) for gutter in gutters]
     series: list[rrb.View] = [
@@ -114,10 +118,8 @@ def sync_blueprint(model: SyncModel, timeline: Timeline, *, video_cameras: Colle
                                                                                y_range=y_range),
                                               time_ranges=trail),
                             log, row_shares=[0.55, 0.45])
-    lanes = min(0.5, _LANE_SHARE[0] + _LANE_SHARE[1] * len(model.cameras))
-    plots = rrb.Vertical(*series, row_shares=[lanes] + [(1 - lanes) / (len(series) - 1)] * (len(series) - 1))
+    plots = rrb.Vertical(*series, row_shares=[lanes] + [(1 - lanes) / n_plots] * n_plots)
     rows: list[rrb.View | rrb.Container] = []
-    videos = [name for name in model.cameras if name in video_cameras]
     if videos:
         rows.append(rrb.Grid(*[_video_view(model, name) for name in videos],
                              grid_columns=min(len(videos), VIDEO_COLUMNS)))

@@ -167,7 +167,8 @@ def plane_view(model: SyncModel, homographies: Mapping[str, np.ndarray] | None,
         The plane's outline, m; its bounding box is the extent shown.
     points_m : ndarray of shape (k, 2)
         Every plane position to show (observations, validation), m; without an outline
-        their 1st to 99th percentile box (at least 1 m) is the extent shown.
+        their bounding box is the extent shown (at least 1 m), leaving out stray points
+        further than half its size beyond their 1st to 99th percentile box.
     errors_m : ndarray of shape (e,)
         Validation errors, m; empty without validation.
     """
@@ -182,7 +183,10 @@ def plane_view(model: SyncModel, homographies: Mapping[str, np.ndarray] | None,
     if outline_m is not None:
         low, high = outline_m.min(axis=0), outline_m.max(axis=0)
     elif len(points):
-        low, high = np.percentile(points, 1, axis=0), np.percentile(points, 99, axis=0)
+        box_low, box_high = np.percentile(points, 1, axis=0), np.percentile(points, 99, axis=0)
+        reach = (box_high - box_low) / 2
+        near = points[np.all((points >= box_low - reach) & (points <= box_high + reach), axis=1)]
+        low, high = near.min(axis=0), near.max(axis=0)
     else:
         low, high = np.zeros(2), np.ones(2)
     middle, half = (low + high) / 2, np.maximum((high - low) / 2, 0.5)
