@@ -495,7 +495,9 @@ def test_validation_arrows_are_scaled_and_long_ones_cut(tiny, recording):
     np.testing.assert_allclose(errors, triples["error_m"])
     assert static["/validation/at_cam2/from_cam1/puck"]["SeriesPoints:names"][0][0] == "at cam2"
     label = static["/plane/map/scale"]["LineStrips2D:labels"][0][0]
-    assert f"×{scale:g}" in label and format_length(cap / scale) in label
+    assert label.startswith(f"error {format_length(cap / scale)} ×{scale:g} ")
+    bar = np.stack(static["/plane/map/scale"]["LineStrips2D:strips"][0][0])
+    assert np.hypot(*(bar[1] - bar[0])) == pytest.approx(cap, rel=1e-5)
 
 
 def test_blueprint_reads_at_first_glance(tiny):

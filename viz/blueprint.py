@@ -40,7 +40,7 @@ _VIDEO_SHARE = 0.28
 _LEFT_SHARE = 0.33
 PLOT_WIDTH_PX = WINDOW_PX[0] * (1 - _LEFT_SHARE)
 """Width of the stacked plots in a :data:`WINDOW_PX` window, px."""
-_CHROME_PX = (65.0, 56.0)
+_CHROME_PX = (65.0, 46.0)
 """Heights of the viewer's top bar and time slider, and of a plot's title and time axis, px."""
 _DIGIT_PX, _CHAR_PX, _AXIS_PAD_PX, _LANES_GUTTER_PX = 6.0, {"-": 5.0, ".": 4.0}, 12.0, 1.0
 """Widths in the viewer's default font: a digit, a minus sign and a point; the padding of a

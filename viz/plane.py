@@ -11,7 +11,7 @@ up). Hovering a point still shows plane metres.
 ``plane/map/outline``  the plane's outline, when one is given (LineStrips2D), static
 ``plane/map/grid``     metre grid over the shown extent (LineStrips2D), static
 ``plane/map/ticks``    grid values, ``x 10 m``, ``y 5 m`` (Points2D labels), static
-``plane/map/scale``    scale bar of the validation error arrows (LineStrips2D), static
+``plane/map/scale``    the longest error arrow drawn, and its error (LineStrips2D), static
 =====================  =============================================================
 
 The outline is never invented: it comes from the homographies file (``"plane":
@@ -287,15 +287,14 @@ def log_plane(recording: rr.RecordingStream, view: PlaneView) -> None:
 
 
 def _log_scale_bar(recording: rr.RecordingStream, view: PlaneView) -> None:
-    """A bar over the extent's top right corner (display) as long as a drawn error arrow of
-    a round length, labelled with that length and the scale."""
+    """A bar above the extent (display) as long as the longest error arrow drawn, labelled
+    with its error and the scale; longer errors are cut to it (orange)."""
     (x0, x1), (y0, _) = view.display_bounds()
-    width = x1 - x0
-    error = nice_floor(0.15 * width / view.error_scale)
-    start = np.array([(x0 + x1 - error * view.error_scale) / 2, y0 + 0.025 * width])
-    bar = np.stack([start, start + [error * view.error_scale, 0.0]]) @ view.to_display  # -> m
-    cut = format_length(view.arrow_cap_m() / view.error_scale)
+    length = view.arrow_cap_m()
+    start = np.array([(x0 + x1 - length) / 2, y0 + 0.025 * (x1 - x0)])
+    bar = np.stack([start, start + [length, 0.0]]) @ view.to_display      # display -> plane m
+    error = format_length(length / view.error_scale)
     recording.log(SCALE_ENTITY, rr.LineStrips2D([bar], colors=ERROR_COLOR, radii=rr.Radius.ui_points(2.0),
-                                                labels=[f"error {format_length(error)} ×{view.error_scale:g}"
-                                                        f" (orange: over {cut}, cut)"],
+                                                labels=[f"error {error} ×{view.error_scale:g} "
+                                                        f"(longer: cut, orange)"],
                                                 show_labels=True), static=True)
