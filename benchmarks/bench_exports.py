@@ -50,19 +50,22 @@ def main() -> None:
     table = frame_table(model, ticks)
     errors = tick_errors_ms(table, model, truth)
     sync = sync_errors(model, truth).set_index("camera")
-    print(f"frames at {args.rate:g} Hz on {args.folder.name}: true end of exposure of the row given "
-          "minus the tick")
-    print(f"{'camera':<8}{'inside':>8}{'located':>9}{'RMS ms':>9}{'max ms':>9}{'RMS rows':>10}"
-          f"{'max rows':>10}{'sync RMS ms':>13}")
+    print(f"frames at {args.rate:g} Hz on {args.folder.name}: true end of exposure of the row given minus the tick")
+    print(
+        f"{'camera':<8}{'inside':>8}{'located':>9}{'RMS ms':>9}{'max ms':>9}{'RMS rows':>10}"
+        f"{'max rows':>10}{'sync RMS ms':>13}"
+    )
     located = table.loc[table["reason"] == "", "camera"].to_numpy()
     for name, clock in model.cameras.items():
         mine = table[table["camera"] == name]
         inside = ~mine["reason"].isin(["before the recording", "after the recording"])
         error = errors[located == name]
         rms, worst = float(np.sqrt(np.mean(error**2))), float(np.abs(error).max())
-        print(f"{name:<8}{int(inside.sum()):>8}{(mine['reason'] == '').sum() / inside.sum():>9.1%}"
-              f"{rms:>9.4f}{worst:>9.4f}{rms / clock.row_time_ms:>10.3f}"
-              f"{worst / clock.row_time_ms:>10.3f}{sync.loc[name, 'rms_ms']:>13.4f}")
+        print(
+            f"{name:<8}{int(inside.sum()):>8}{(mine['reason'] == '').sum() / inside.sum():>9.1%}"
+            f"{rms:>9.4f}{worst:>9.4f}{rms / clock.row_time_ms:>10.3f}"
+            f"{worst / clock.row_time_ms:>10.3f}{sync.loc[name, 'rms_ms']:>13.4f}"
+        )
     every = float(np.sqrt(np.mean(errors**2)))
     print(f"{'all':<8}{'':>8}{'':>9}{every:>9.4f}")
 
@@ -76,8 +79,10 @@ def main() -> None:
         mine = (interpolated["camera"] == name).to_numpy()
         true = puck_image_px(truth, homographies[name], instants[mine])
         distance = np.hypot(*(interpolated.loc[mine, ["x", "y"]].to_numpy() - true).T)
-        print(f"{name:<8}{mine.sum():>8}{np.median(distance):>9.3f}{np.percentile(distance, 95):>9.3f}"
-              f"{distance.max():>9.3f}")
+        print(
+            f"{name:<8}{mine.sum():>8}{np.median(distance):>9.3f}{np.percentile(distance, 95):>9.3f}"
+            f"{distance.max():>9.3f}"
+        )
 
 
 if __name__ == "__main__":

@@ -103,17 +103,32 @@ def main() -> None:
             montage.append(time.perf_counter() - start)
             encode.append(encode_seconds(workdir / "synced.mp4", workdir))
         floor = min(decode) + min(encode)
-        print(f"machine: {platform.machine()}, {os.cpu_count()} cores, PyAV {av.__version__}, "
-              f"best of {args.rounds} rounds")
-        print(f"montage of {len(videos)} videos ({decoded} frames) -> {summary.frames} frames of "
-              f"{summary.width}x{summary.height} at 30 Hz")
+        print(
+            f"machine: {platform.machine()}, {os.cpu_count()} cores, PyAV {av.__version__}, "
+            f"best of {args.rounds} rounds"
+        )
+        print(
+            f"montage of {len(videos)} videos ({decoded} frames) -> {summary.frames} frames of "
+            f"{summary.width}x{summary.height} at 30 Hz"
+        )
         print(f"decode inputs:   {min(decode):6.2f} s")
         print(f"encode output:   {min(encode):6.2f} s")
         print(f"write_montage:   {min(montage):6.2f} s   ratio to the floor {min(montage) / floor:.2f}")
         for span_ms in (2000.0, 8000.0):
-            result = subprocess.run([sys.executable, "-c", MEMORY_PROBE, str(workdir / "sync.json"),
-                                     str(workdir / "memory.mp4"), str(span_ms), *map(str, videos)],
-                                    capture_output=True, text=True, check=True)
+            result = subprocess.run(
+                [
+                    sys.executable,
+                    "-c",
+                    MEMORY_PROBE,
+                    str(workdir / "sync.json"),
+                    str(workdir / "memory.mp4"),
+                    str(span_ms),
+                    *map(str, videos),
+                ],
+                capture_output=True,
+                text=True,
+                check=True,
+            )
             frames, megabytes = result.stdout.split()
             print(f"peak memory, {span_ms / 1000:.0f} s montage ({frames} frames): {megabytes} MB")
 

@@ -20,6 +20,19 @@ from flashsync.montage import write_montage
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.ticks import frame_table, model_ticks_ms
 
-__all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "SyncModel",
-           "all_events", "detect_video", "detect_videos", "frame_table", "load_model",
-           "model_ticks_ms", "save_model", "synchronize", "write_montage"]
+__all__ = [
+    "CameraClock",
+    "DetectorSettings",
+    "EventDetector",
+    "FlashsyncError",
+    "SyncModel",
+    "all_events",
+    "detect_video",
+    "detect_videos",
+    "frame_table",
+    "load_model",
+    "model_ticks_ms",
+    "save_model",
+    "synchronize",
+    "write_montage",
+]

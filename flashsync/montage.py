@@ -29,8 +29,7 @@ from av.video.reformatter import VideoReformatter
 from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
-from flashsync.ticks import (AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms,
-                             tick_period_ms)
+from flashsync.ticks import AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms, tick_period_ms
 from flashsync.timestamps import open_video, video_timestamps
 
 #: Output containers by file extension.
@@ -108,9 +107,20 @@ def layout(sizes: dict[str, tuple[int, int]], cell: tuple[int, int] | None = Non
         scale = min(cell_width / width, cell_height / height)
         tile_width, tile_height = max(round(width * scale), 1), max(round(height * scale), 1)
         cell_left, cell_top = (index % columns) * cell_width, (index // columns) * cell_height
-        tiles.append(Tile(camera, cell_left + (cell_width - tile_width) // 2,
-                          cell_top + (cell_height - tile_height) // 2, tile_width, tile_height,
-                          tile_height / height, cell_left, cell_top, cell_width, cell_height))
+        tiles.append(
+            Tile(
+                camera,
+                cell_left + (cell_width - tile_width) // 2,
+                cell_top + (cell_height - tile_height) // 2,
+                tile_width,
+                tile_height,
+                tile_height / height,
+                cell_left,
+                cell_top,
+                cell_width,
+                cell_height,
+            )
+        )
     return tiles
 
 
@@ -129,25 +139,38 @@ def named_videos(paths: Sequence[str | Path], model: SyncModel) -> dict[str, Pat
     videos: dict[str, Path] = {}
     for path in map(Path, paths):
         if path.stem in videos:
-            raise FlashsyncError(f"{path}: two videos are named {path.stem}; camera names are file "
-                                 "stems and must be unique: rename one")
+            raise FlashsyncError(
+                f"{path}: two videos are named {path.stem}; camera names are file stems and must be unique: rename one"
+            )
         if not path.is_file():
             raise FlashsyncError(f"{path}: no such file; check the path")
         if path.stem not in model.cameras:
-            raise FlashsyncError(f"{path}: camera {path.stem!r} is not in the model (it has "
-                                 f"{', '.join(model.cameras)}); give the videos the model was made from")
+            raise FlashsyncError(
+                f"{path}: camera {path.stem!r} is not in the model (it has "
+                f"{', '.join(model.cameras)}); give the videos the model was made from"
+            )
         count, expected = len(video_timestamps(path)), model.cameras[path.stem].n_frames
         if count != expected:
-            raise FlashsyncError(f"{path}: {count} frames, but the model has {expected} for camera "
-                                 f"{path.stem!r}; give the video the model was made from")
+            raise FlashsyncError(
+                f"{path}: {count} frames, but the model has {expected} for camera "
+                f"{path.stem!r}; give the video the model was made from"
+            )
         videos[path.stem] = path
     return videos
 
 
-def write_montage(videos: Sequence[str | Path], model: SyncModel, output: str | Path,
-                  rate_hz: float | None = None, start_ms: float | None = None, end_ms: float | None = None, *,
-                  cell: tuple[int, int] | None = None, crf: int = 20,
-                  progress: Progress | None = None) -> MontageSummary:
+def write_montage(
+    videos: Sequence[str | Path],
+    model: SyncModel,
+    output: str | Path,
+    rate_hz: float | None = None,
+    start_ms: float | None = None,
+    end_ms: float | None = None,
+    *,
+    cell: tuple[int, int] | None = None,
+    crf: int = 20,
+    progress: Progress | None = None,
+) -> MontageSummary:
     """Write the videos tiled, in sync, one frame per tick, to an H.264 file (atomically).
 
     Parameters
@@ -183,10 +206,9 @@ def write_montage(videos: Sequence[str | Path], model: SyncModel, output: str | 
     """
     output = Path(output)
     if output.suffix.lower() not in CONTAINERS:
-        raise FlashsyncError(f"{output}: cannot write '{output.suffix}' video; name it "
-                             f"{', '.join(CONTAINERS)}")
+        raise FlashsyncError(f"{output}: cannot write '{output.suffix}' video; name it {', '.join(CONTAINERS)}")
     if rate_hz is not None:
-        tick_period_ms(rate_hz)                               # a bad rate fails before decoding
+        tick_period_ms(rate_hz)  # a bad rate fails before decoding
     named = named_videos(videos, model)
     if rate_hz is None:
         rate_hz = max(frame_rate_hz(model.cameras[name]) for name in named)
@@ -197,11 +219,9 @@ def write_montage(videos: Sequence[str | Path], model: SyncModel, output: str | 
     located = {name: locate_ticks(model.cameras[name], ticks) for name in named}
     update = progress("montage", len(ticks)) if progress else None
     with ExitStack() as stack:
-        readers = [stack.enter_context(closing(_TileReader(path, tile)))
-                   for path, tile in zip(named.values(), tiles)]
+        readers = [stack.enter_context(closing(_TileReader(path, tile))) for path, tile in zip(named.values(), tiles)]
         temporary = stack.enter_context(atomic_output(output))
-        container = stack.enter_context(av.open(str(temporary), "w",
-                                                format=CONTAINERS[output.suffix.lower()]))
+        container = stack.enter_context(av.open(str(temporary), "w", format=CONTAINERS[output.suffix.lower()]))
         rate = Fraction(rate_hz).limit_denominator(1001)
         stream = container.add_stream("libx264", rate=rate)
         stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
@@ -222,22 +242,27 @@ def write_montage(videos: Sequence[str | Path], model: SyncModel, output: str | 
     return MontageSummary(output, len(ticks), width, height, float(rate_hz), float(ticks[0]))
 
 
-def _draw_tile(canvas: np.ndarray, reader: _TileReader, frame: int, row: float, reason: int,
-               tick_ms: float) -> None:
+def _draw_tile(canvas: np.ndarray, reader: _TileReader, frame: int, row: float, reason: int, tick_ms: float) -> None:
     """One camera's tile at one tick: its frame, the exposed row's line, the caption."""
     tile = reader.tile
     if reason in (BEFORE, AFTER):
         caption = f"{tile.camera}  {REASONS[reason]}"
     else:
-        canvas[tile.top:tile.top + tile.height, tile.left:tile.left + tile.width] = reader.image(frame)
+        canvas[tile.top : tile.top + tile.height, tile.left : tile.left + tile.width] = reader.image(frame)
         caption = f"{tile.camera}  frame {frame}" + ("" if reason == LOCATED else f" ({REASONS[reason]})")
     if reason == LOCATED:
         y = tile.montage_row(row)
-        shift = 4                                                 # 1/16 px sub-pixel precision
+        shift = 4  # 1/16 px sub-pixel precision
         thickness = max(2, round(tile.height / 180))
-        cv2.line(canvas, (tile.left << shift, round(y * (1 << shift))),
-                 ((tile.left + tile.width - 1) << shift, round(y * (1 << shift))), LINE_COLOR,
-                 thickness, cv2.LINE_AA, shift)
+        cv2.line(
+            canvas,
+            (tile.left << shift, round(y * (1 << shift))),
+            ((tile.left + tile.width - 1) << shift, round(y * (1 << shift))),
+            LINE_COLOR,
+            thickness,
+            cv2.LINE_AA,
+            shift,
+        )
     _caption(canvas, tile, f"{caption}  t = {tick_ms:.1f} ms")
 
 
@@ -249,7 +274,7 @@ def _caption(canvas: np.ndarray, tile: Tile, text: str) -> None:
         scale *= (tile.cell_width - 8) / text_width
         (text_width, text_height), baseline = cv2.getTextSize(text, font, scale, 1)
     left, top = tile.cell_left + 2, tile.cell_top + 2
-    canvas[top:top + text_height + baseline + 4, left:left + text_width + 4] //= 4
+    canvas[top : top + text_height + baseline + 4, left : left + text_width + 4] //= 4
     cv2.putText(canvas, text, (left + 2, top + text_height + 2), font, scale, CAPTION_COLOR, 1, cv2.LINE_AA)
 
 
@@ -262,7 +287,7 @@ class _TileReader:
         stream = self._container.streams.video[0]
         stream.thread_type = "AUTO"
         self._frames: Iterator[av.VideoFrame] = self._container.decode(stream)
-        self._scaler = VideoReformatter()                  # keeps its scaling context: 3-5x faster
+        self._scaler = VideoReformatter()  # keeps its scaling context: 3-5x faster
         self._index, self._image = -1, None
 
     def image(self, frame: int) -> np.ndarray:
@@ -274,13 +299,12 @@ class _TileReader:
                     next(self._frames)
                 decoded = next(self._frames)
             except StopIteration:
-                raise FlashsyncError(f"{self.path}: ends before frame {frame}; is the file "
-                                     "complete?") from None
+                raise FlashsyncError(f"{self.path}: ends before frame {frame}; is the file complete?") from None
             except av.FFmpegError as error:
-                raise FlashsyncError(f"{self.path}: cannot decode ({error.strerror}); is the file "
-                                     "complete?") from None
-            self._image = self._scaler.reformat(decoded, self.tile.width, self.tile.height, "bgr24",
-                                                interpolation="AREA").to_ndarray()
+                raise FlashsyncError(f"{self.path}: cannot decode ({error.strerror}); is the file complete?") from None
+            self._image = self._scaler.reformat(
+                decoded, self.tile.width, self.tile.height, "bgr24", interpolation="AREA"
+            ).to_ndarray()
             self._index = frame
         return self._image
 

@@ -38,8 +38,7 @@ from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
 
 #: Why a camera shows no row at a tick; code 0 (located) has no reason.
-REASONS = ("", "before the recording", "after the recording", "vertical blanking",
-           "dropped frame")
+REASONS = ("", "before the recording", "after the recording", "vertical blanking", "dropped frame")
 LOCATED, BEFORE, AFTER, BLANKING, DROPPED = range(len(REASONS))
 #: A gap between frame starts longer than this many frame periods holds dropped frames.
 DROP_GAP_PERIODS = 1.5
@@ -73,25 +72,35 @@ def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
     if not (math.isfinite(start_ms) and math.isfinite(end_ms)):
         raise FlashsyncError(f"--start-ms {start_ms} / --end-ms {end_ms}: give finite times in ms")
     if not end_ms > start_ms:
-        raise FlashsyncError(f"--end-ms {end_ms} is not after --start-ms {start_ms}; give an end "
-                             "after the start (ms on the global clock)")
-    count = math.ceil((end_ms - start_ms) / step_ms - 1e-6)     # a tick at the end is left out
+        raise FlashsyncError(
+            f"--end-ms {end_ms} is not after --start-ms {start_ms}; give an end "
+            "after the start (ms on the global clock)"
+        )
+    count = math.ceil((end_ms - start_ms) / step_ms - 1e-6)  # a tick at the end is left out
     if count > MAX_TICKS:
-        raise FlashsyncError(f"{count} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
-                             f"than {MAX_TICKS}; lower --rate or give a shorter span")
+        raise FlashsyncError(
+            f"{count} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
+            f"than {MAX_TICKS}; lower --rate or give a shorter span"
+        )
     return start_ms + np.arange(count) * step_ms
 
 
 def tick_period_ms(rate_hz: float) -> float:
     """``1000 / rate_hz``, ms, or a one-line error unless the rate is a positive number."""
     if not (math.isfinite(rate_hz) and rate_hz > 0):
-        raise FlashsyncError(f"--rate {rate_hz}: the rate must be a positive number of ticks "
-                             "per second, e.g. --rate 100")
+        raise FlashsyncError(
+            f"--rate {rate_hz}: the rate must be a positive number of ticks per second, e.g. --rate 100"
+        )
     return 1000.0 / rate_hz
 
 
-def model_ticks_ms(model: SyncModel, rate_hz: float, start_ms: float | None = None,
-                   end_ms: float | None = None, cameras: Sequence[str] | None = None) -> np.ndarray:
+def model_ticks_ms(
+    model: SyncModel,
+    rate_hz: float,
+    start_ms: float | None = None,
+    end_ms: float | None = None,
+    cameras: Sequence[str] | None = None,
+) -> np.ndarray:
     """Ticks over the span covered by any camera of ``model``, or over a given span.
 
     Without ``start_ms`` the ticks lie on the grid ``k * 1000 / rate_hz + phase`` (ms,
@@ -115,13 +124,16 @@ def model_ticks_ms(model: SyncModel, rate_hz: float, start_ms: float | None = No
         start_ms = math.ceil(first / step_ms - 1e-6) * step_ms
         start_ms += _best_phase_ms(model, cameras, start_ms, last, step_ms)
     elif end_ms is None and not start_ms < last:
-        raise FlashsyncError(f"--start-ms {start_ms} is not before the end of the recordings "
-                             f"({last:.3f} ms on the global clock); give an earlier start")
+        raise FlashsyncError(
+            f"--start-ms {start_ms} is not before the end of the recordings "
+            f"({last:.3f} ms on the global clock); give an earlier start"
+        )
     return tick_times_ms(rate_hz, start_ms, last if end_ms is None else end_ms)
 
 
-def _best_phase_ms(model: SyncModel, cameras: Sequence[str] | None, start_ms: float, end_ms: float,
-                   step_ms: float) -> float:
+def _best_phase_ms(
+    model: SyncModel, cameras: Sequence[str] | None, start_ms: float, end_ms: float, step_ms: float
+) -> float:
     """The offset (ms, one of :data:`GRID_PHASES` in ``[0, step_ms)``) of a tick grid from
     ``start_ms`` at which the most (tick, camera) pairs are located, scored on at most
     :data:`PHASE_PROBES` ticks spread over the span; the smallest offset on a tie."""
@@ -129,8 +141,10 @@ def _best_phase_ms(model: SyncModel, cameras: Sequence[str] | None, start_ms: fl
     probes = start_ms + np.unique(np.linspace(0, count - 1, min(count, PHASE_PROBES)).astype(np.int64)) * step_ms
     clocks = [model.camera(name) for name in (cameras or model.cameras)]
     offsets = np.arange(GRID_PHASES) * step_ms / GRID_PHASES
-    located = [sum(int(np.count_nonzero(locate_ticks(clock, probes + offset)[2] == LOCATED))
-                   for clock in clocks) for offset in offsets]
+    located = [
+        sum(int(np.count_nonzero(locate_ticks(clock, probes + offset)[2] == LOCATED)) for clock in clocks)
+        for offset in offsets
+    ]
     return float(offsets[int(np.argmax(located))])
 
 
@@ -219,10 +233,12 @@ def frame_table(model: SyncModel, ticks_ms: np.ndarray) -> pd.DataFrame:
         frames[:, column], rows[:, column], reasons[:, column] = locate_ticks(model.cameras[name], ticks)
     frame = pd.array(frames.ravel(), dtype="Int64")
     frame[reasons.ravel() != LOCATED] = pd.NA
-    return pd.DataFrame({
-        "t_global_ms": np.repeat(ticks, len(names)),
-        "camera": pd.array(np.tile(np.array(names, dtype=object), len(ticks)), dtype="str"),
-        "frame": frame,
-        "row": rows.ravel(),
-        "reason": pd.array(np.array(REASONS, dtype=object)[reasons.ravel()], dtype="str"),
-    })
+    return pd.DataFrame(
+        {
+            "t_global_ms": np.repeat(ticks, len(names)),
+            "camera": pd.array(np.tile(np.array(names, dtype=object), len(ticks)), dtype="str"),
+            "frame": frame,
+            "row": rows.ravel(),
+            "reason": pd.array(np.array(REASONS, dtype=object)[reasons.ravel()], dtype="str"),
+        }
+    )

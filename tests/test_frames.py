@@ -4,14 +4,13 @@ simulator's true clocks (an upside-down camera with dropped frames among them)."
 import numpy as np
 import pandas as pd
 import pytest
+from cli_run import one_error_line, run
 
 from flashsync.evaluate import clock_origin_ms, sync_errors, tick_errors_ms
 from flashsync.model import CameraClock, SyncModel
 from flashsync.model_file import load_model
 from flashsync.simulation import load_ground_truth
 from flashsync.ticks import REASONS, frame_table, model_ticks_ms, tick_times_ms
-
-from cli_run import one_error_line, run
 
 
 def true_exposure(truth, camera, ticks_ms):
@@ -28,8 +27,9 @@ def true_exposure(truth, camera, ticks_ms):
     kept = np.asarray(cam.frame_index)
     reason = np.where(q > cam.height - 1, "vertical blanking", "")
     reason = np.where((reason == "") & ~np.isin(sensor, kept), "dropped frame", reason)
-    reason = np.where((sensor > kept[-1]) | ((sensor == kept[-1]) & (q > cam.height - 1)),
-                      "after the recording", reason)
+    reason = np.where(
+        (sensor > kept[-1]) | ((sensor == kept[-1]) & (q > cam.height - 1)), "after the recording", reason
+    )
     reason = np.where(sensor < kept[0], "before the recording", reason)
     frame = np.searchsorted(kept, sensor)
     row = cam.height - 1 - q if cam.flipped else q
@@ -39,10 +39,22 @@ def true_exposure(truth, camera, ticks_ms):
 
 def true_model(truth) -> SyncModel:
     """The model with the simulator's own clock parameters (exact for constant drift)."""
-    return SyncModel(truth.reference, {
-        name: CameraClock(name, np.asarray(cam.frame_times_ms), cam.height, cam.width, cam.alpha,
-                          cam.beta_ms, cam.row_time_ms, cam.flipped)
-        for name, cam in truth.cameras.items()})
+    return SyncModel(
+        truth.reference,
+        {
+            name: CameraClock(
+                name,
+                np.asarray(cam.frame_times_ms),
+                cam.height,
+                cam.width,
+                cam.alpha,
+                cam.beta_ms,
+                cam.row_time_ms,
+                cam.flipped,
+            )
+            for name, cam in truth.cameras.items()
+        },
+    )
 
 
 @pytest.fixture(scope="module")
@@ -89,8 +101,9 @@ def test_rows_of_the_solved_model_are_exposed_at_their_ticks(synced_scenario, tr
         rms = float(np.sqrt(np.mean(error**2)))
         assert rms <= 1.2 * sync_rms[name] + 0.002, (name, rms, sync_rms[name])
         assert rms < 0.35 * clock.row_time_ms and np.abs(error).max() < clock.row_time_ms, name
-        inside = table[(table["camera"] == name)
-                       & ~table["reason"].isin(["before the recording", "after the recording"])]
+        inside = table[
+            (table["camera"] == name) & ~table["reason"].isin(["before the recording", "after the recording"])
+        ]
         assert (inside["reason"] == "").mean() >= 0.8, name
 
 
@@ -114,11 +127,22 @@ def test_reasons_of_the_solved_model_match_the_sensor_away_from_boundaries(synce
     assert (table[table["camera"] == "f"]["reason"] == "dropped frame").sum() >= 3 * 25
 
 
-
 def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys):
     model = synced_scenario / "sync.json"
-    code, _, err = run(capsys, "frames", "--model", model, "--rate", 100, "--start-ms", 1000,
-                       "--end-ms", 2000, "-o", tmp_path / "frames.csv")
+    code, _, err = run(
+        capsys,
+        "frames",
+        "--model",
+        model,
+        "--rate",
+        100,
+        "--start-ms",
+        1000,
+        "--end-ms",
+        2000,
+        "-o",
+        tmp_path / "frames.csv",
+    )
     assert code == 0, err
     assert "100 ticks x 3 cameras" in err
     table = pd.read_csv(tmp_path / "frames.csv", keep_default_na=False)
@@ -127,8 +151,20 @@ def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys
     assert set(table["reason"]) <= set(REASONS)
     assert ((table["frame"] == "") == (table["reason"] != "")).all()
     assert ((table["row"] == "") == (table["reason"] != "")).all()
-    code, _, err = run(capsys, "frames", "--model", model, "--rate", 100, "--start-ms", 1000,
-                       "--end-ms", 2000, "-o", tmp_path / "frames.parquet")
+    code, _, err = run(
+        capsys,
+        "frames",
+        "--model",
+        model,
+        "--rate",
+        100,
+        "--start-ms",
+        1000,
+        "--end-ms",
+        2000,
+        "-o",
+        tmp_path / "frames.parquet",
+    )
     assert code == 0, err
     parquet = pd.read_parquet(tmp_path / "frames.parquet")
     assert str(parquet["frame"].dtype) == "Int64"
@@ -136,30 +172,35 @@ def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys
     pd.testing.assert_series_equal(parquet["row"], csv["row"])
 
 
-
-@pytest.mark.parametrize("options, words", [
-    (["--rate", "0"], ["--rate 0", "positive"]),
-    (["--rate", "-5"], ["--rate -5", "positive"]),
-    (["--rate", "nan"], ["--rate nan", "positive"]),
-    (["--rate", "100", "--start-ms", "2000", "--end-ms", "1000"], ["--end-ms 1000", "not after"]),
-    (["--rate", "100", "--start-ms", "99999"], ["--start-ms 99999", "not before the end"]),
-    (["--rate", "1e9"], ["ticks", "lower --rate"]),
-])
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        (["--rate", "0"], ["--rate 0", "positive"]),
+        (["--rate", "-5"], ["--rate -5", "positive"]),
+        (["--rate", "nan"], ["--rate nan", "positive"]),
+        (["--rate", "100", "--start-ms", "2000", "--end-ms", "1000"], ["--end-ms 1000", "not after"]),
+        (["--rate", "100", "--start-ms", "99999"], ["--start-ms 99999", "not before the end"]),
+        (["--rate", "1e9"], ["ticks", "lower --rate"]),
+    ],
+)
 def test_frames_refuses_bad_ticks(synced_scenario, tmp_path, capsys, options, words):
-    code, _, err = run(capsys, "frames", "--model", synced_scenario / "sync.json", *options,
-                       "-o", tmp_path / "frames.csv")
+    code, _, err = run(
+        capsys, "frames", "--model", synced_scenario / "sync.json", *options, "-o", tmp_path / "frames.csv"
+    )
     assert code == 1
     one_error_line(err, *words)
     assert not list(tmp_path.iterdir())
 
 
 def test_frames_refuses_a_missing_model_and_an_unknown_format(synced_scenario, tmp_path, capsys):
-    code, _, err = run(capsys, "frames", "--model", tmp_path / "nope.json", "--rate", 100,
-                       "-o", tmp_path / "frames.csv")
+    code, _, err = run(
+        capsys, "frames", "--model", tmp_path / "nope.json", "--rate", 100, "-o", tmp_path / "frames.csv"
+    )
     assert code == 1
     one_error_line(err, "nope.json", "no such model file")
-    code, _, err = run(capsys, "frames", "--model", synced_scenario / "sync.json", "--rate", 100,
-                       "-o", tmp_path / "frames.xlsx")
+    code, _, err = run(
+        capsys, "frames", "--model", synced_scenario / "sync.json", "--rate", 100, "-o", tmp_path / "frames.xlsx"
+    )
     assert code == 1
     one_error_line(err, "frames.xlsx", "use .csv or .parquet")
     assert not list(tmp_path.iterdir())
@@ -170,9 +211,18 @@ def test_rows_round_trip_through_a_warped_clock():
     frames, every located (frame, row) maps back onto its tick, and no tick is located
     in a frame the camera dropped."""
     stamps = np.delete(np.arange(300) * 40.0 + 3.0, [100, 101, 200])
-    clock = CameraClock("w", stamps, height=200, width=320, alpha=1.00002, beta_ms=-51.7,
-                        row_time_ms=0.19, flipped=True, drift_knots_ms=np.array([3.0, 4000.0, 8000.0, 11963.0]),
-                        drift_warp_ms=np.array([0.8, -0.5]))
+    clock = CameraClock(
+        "w",
+        stamps,
+        height=200,
+        width=320,
+        alpha=1.00002,
+        beta_ms=-51.7,
+        row_time_ms=0.19,
+        flipped=True,
+        drift_knots_ms=np.array([3.0, 4000.0, 8000.0, 11963.0]),
+        drift_warp_ms=np.array([0.8, -0.5]),
+    )
     model = SyncModel("w", {"w": clock})
     table = frame_table(model, model_ticks_ms(model, 1000.0))
     located = table[table["reason"] == ""]
@@ -180,9 +230,10 @@ def test_rows_round_trip_through_a_warped_clock():
     np.testing.assert_allclose(back, located["t_global_ms"], atol=1e-9)
     starts = clock.frame_start_ms(stamps)
     dropped = table[table["reason"] == "dropped frame"]["t_global_ms"].to_numpy()
-    assert 3 * 37 <= len(dropped) <= 3 * 38                 # 3 frames x 37.8 ms of visible rows
-    assert np.all(((dropped > starts[99]) & (dropped < starts[100]))
-                  | ((dropped > starts[197]) & (dropped < starts[198])))
+    assert 3 * 37 <= len(dropped) <= 3 * 38  # 3 frames x 37.8 ms of visible rows
+    assert np.all(
+        ((dropped > starts[99]) & (dropped < starts[100])) | ((dropped > starts[197]) & (dropped < starts[198]))
+    )
 
 
 def test_default_grid_meets_visible_rows():

@@ -16,7 +16,6 @@ frame of that flash.
 import importlib.util
 import os
 import shutil
-import signal
 import subprocess
 import time
 import urllib.parse
@@ -27,19 +26,25 @@ import cv2
 import numpy as np
 import pandas as pd
 import pytest
+from test_viz import free_port, quiet_rerun, read_blueprint, views  # noqa: F401 (fixture)
 
 import viz
 from flashsync.pipeline import all_events, detect_videos, synchronize
-from test_viz import free_port, quiet_rerun, read_blueprint, views  # noqa: F401 (fixture)
 from tracking_adapter.formats import load_homographies, load_plane_outline
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import validate
 
 SAMPLES = Path(__file__).parents[1] / "samples"
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_FLAGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-                  "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync", "--no-first-run"]
+CHROMIUM_FLAGS = [
+    "--no-sandbox",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 VIEWPORT = {"width": 1600, "height": 1000}
 CONTENT_Y = (35, 971)
 """Rows of the viewer's panels at this viewport: below its top bar, above the time slider."""
@@ -50,7 +55,8 @@ and at most."""
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("playwright") is None or not CHROMIUM.exists(),
-    reason="needs the playwright package and Debian's /usr/bin/chromium")
+    reason="needs the playwright package and Debian's /usr/bin/chromium",
+)
 
 
 @pytest.fixture(scope="module")
@@ -63,9 +69,16 @@ def sample(tmp_path_factory, quiet_rerun):  # noqa: F811 (the imported fixture)
     homographies = load_homographies(SAMPLES / "homographies.json")
     triples = validate(restamped, model, homographies).triples
     path = tmp_path_factory.mktemp("sample") / "sample.rrd"
-    viz.save_recording(path, model, videos=videos, events=all_events(detections),
-                       detections=restamped, homographies=homographies, validation=triples,
-                       plane_outline_m=load_plane_outline(SAMPLES / "homographies.json"))
+    viz.save_recording(
+        path,
+        model,
+        videos=videos,
+        events=all_events(detections),
+        detections=restamped,
+        homographies=homographies,
+        validation=triples,
+        plane_outline_m=load_plane_outline(SAMPLES / "homographies.json"),
+    )
     return {"model": model, "rrd": path}
 
 
@@ -74,9 +87,20 @@ def served(sample):
     """``rerun --serve-web`` on the recording; yields the viewer's address, then stops it."""
     web_port, grpc_port = free_port(), free_port()
     server = subprocess.Popen(
-        [str(viz.recording.rerun_program()), "--serve-web", "--bind", "127.0.0.1",
-         "--web-viewer-port", str(web_port), "--port", str(grpc_port), str(sample["rrd"])],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        [
+            str(viz.recording.rerun_program()),
+            "--serve-web",
+            "--bind",
+            "127.0.0.1",
+            "--web-viewer-port",
+            str(web_port),
+            "--port",
+            str(grpc_port),
+            str(sample["rrd"]),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         deadline = time.monotonic() + 60
         while True:
@@ -94,8 +118,11 @@ def served(sample):
 
 def panel_rects(blueprint: dict[str, dict]) -> dict[str, tuple[int, int, int, int]]:
     """Each view's name -> (x0, y0, x1, y1) px at :data:`VIEWPORT`, from the container shares."""
-    names = {path[1:]: parts["ViewBlueprint:display_name"][0] for path, parts in blueprint.items()
-             if "ViewBlueprint:display_name" in parts}
+    names = {
+        path[1:]: parts["ViewBlueprint:display_name"][0]
+        for path, parts in blueprint.items()
+        if "ViewBlueprint:display_name" in parts
+    }
     rects = {}
 
     def place(item: str, x0: float, y0: float, x1: float, y1: float) -> None:
@@ -105,13 +132,18 @@ def panel_rects(blueprint: dict[str, dict]) -> dict[str, tuple[int, int, int, in
         parts = blueprint["/" + item]
         children = list(parts["ContainerBlueprint:contents"])
         kind = parts["ContainerBlueprint:container_kind"][0]
-        if kind == 4:                                            # grid
+        if kind == 4:  # grid
             columns = parts["ContainerBlueprint:grid_columns"][0]
             rows = -(-len(children) // columns)
             for i, child in enumerate(children):
                 w, h = (x1 - x0) / columns, (y1 - y0) / rows
-                place(child, x0 + w * (i % columns), y0 + h * (i // columns),
-                      x0 + w * (i % columns + 1), y0 + h * (i // columns + 1))
+                place(
+                    child,
+                    x0 + w * (i % columns),
+                    y0 + h * (i // columns),
+                    x0 + w * (i % columns + 1),
+                    y0 + h * (i // columns + 1),
+                )
             return
         key = "ContainerBlueprint:col_shares" if kind == 2 else "ContainerBlueprint:row_shares"
         shares = np.asarray(parts.get(key) or [1.0] * len(children), dtype=float)
@@ -123,8 +155,7 @@ def panel_rects(blueprint: dict[str, dict]) -> dict[str, tuple[int, int, int, in
                 place(child, x0, y0 + a * (y1 - y0), x1, y0 + b * (y1 - y0))
 
     root = bytes(blueprint["/viewport"]["ViewportBlueprint:root_container"][0])
-    root_path = next(path[1:] for path in blueprint if path.startswith("/container/")
-                     and path.endswith(_uuid(root)))
+    root_path = next(path[1:] for path in blueprint if path.startswith("/container/") and path.endswith(_uuid(root)))
     place(root_path, 0, CONTENT_Y[0], VIEWPORT["width"], CONTENT_Y[1])
     return rects
 
@@ -155,13 +186,13 @@ def busy_fraction(image: np.ndarray) -> float:
 
 def crop(image: np.ndarray, rect, inset=(0, TITLE_PX, 0, 0)) -> np.ndarray:
     x0, y0, x1, y1 = rect
-    return image[y0 + inset[1]:y1 - inset[3], x0 + inset[0]:x1 - inset[2]]
+    return image[y0 + inset[1] : y1 - inset[3], x0 + inset[0] : x1 - inset[2]]
 
 
 def cursor_x(gray: np.ndarray, rect) -> int:
     """Column of the time cursor in a time view: the leftmost dark line through its height."""
     x0, y0, x1, y1 = rect
-    plot = gray[y0 + TITLE_PX + 20:y1 - 30, x0:x1]
+    plot = gray[y0 + TITLE_PX + 20 : y1 - 30, x0:x1]
     return x0 + int(np.argmax((plot < 120).mean(axis=0) > 0.8))
 
 
@@ -185,30 +216,40 @@ def test_default_layout_reads_at_first_glance(sample, served, tmp_path):
     found = views(read_blueprint(sample["rrd"]))
     rects = panel_rects(read_blueprint(sample["rrd"]))
     assert set(cameras) <= set(rects)
-    title = {key: next(name for name in rects if name.startswith(key)) for key in
-             ("residuals of the solve (ms)", "validation error (m)", "flash events per camera",
-              "plane (m), top view as cam1 sees it", "flash log")}
-    assert len({rects[name] for name in cameras}) == 4                 # a row of four videos
+    title = {
+        key: next(name for name in rects if name.startswith(key))
+        for key in (
+            "residuals of the solve (ms)",
+            "validation error (m)",
+            "flash events per camera",
+            "plane (m), top view as cam1 sees it",
+            "flash log",
+        )
+    }
+    assert len({rects[name] for name in cameras}) == 4  # a row of four videos
     assert all(found[name]["ViewBlueprint:space_origin"] == [f"cameras/{name}"] for name in cameras)
     timeline = viz.timeline.Timeline.of(model)
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_FLAGS)
         try:
             page = browser.new_page(viewport=VIEWPORT)
-            page.set_default_timeout(120_000)   # software rendering on a busy machine is slow
+            page.set_default_timeout(120_000)  # software rendering on a busy machine is slow
             page.goto(served, wait_until="load")
             page.wait_for_selector("canvas")
             time.sleep(SETTLE_S)
             first = timeline.first_camera
-            start = screenshot(page, lambda image: busy_fraction(crop(image, rects[first])) > 0.3,
-                               tmp_path / "start.png")
+            start = screenshot(
+                page, lambda image: busy_fraction(crop(image, rects[first])) > 0.3, tmp_path / "start.png"
+            )
             x0, y0, _, _ = rects[title["flash log"]]
-            row = 2 + 4 * 2                     # two lines on time 0, then four per flash
+            row = 2 + 4 * 2  # two lines on time 0, then four per flash
             page.mouse.click(x0 + 52, y0 + LOG_FIRST_ROW_PX + row * LOG_ROW_PX)
-            time.sleep(SETTLE_S / 2)            # the videos seek and decode
-            flash = screenshot(page, lambda image: all(busy_fraction(crop(image, rects[name])) > 0.3
-                                                       for name in cameras),
-                               tmp_path / "flash2.png")
+            time.sleep(SETTLE_S / 2)  # the videos seek and decode
+            flash = screenshot(
+                page,
+                lambda image: all(busy_fraction(crop(image, rects[name])) > 0.3 for name in cameras),
+                tmp_path / "flash2.png",
+            )
             canvas = page.locator("canvas").first.bounding_box()
         finally:
             browser.close()
@@ -225,8 +266,9 @@ def test_default_layout_reads_at_first_glance(sample, served, tmp_path):
         else:
             assert 0.002 < busy_fraction(panel) < 0.1 and text_runs(crop(gray, rects[name]), 0) == 1, where
     # One time cursor through the stacked views, at 0 and at flash 2.
-    stacked = [rects[title[key]] for key in ("flash events per camera", "residuals of the solve (ms)",
-                                            "validation error (m)")]
+    stacked = [
+        rects[title[key]] for key in ("flash events per camera", "residuals of the solve (ms)", "validation error (m)")
+    ]
     for image in (gray, cv2.cvtColor(flash, cv2.COLOR_BGR2GRAY)):
         columns = [cursor_x(image, rect) for rect in stacked]
         assert max(columns) - min(columns) <= 2, (columns, where)
@@ -237,22 +279,23 @@ def test_default_layout_reads_at_first_glance(sample, served, tmp_path):
         x0, y0, x1, y1 = rects[title[key]]
         cursor = cursor_x(gray, rects[title[key]]) - x0
         assert 10 < cursor < 80, (key, where)
-        value_axis = gray[y0 + TITLE_PX:y1 - 22, x0 + 2:x0 + cursor - 1]
-        time_axis = gray[y1 - 20:y1 - 2, x0 + cursor + 10:x1 - 10]
+        value_axis = gray[y0 + TITLE_PX : y1 - 22, x0 + 2 : x0 + cursor - 1]
+        time_axis = gray[y1 - 20 : y1 - 2, x0 + cursor + 10 : x1 - 10]
         assert text_runs(value_axis, 0) >= 3, (key, where)
         assert text_runs(time_axis, 1, gap=8) >= 6, (key, where)
     # A labelled lane per camera (the labels start left of the time cursor at 0).
     x0, y0, x1, y1 = rects[title["flash events per camera"]]
-    lane_labels = gray[y0 + TITLE_PX + 16:y1, x0 + 2:cursor_x(gray, stacked[0]) - 2]
+    lane_labels = gray[y0 + TITLE_PX + 16 : y1, x0 + 2 : cursor_x(gray, stacked[0]) - 2]
     assert text_runs(lane_labels, 0) >= len(cameras), where
     # The plane's metre labels along two sides, and its flash log lines.
     x0, y0, x1, y1 = rects[title["plane (m), top view as cam1 sees it"]]
-    assert text_runs(gray[y0 + TITLE_PX:y1, x0 + 2:x0 + 60], 0) >= 3, where
+    assert text_runs(gray[y0 + TITLE_PX : y1, x0 + 2 : x0 + 60], 0) >= 3, where
     x0, y0, x1, y1 = rects[title["flash log"]]
-    assert text_runs(gray[y0 + LOG_FIRST_ROW_PX - 10:y1, x0 + 100:x1 - 20], 0) >= 8, where
+    assert text_runs(gray[y0 + LOG_FIRST_ROW_PX - 10 : y1, x0 + 100 : x1 - 20], 0) >= 8, where
     # After the click on flash 2: every camera shows its frame of the flash, and the plane
     # its trail of the puck.
     for name in cameras:
         assert busy_fraction(crop(flash, rects[name])) > 0.3, (name, where)
-    assert busy_fraction(crop(flash, rects[title["plane (m), top view as cam1 sees it"]])) > \
-        busy_fraction(crop(start, rects[title["plane (m), top view as cam1 sees it"]])), where
+    assert busy_fraction(crop(flash, rects[title["plane (m), top view as cam1 sees it"]])) > busy_fraction(
+        crop(start, rects[title["plane (m), top view as cam1 sees it"]])
+    ), where

@@ -81,26 +81,40 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
     model = with_clock_offset(synchronize(detections)[0], CLOCK_OFFSET_MS)
     restamped = restamp(pd.read_csv(tiny_scenario / "detections.csv"), model)
     puck = restamped[restamped["restamp_error"].isna() & (restamped["camera"] == "cam2")]
-    puck = puck.iloc[:len(ERRORS_M)]
+    puck = puck.iloc[: len(ERRORS_M)]
     homographies = load_homographies(tiny_scenario / "homographies.json")
     plane_b = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(), homographies["cam2"])
-    validation = pd.DataFrame({"camera_a": "cam1", "camera_b": "cam2", "object": "puck",
-                               "t_global_ms": puck["t_global_ms"].to_numpy(),
-                               "x_b": plane_b[:, 0], "y_b": plane_b[:, 1],
-                               "x_a": plane_b[:, 0] + 0.6 * ERRORS_M,
-                               "y_a": plane_b[:, 1] - 0.8 * ERRORS_M, "error_m": ERRORS_M})
+    validation = pd.DataFrame(
+        {
+            "camera_a": "cam1",
+            "camera_b": "cam2",
+            "object": "puck",
+            "t_global_ms": puck["t_global_ms"].to_numpy(),
+            "x_b": plane_b[:, 0],
+            "y_b": plane_b[:, 1],
+            "x_a": plane_b[:, 0] + 0.6 * ERRORS_M,
+            "y_a": plane_b[:, 1] - 0.8 * ERRORS_M,
+            "error_m": ERRORS_M,
+        }
+    )
     events = all_events(detections)
-    spurious = events.iloc[[0]].assign(camera="cam1", event=events["event"].max() + 1, frame=10,
-                                       row=50.25)          # an event no other camera saw
+    spurious = events.iloc[[0]].assign(
+        camera="cam1", event=events["event"].max() + 1, frame=10, row=50.25
+    )  # an event no other camera saw
     events = pd.concat([events, spurious], ignore_index=True)
-    data = dict(model=model, videos=videos, events=events, detections=restamped,
-                homographies=homographies, validation=validation,
-                plane_outline_m=load_plane_outline(tiny_scenario / "homographies.json"))
+    data = dict(
+        model=model,
+        videos=videos,
+        events=events,
+        detections=restamped,
+        homographies=homographies,
+        validation=validation,
+        plane_outline_m=load_plane_outline(tiny_scenario / "homographies.json"),
+    )
     directory = tmp_path_factory.mktemp("viz")
     save_model(model, directory / "sync.json")
     viz.save_recording(directory / "tiny.rrd", **data)
-    return dict(data, rrd=directory / "tiny.rrd", directory=directory,
-                timeline=Timeline.of(model))
+    return dict(data, rrd=directory / "tiny.rrd", directory=directory, timeline=Timeline.of(model))
 
 
 def read_recording(path: Path) -> tuple[dict[str, pd.DataFrame], dict[str, pd.DataFrame]]:
@@ -119,8 +133,7 @@ def read_blueprint(path: Path) -> dict[str, dict]:
     contents: dict[str, dict] = {}
     for chunk in reader.store(store=reader.blueprints()[0]).stream():
         for row in chunk.to_record_batch().to_pylist():
-            contents.setdefault(chunk.entity_path, {}).update(
-                {key: value for key, value in row.items() if ":" in key})
+            contents.setdefault(chunk.entity_path, {}).update({key: value for key, value in row.items() if ":" in key})
     return contents
 
 
@@ -153,8 +166,9 @@ def recording(tiny):
 
 
 def test_recording_verifies_and_has_a_blueprint(tiny):
-    verify = subprocess.run([str(RERUN), "rrd", "verify", str(tiny["rrd"])],
-                            capture_output=True, text=True, timeout=120)
+    verify = subprocess.run(
+        [str(RERUN), "rrd", "verify", str(tiny["rrd"])], capture_output=True, text=True, timeout=120
+    )
     assert verify.returncode == 0, verify.stderr
     reader = rerun.chunk.RrdReader(tiny["rrd"])
     assert [store.application_id for store in reader.recordings()] == [viz.APPLICATION_ID]
@@ -163,23 +177,47 @@ def test_recording_verifies_and_has_a_blueprint(tiny):
 
 def test_entity_paths(recording):
     temporal, static = recording
-    expected = {"/events/cam1", "/events/cam2", "/events/log",
-                "/residuals/cam1/matched", "/residuals/cam2/matched",
-                "/residuals/cam2/sigma_plus", "/residuals/cam2/sigma_minus",
-                "/cameras/cam1/video", "/cameras/cam2/video",
-                "/cameras/cam1/flash_rows", "/cameras/cam2/flash_rows",
-                "/cameras/cam1/flash_labels", "/cameras/cam2/flash_labels",
-                "/cameras/cam1/now", "/cameras/cam2/now",
-                "/cameras/cam1/status", "/cameras/cam2/status",
-                "/cameras/cam1/detections", "/cameras/cam2/detections",
-                "/plane/observations/cam1/puck", "/plane/observations/cam2/puck",
-                "/plane/validation/at_cam2/from_cam1/puck/error",
-                "/validation/at_cam2/from_cam1/puck"}
+    expected = {
+        "/events/cam1",
+        "/events/cam2",
+        "/events/log",
+        "/residuals/cam1/matched",
+        "/residuals/cam2/matched",
+        "/residuals/cam2/sigma_plus",
+        "/residuals/cam2/sigma_minus",
+        "/cameras/cam1/video",
+        "/cameras/cam2/video",
+        "/cameras/cam1/flash_rows",
+        "/cameras/cam2/flash_rows",
+        "/cameras/cam1/flash_labels",
+        "/cameras/cam2/flash_labels",
+        "/cameras/cam1/now",
+        "/cameras/cam2/now",
+        "/cameras/cam1/status",
+        "/cameras/cam2/status",
+        "/cameras/cam1/detections",
+        "/cameras/cam2/detections",
+        "/plane/observations/cam1/puck",
+        "/plane/observations/cam2/puck",
+        "/plane/validation/at_cam2/from_cam1/puck/error",
+        "/validation/at_cam2/from_cam1/puck",
+    }
     assert expected <= set(temporal)
-    assert {"/cameras/cam1/video", "/cameras/cam2/video", "/plane", "/plane/map/outline",
-            "/plane/map/grid", "/plane/map/ticks", "/plane/map/scale"} <= set(static)
-    timelines = {column for table in temporal.values() for column in table
-                 if column in ("global_time", "frame_cam1", "frame_cam2", "log_time", "log_tick")}
+    assert {
+        "/cameras/cam1/video",
+        "/cameras/cam2/video",
+        "/plane",
+        "/plane/map/outline",
+        "/plane/map/grid",
+        "/plane/map/ticks",
+        "/plane/map/scale",
+    } <= set(static)
+    timelines = {
+        column
+        for table in temporal.values()
+        for column in table
+        if column in ("global_time", "frame_cam1", "frame_cam2", "log_time", "log_tick")
+    }
     assert timelines == {"global_time", "frame_cam1", "frame_cam2"}
 
 
@@ -192,13 +230,15 @@ def test_timeline_starts_at_the_earliest_first_frame_and_says_so(tiny, recording
     assert timeline.origin_ms > CLOCK_OFFSET_MS - 1000
     ends = [readout_end_ms(camera, [camera.n_frames - 1])[0] for camera in model.cameras.values()]
     assert timeline.duration_ms == pytest.approx(max(ends) - timeline.origin_ms)
-    logged = np.concatenate([nanos(table["global_time"]) for table in temporal.values()
-                             if "global_time" in table])
+    logged = np.concatenate([nanos(table["global_time"]) for table in temporal.values() if "global_time" in table])
     assert logged.min() == 0
     assert logged.max() <= round(timeline.duration_ms * 1e6)
     # The first data on global_time in the file is at 0, so that the viewer opens there.
-    first = next(chunk for chunk in rerun.chunk.RrdReader(tiny["rrd"]).stream()
-                 if "global_time" in chunk.to_record_batch().schema.names)
+    first = next(
+        chunk
+        for chunk in rerun.chunk.RrdReader(tiny["rrd"]).stream()
+        if "global_time" in chunk.to_record_batch().schema.names
+    )
     assert first.to_record_batch().column("global_time").to_pylist()[0] == pd.Timedelta(0)
     description = static["/__properties/description"]["TextDocument:text"][0][0]
     assert description.startswith("global_time 0 is the start of the recordings")
@@ -244,14 +284,16 @@ def test_videos_say_when_they_start_and_end(tiny, recording):
         start = on_timeline(timeline, readout_start_ms(camera, [0]))[0]
         end = on_timeline(timeline, readout_end_ms(camera, [camera.n_frames - 1]))[0]
         status = temporal[f"/cameras/{name}/status"].sort_values("global_time")
-        labels = {t: (list(text) if text is not None else []) for t, text
-                  in zip(nanos(status["global_time"]), status["Points2D:labels"])}
+        labels = {
+            t: (list(text) if text is not None else [])
+            for t, text in zip(nanos(status["global_time"]), status["Points2D:labels"])
+        }
         if start > 0:
             assert "starts at" in labels[0][0] and labels[start] == []
         assert "ended at" in labels[end][0]
         video = temporal[f"/cameras/{name}/video"]
         cleared = video[video["frame_" + name].isna()]
-        assert nanos(cleared["global_time"]).tolist() == [end]      # the last frame is cleared
+        assert nanos(cleared["global_time"]).tolist() == [end]  # the last frame is cleared
 
 
 @pytest.mark.parametrize("name", ["cam1", "cam2"])
@@ -260,10 +302,10 @@ def test_residuals_are_the_models(tiny, recording, name):
     events = tiny["model"].events
     mine = events[(events["camera"] == name) & events["inlier"]].sort_values("t_global_ms")
     logged = temporal[f"/residuals/{name}/matched"].sort_values("global_time")
-    np.testing.assert_allclose(np.concatenate(logged["Scalars:scalars"].to_numpy()),
-                               mine["residual_ms"], rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(nanos(logged["global_time"]),
-                                  on_timeline(tiny["timeline"], mine["t_global_ms"]))
+    np.testing.assert_allclose(
+        np.concatenate(logged["Scalars:scalars"].to_numpy()), mine["residual_ms"], rtol=0, atol=1e-12
+    )
+    np.testing.assert_array_equal(nanos(logged["global_time"]), on_timeline(tiny["timeline"], mine["t_global_ms"]))
     assert static[f"/residuals/{name}/matched"]["SeriesPoints:names"][0][0] == name
     camera = tiny["model"].cameras[name]
     if not np.any(camera.covariance):
@@ -273,8 +315,7 @@ def test_residuals_are_the_models(tiny, recording, name):
     band = temporal[f"/residuals/{name}/sigma_plus"].sort_values("global_time")
     sigma = np.concatenate(band["Scalars:scalars"].to_numpy())
     assert 0 < len(sigma) <= camera.n_frames
-    assert sigma.max() == pytest.approx(camera.t_global_std_ms(np.arange(camera.n_frames),
-                                                               camera.height // 2).max())
+    assert sigma.max() == pytest.approx(camera.t_global_std_ms(np.arange(camera.n_frames), camera.height // 2).max())
 
 
 def test_flashes_are_numbered_in_time_order(tiny):
@@ -300,8 +341,11 @@ def test_event_lanes_hold_every_event_from_its_leading_edge(tiny, recording):
         mine = lanes[lanes["camera"] == name]
         assert states == ["recording", *mine["state"], ""]
         leading = table[(table["camera"] == name) & (table["edge"] == "leading")]
-        expected = [readout_start_ms(camera, [0])[0], *mine["t_global_ms"],
-                    readout_end_ms(camera, [camera.n_frames - 1])[0]]
+        expected = [
+            readout_start_ms(camera, [0])[0],
+            *mine["t_global_ms"],
+            readout_end_ms(camera, [camera.n_frames - 1])[0],
+        ]
         np.testing.assert_array_equal(nanos(lane["global_time"]), on_timeline(timeline, expected))
         assert set(mine["t_global_ms"]) == set(leading["t_global_ms"])
         values = list(static[f"/events/{name}"]["StateConfiguration:values"][0])
@@ -309,21 +353,23 @@ def test_event_lanes_hold_every_event_from_its_leading_edge(tiny, recording):
     assert "unmatched" in [s[0] for s in temporal["/events/cam1"]["StateChange:state"]]
     matched = lanes[lanes["state"].str.fullmatch(r"flash \d+")]
     per_flash = matched.groupby("state")["camera"].nunique()
-    assert (per_flash == 2).all()                # both cameras saw each matched flash
+    assert (per_flash == 2).all()  # both cameras saw each matched flash
 
 
 def test_flash_log_has_a_line_per_event_at_its_flash(tiny, recording):
     temporal, _ = recording
     model, timeline = tiny["model"], tiny["timeline"]
     log = temporal["/events/log"]
-    lines = list(zip(nanos(log["global_time"]), [t[0] for t in log["TextLog:text"]],
-                     [level[0] for level in log["TextLog:level"]]))
+    lines = list(
+        zip(
+            nanos(log["global_time"]), [t[0] for t in log["TextLog:text"]], [level[0] for level in log["TextLog:level"]]
+        )
+    )
     numbers = flash_numbers(model)
     flash_ms = model.events.groupby("flash")["t_global_ms"].min()
     for e in model.events.itertuples():
         at = np.ceil(np.round((flash_ms[e.flash] - timeline.origin_ms) / 1.0, 9)) * 1e6
-        line = [text for t, text, _ in lines
-                if t == at and text.startswith(f"flash {numbers[e.flash]}  {e.camera}  ")]
+        line = [text for t, text, _ in lines if t == at and text.startswith(f"flash {numbers[e.flash]}  {e.camera}  ")]
         assert len(line) == 1 and f"frame {e.frame}  row {e.row:.1f}" in line[0]
         assert f"{e.residual_ms:+.4f} ms" in line[0]
     table = event_table(model, tiny["events"])
@@ -338,12 +384,11 @@ def test_flash_rows_drawn_on_their_frames_only(tiny, recording):
     rows = temporal["/cameras/cam1/flash_rows"].sort_values("frame_cam1")
     labels = temporal["/cameras/cam1/flash_labels"].sort_values("frame_cam1")
     edges = tiny["events"][tiny["events"]["camera"] == "cam1"]
-    for frame, strips, names in zip(rows["frame_cam1"], rows["LineStrips2D:strips"],
-                                    labels["Points2D:labels"]):
+    for frame, strips, names in zip(rows["frame_cam1"], rows["LineStrips2D:strips"], labels["Points2D:labels"]):
         mine = edges[edges["frame"] == frame]
         expected = np.sort(mine["row"].to_numpy() + 0.5)
         ys = np.sort([strip[0][1] for strip in strips])
-        np.testing.assert_allclose(ys, expected, rtol=0, atol=1e-4)   # float32 in Rerun
+        np.testing.assert_allclose(ys, expected, rtol=0, atol=1e-4)  # float32 in Rerun
         for strip in strips:
             assert [point[0] for point in strip] == [0.0, camera.width]
         names = [] if names is None else list(names)
@@ -360,15 +405,17 @@ def test_now_line_is_on_the_row_exposed_at_each_instant(tiny, recording, name):
     ticks = timeline.origin_ms + nanos(now["global_time"]) / 1e6
     drawn = np.array([len(s) > 0 for s in now["LineStrips2D:strips"]])
     frames, rows = camera.locate(ticks)
-    np.testing.assert_array_equal(drawn, np.isfinite(rows))   # cleared in the blanking
+    np.testing.assert_array_equal(drawn, np.isfinite(rows))  # cleared in the blanking
     ys = np.array([s[0][0][1] for s in now["LineStrips2D:strips"][drawn]])
     np.testing.assert_allclose(ys, rows[drawn] + 0.5, atol=2e-3)
     # The row drawn ends its exposure at the tick (the time convention), to float32.
-    np.testing.assert_allclose(camera.t_global_ms(frames[drawn], ys - 0.5), ticks[drawn],
-                               atol=1e-3 * camera.row_time_ms * 4)
+    np.testing.assert_allclose(
+        camera.t_global_ms(frames[drawn], ys - 0.5), ticks[drawn], atol=1e-3 * camera.row_time_ms * 4
+    )
     period_ns = 1e9 / NOW_RATE_HZ
-    on_grid = np.isclose(nanos(now["global_time"]) % period_ns, 0) \
-        | np.isclose(nanos(now["global_time"]) % period_ns, period_ns)
+    on_grid = np.isclose(nanos(now["global_time"]) % period_ns, 0) | np.isclose(
+        nanos(now["global_time"]) % period_ns, period_ns
+    )
     assert on_grid.mean() > 0.9 and np.diff(nanos(now["global_time"])[on_grid]).max() <= 2 * period_ns
     # And exactly at each flash log line, where a click on it puts the cursor.
     log = temporal["/events/log"]
@@ -414,31 +461,28 @@ def test_detections_drawn_on_their_frames_at_pixel_centres(tiny, recording):
 def test_plane_observations_are_projected_detections(tiny, recording):
     temporal, _ = recording
     detections = tiny["detections"]
-    puck = detections[(detections["camera"] == "cam2") & (detections["object"] == "puck")
-                      & detections["restamp_error"].isna()]
+    puck = detections[
+        (detections["camera"] == "cam2") & (detections["object"] == "puck") & detections["restamp_error"].isna()
+    ]
     logged = temporal["/plane/observations/cam2/puck"].sort_values("frame_cam2")
     positions = np.stack([p[0] for p in logged["Points2D:positions"]])
-    expected = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(),
-                              tiny["homographies"]["cam2"])
-    np.testing.assert_allclose(positions, expected[np.argsort(puck["frame"].to_numpy(),
-                                                              kind="stable")], atol=1e-4)
-    assert np.all(np.concatenate(logged["Points2D:radii"].to_numpy()) < 0)   # ui points
+    expected = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(), tiny["homographies"]["cam2"])
+    np.testing.assert_allclose(positions, expected[np.argsort(puck["frame"].to_numpy(), kind="stable")], atol=1e-4)
+    assert np.all(np.concatenate(logged["Points2D:radii"].to_numpy()) < 0)  # ui points
     instants = puck.get("t_center_ms", puck["t_global_ms"]).to_numpy()
-    np.testing.assert_array_equal(nanos(logged["global_time"]),
-                                  on_timeline(tiny["timeline"], np.sort(instants)))
+    np.testing.assert_array_equal(nanos(logged["global_time"]), on_timeline(tiny["timeline"], np.sort(instants)))
 
 
 def test_plane_view_is_turned_as_the_reference_camera_sees_it(tiny, recording):
     _, static = recording
     homography, camera = tiny["homographies"]["cam1"], tiny["model"].cameras["cam1"]
     columns = np.asarray(list(static["/plane"]["Transform3D:mat3x3"][0][0]), dtype=np.float64)
-    to_display = columns.reshape(3, 3).T[:2, :2]                # Rerun stores columns
+    to_display = columns.reshape(3, 3).T[:2, :2]  # Rerun stores columns
     np.testing.assert_allclose(to_display @ to_display.T, np.eye(2), atol=1e-6)
     # Image points up, down, left and right of the centre keep their places in the view.
     cx, cy = camera.width / 2, camera.height / 2
-    plane = image_to_plane(np.array([cx, cx, cx - 50, cx + 50]),
-                           np.array([cy - 50, cy + 50, cy, cy]), homography)
-    shown = plane @ to_display.T                                # display: x right, y down
+    plane = image_to_plane(np.array([cx, cx, cx - 50, cx + 50]), np.array([cy - 50, cy + 50, cy, cy]), homography)
+    shown = plane @ to_display.T  # display: x right, y down
     assert shown[0, 1] < shown[1, 1] and shown[2, 0] < shown[3, 0]
     assert abs(shown[0, 0] - shown[1, 0]) < 0.05 * abs(shown[0, 1] - shown[1, 1])
 
@@ -467,17 +511,23 @@ def test_each_camera_keeps_its_colour(recording):
         in_plane = colors(f"/plane/observations/{name}/puck", "Points2D:colors")
         series = {int(c[0]) for c in static[f"/residuals/{name}/matched"]["SeriesPoints:colors"]}
         assert len(on_frames) == 1 and on_frames == in_plane == series
-    assert colors("/plane/observations/cam1/puck", "Points2D:colors") != \
-        colors("/plane/observations/cam2/puck", "Points2D:colors")
+    assert colors("/plane/observations/cam1/puck", "Points2D:colors") != colors(
+        "/plane/observations/cam2/puck", "Points2D:colors"
+    )
 
 
 def test_validation_arrows_are_scaled_and_long_ones_cut(tiny, recording):
     temporal, static = recording
     triples = tiny["validation"]
-    view = plane_view(tiny["model"], tiny["homographies"], tiny["plane_outline_m"],
-                      triples[["x_b", "y_b"]].to_numpy(), triples["error_m"].to_numpy())
+    view = plane_view(
+        tiny["model"],
+        tiny["homographies"],
+        tiny["plane_outline_m"],
+        triples[["x_b", "y_b"]].to_numpy(),
+        triples["error_m"].to_numpy(),
+    )
     scale, cap = view.error_scale, view.arrow_cap_m()
-    assert scale >= 100 and nice_floor(scale) == scale      # millimetres become metres
+    assert scale >= 100 and nice_floor(scale) == scale  # millimetres become metres
     arrows = temporal["/plane/validation/at_cam2/from_cam1/puck/error"].sort_values("global_time")
     assert len(arrows) == len(triples)
     origins = np.stack([a[0] for a in arrows["Arrows2D:origins"]])
@@ -506,8 +556,9 @@ def test_blueprint_reads_at_first_glance(tiny):
     model, timeline = tiny["model"], tiny["timeline"]
     for name, camera in model.cameras.items():
         assert found[name]["ViewBlueprint:space_origin"] == [f"cameras/{name}"]
-        assert found[name]["VisualBounds2D:range"] == [{"x_range": [0.0, camera.width],
-                                                        "y_range": [0.0, camera.height]}]
+        assert found[name]["VisualBounds2D:range"] == [
+            {"x_range": [0.0, camera.width], "y_range": [0.0, camera.height]}
+        ]
     residuals = next(v for k, v in found.items() if k.startswith("residuals of the solve (ms)"))
     errors = next(v for k, v in found.items() if k.startswith("validation error (m)"))
     lanes = next(v for k, v in found.items() if k.startswith("flash events per camera"))
@@ -532,7 +583,7 @@ def test_blueprint_reads_at_first_glance(tiny):
     assert top >= viz.residuals.residual_extent_ms(model)
     assert errors["ScalarAxis:range"][0][1] >= ERRORS_M.max()
     x_range = plane["VisualBounds2D:range"][0]["x_range"]
-    assert x_range[1] - x_range[0] > 10                       # metres, the whole rink
+    assert x_range[1] - x_range[0] > 10  # metres, the whole rink
     assert blueprint["/time_panel"]["TimePanelBlueprint:timeline"] == ["global_time"]
 
 
@@ -558,18 +609,21 @@ def test_no_outline_unless_given(tiny, tmp_path):
     temporal, static = read_recording(tmp_path / "none.rrd")
     assert "/plane/map/outline" not in static and "/plane/map/grid" in static
     # The view holds every observation (the data's extent, as the reference camera sees it).
-    points = np.concatenate([np.stack(list(p)) for path, table in temporal.items()
-                             if path.startswith("/plane/observations/")
-                             for p in table["Points2D:positions"]])
+    points = np.concatenate(
+        [
+            np.stack(list(p))
+            for path, table in temporal.items()
+            if path.startswith("/plane/observations/")
+            for p in table["Points2D:positions"]
+        ]
+    )
     transform = np.asarray(list(static["/plane"]["Transform3D:mat3x3"][0][0])).reshape(3, 3).T
     shown = points @ transform[:2, :2].T
-    plane = next(v for k, v in views(read_blueprint(tmp_path / "none.rrd")).items()
-                 if k.startswith("plane"))
+    plane = next(v for k, v in views(read_blueprint(tmp_path / "none.rrd")).items() if k.startswith("plane"))
     bounds = plane["VisualBounds2D:range"][0]
     assert bounds["x_range"][0] < shown[:, 0].min() and shown[:, 0].max() < bounds["x_range"][1]
     assert bounds["y_range"][0] < shown[:, 1].min() and shown[:, 1].max() < bounds["y_range"][1]
-    viz.save_recording(tmp_path / "box.rrd", plane_outline_m=viz.rectangle_outline(0, 0, 60, 30),
-                       **data)
+    viz.save_recording(tmp_path / "box.rrd", plane_outline_m=viz.rectangle_outline(0, 0, 60, 30), **data)
     _, static = read_recording(tmp_path / "box.rrd")
     outline = np.stack(static["/plane/map/outline"]["LineStrips2D:strips"][0][0])
     np.testing.assert_array_equal(outline, [[0, 0], [60, 0], [60, 30], [0, 30], [0, 0]])
@@ -577,9 +631,13 @@ def test_no_outline_unless_given(tiny, tmp_path):
 
 def test_plane_extent_without_outline_holds_the_data_but_stray_points(tiny):
     rng = np.random.default_rng(1)
-    points = np.concatenate([rng.uniform([0, 0], [50, 20], (1000, 2)),
-                             [[-8.0, 10.0]] * 8,                     # a few at the edge
-                             [[1e6, 10.0]]])                         # one far off
+    points = np.concatenate(
+        [
+            rng.uniform([0, 0], [50, 20], (1000, 2)),
+            [[-8.0, 10.0]] * 8,  # a few at the edge
+            [[1e6, 10.0]],
+        ]
+    )  # one far off
     view = plane_view(tiny["model"], None, None, points, np.zeros(0))
     assert view.low_m[0] == -8.0 and 49.5 < view.high_m[0] <= 50
     assert 0 <= view.low_m[1] < 0.5 and 19.5 < view.high_m[1] <= 20
@@ -591,14 +649,18 @@ def test_plane_outline_in_the_homographies_file(tmp_path):
     path.write_text(json.dumps({"cam1": matrix, "plane": {"outline_m": [[0, 0], [4, 0], [4, 2]]}}))
     assert list(load_homographies(path)) == ["cam1"]
     np.testing.assert_array_equal(load_plane_outline(path), [[0, 0], [4, 0], [4, 2], [0, 0]])
-    path.write_text(json.dumps({"cam1": matrix, "plane": matrix}))      # a camera named plane
+    path.write_text(json.dumps({"cam1": matrix, "plane": matrix}))  # a camera named plane
     assert list(load_homographies(path)) == ["cam1", "plane"] and load_plane_outline(path) is None
     path.write_text(json.dumps({"cam1": matrix}))
     assert load_plane_outline(path) is None
-    for bad in ({"outline_m": [[0, 0], [1, 1]]}, {"outline_m": "rink"}, {"corners": []},
-                {"outline_m": [[0, 0, 0], [1, 0, 0], [1, 1, 0]]}):
+    for bad in (
+        {"outline_m": [[0, 0], [1, 1]]},
+        {"outline_m": "rink"},
+        {"corners": []},
+        {"outline_m": [[0, 0, 0], [1, 0, 0], [1, 1, 0]]},
+    ):
         path.write_text(json.dumps({"cam1": matrix, "plane": bad}))
-        with pytest.raises(FlashsyncError, match="h.json: \"plane\" needs \"outline_m\""):
+        with pytest.raises(FlashsyncError, match='h.json: "plane" needs "outline_m"'):
             load_plane_outline(path)
     path.write_text(json.dumps({"plane": {"outline_m": [[0, 0], [4, 0], [4, 2]]}}))
     with pytest.raises(FlashsyncError, match="no camera in it"):
@@ -611,13 +673,15 @@ def test_inverted_homography_warns(tiny, tmp_path):
     with pytest.warns(viz.PlaneWarning) as caught:
         viz.save_recording(tmp_path / "inverted.rrd", homographies=inverted, **data)
     assert sorted(str(w.message).split(" of ")[1][:4] for w in caught) == ["cam1", "cam2"]
-    assert all("detections land far outside the plane outline (x 0 m..60 m, y 0 m..30 m)"
-               in str(w.message) for w in caught)
-    in_mm = {name: np.diag([1000.0, 1000.0, 1.0]) @ matrix       # millimetres, no outline
-             for name, matrix in tiny["homographies"].items()}
+    assert all(
+        "detections land far outside the plane outline (x 0 m..60 m, y 0 m..30 m)" in str(w.message) for w in caught
+    )
+    in_mm = {
+        name: np.diag([1000.0, 1000.0, 1.0]) @ matrix  # millimetres, no outline
+        for name, matrix in tiny["homographies"].items()
+    }
     with pytest.warns(viz.PlaneWarning) as caught:
-        viz.save_recording(tmp_path / "mm.rrd", homographies=in_mm, model=tiny["model"],
-                           detections=tiny["detections"])
+        viz.save_recording(tmp_path / "mm.rrd", homographies=in_mm, model=tiny["model"], detections=tiny["detections"])
     assert len(caught) == 2
     assert all(re.search(r"cam\d's detections spread over [\d.]+ km", str(w.message)) for w in caught)
     with warnings.catch_warnings():
@@ -629,14 +693,30 @@ def test_view_command_warns_in_one_line_and_takes_a_plane(tiny, tmp_path, capsys
     inverted = {name: np.linalg.inv(m).tolist() for name, m in tiny["homographies"].items()}
     (tmp_path / "inverted.json").write_text(json.dumps(inverted))
     tiny["detections"].to_csv(tmp_path / "restamped.csv", index=False)
-    code = main(["view", "--model", str(tiny["directory"] / "sync.json"), "--detections",
-                 str(tmp_path / "restamped.csv"), "--homographies", str(tmp_path / "inverted.json"),
-                 "--plane", "0", "0", "60", "30", "--save", str(tmp_path / "v.rrd")])
+    code = main(
+        [
+            "view",
+            "--model",
+            str(tiny["directory"] / "sync.json"),
+            "--detections",
+            str(tmp_path / "restamped.csv"),
+            "--homographies",
+            str(tmp_path / "inverted.json"),
+            "--plane",
+            "0",
+            "0",
+            "60",
+            "30",
+            "--save",
+            str(tmp_path / "v.rrd"),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 0, err
     warned = [line for line in err.splitlines() if "warning" in line]
-    assert len(warned) == 2 and all(line.startswith("flashsync view: warning: ") and
-                                    "inverted.json" in line for line in warned)
+    assert len(warned) == 2 and all(
+        line.startswith("flashsync view: warning: ") and "inverted.json" in line for line in warned
+    )
     assert "Traceback" not in err
     _, static = read_recording(tmp_path / "v.rrd")
     outline = np.stack(static["/plane/map/outline"]["LineStrips2D:strips"][0][0])
@@ -647,9 +727,16 @@ def test_view_help_has_the_whole_chain_and_the_units(capsys):
     with pytest.raises(SystemExit):
         main(["view", "--help"])
     text = capsys.readouterr().out
-    for option in ("--events events.csv", "--detections restamped.csv",
-                   "--homographies homographies.json", "--validation validation.json",
-                   "sync --events", "--plane", "--bind", "--port"):
+    for option in (
+        "--events events.csv",
+        "--detections restamped.csv",
+        "--homographies homographies.json",
+        "--validation validation.json",
+        "sync --events",
+        "--plane",
+        "--bind",
+        "--port",
+    ):
         assert option in " ".join(text.split()), option
     for unit in ("seconds from the start of the recordings", "in ms", "metres", "px"):
         assert unit in " ".join(text.split()), unit
@@ -668,8 +755,7 @@ def test_model_alone_with_a_rejected_event(tiny, tmp_path):
     residual = temporal[f"/residuals/{rejected.camera}/rejected"]["Scalars:scalars"]
     assert residual[0][0] == pytest.approx(rejected.residual_ms, abs=1e-12)
     log = temporal["/events/log"]
-    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"])
-              if level[0] == "WARN"]
+    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"]) if level[0] == "WARN"]
     assert len(warned) == 1 and warned[0].startswith(f"flash {number}  {rejected.camera}  ")
     assert f"REJECTED (event {rejected.event})" in warned[0]
     assert "/residuals/cam1/sigma_plus" not in temporal
@@ -692,11 +778,9 @@ def test_a_flash_the_solve_could_not_place(tiny, tmp_path):
         assert (instants >= 0).all() and (instants <= timeline.duration_ms * 1e6).all(), entity
     assert flash_numbers(model)[flashes[1]] == 1
     log = temporal["/events/log"]
-    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"])
-              if level[0] == "WARN"]
+    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"]) if level[0] == "WARN"]
     assert len(warned) == 2 and all(line.startswith("flash 1  ") for line in warned)
-    residuals = next(v for k, v in views(read_blueprint(tmp_path / "lost.rrd")).items()
-                     if k.startswith("residuals"))
+    residuals = next(v for k, v in views(read_blueprint(tmp_path / "lost.rrd")).items() if k.startswith("residuals"))
     assert residuals["ScalarAxis:range"][0][1] < 1.0
 
 
@@ -708,8 +792,9 @@ def test_mkv_is_remuxed_packet_for_packet(tiny, tmp_path):
     def packets(path):
         with av.open(str(path)) as container:
             stream = container.streams.video[0]
-            return [(bytes(p), round(float(p.pts * stream.time_base) * 1000, 3))
-                    for p in container.demux(stream) if p.size]
+            return [
+                (bytes(p), round(float(p.pts * stream.time_base) * 1000, 3)) for p in container.demux(stream) if p.size
+            ]
 
     assert packets(remuxed) == packets(source)
     mp4 = tiny["videos"][0]
@@ -761,26 +846,37 @@ def listening_addresses(port: int) -> set[str]:
         for line in Path(table).read_text().splitlines()[1:]:
             local, state = line.split()[1], line.split()[3]
             address, hex_port = local.split(":")
-            if int(hex_port, 16) == port and state == "0A":            # LISTEN
+            if int(hex_port, 16) == port and state == "0A":  # LISTEN
                 raw = bytes.fromhex(address)
                 if width == 8:
                     found.add(socket.inet_ntop(socket.AF_INET, raw[::-1]))
                 else:
-                    words = b"".join(raw[i:i + 4][::-1] for i in range(0, 16, 4))
+                    words = b"".join(raw[i : i + 4][::-1] for i in range(0, 16, 4))
                     found.add(socket.inet_ntop(socket.AF_INET6, words))
     return found
 
 
 def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
     web_port, grpc_port = free_port(), free_port()
-    command = [sys.executable, "-m", "flashsync", "view", "--model",
-               str(tiny["directory"] / "sync.json"), "--serve", "--port", str(web_port),
-               "--grpc-port", str(grpc_port)]
-    server = subprocess.Popen(command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE,
-                              text=True, start_new_session=True)
+    command = [
+        sys.executable,
+        "-m",
+        "flashsync",
+        "view",
+        "--model",
+        str(tiny["directory"] / "sync.json"),
+        "--serve",
+        "--port",
+        str(web_port),
+        "--grpc-port",
+        str(grpc_port),
+    ]
+    server = subprocess.Popen(
+        command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
     try:
         line, deadline = "", time.monotonic() + 120
-        while "serving the Rerun web viewer" not in line:     # printed once both listen
+        while "serving the Rerun web viewer" not in line:  # printed once both listen
             assert server.poll() is None and time.monotonic() < deadline, "serve did not start"
             if select.select([server.stderr], [], [], 1.0)[0]:
                 line = server.stderr.readline()
@@ -793,16 +889,16 @@ def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
         with socket.create_connection(("127.0.0.1", grpc_port), timeout=30):
             pass
         # A second server on the same ports: one clear line, no traceback.
-        second = subprocess.run(command, cwd=Path(__file__).parents[1], capture_output=True,
-                                text=True, timeout=120)
+        second = subprocess.run(command, cwd=Path(__file__).parents[1], capture_output=True, text=True, timeout=120)
         assert second.returncode == 1 and "Traceback" not in second.stderr
         assert f"cannot listen on 127.0.0.1 port {web_port}" in second.stderr
         server.send_signal(signal.SIGINT)
         assert server.wait(timeout=60) == 0
         assert not listening_addresses(web_port) and not listening_addresses(grpc_port)
         # kill (SIGTERM) stops the server too, instead of leaving it behind.
-        server = subprocess.Popen(command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE,
-                                  text=True, start_new_session=True)
+        server = subprocess.Popen(
+            command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE, text=True, start_new_session=True
+        )
         while not listening_addresses(web_port):
             assert server.poll() is None and time.monotonic() < deadline + 120, "no second start"
             time.sleep(0.5)
@@ -818,8 +914,7 @@ def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
 def test_spawn_without_a_display_is_one_clear_line(tiny, capsys, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    code = main(["view", "--model", str(tiny["directory"] / "sync.json"), "--spawn",
-                 "--grpc-port", str(free_port())])
+    code = main(["view", "--model", str(tiny["directory"] / "sync.json"), "--spawn", "--grpc-port", str(free_port())])
     err = capsys.readouterr().err
     assert code == 1 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert "needs a display" in err

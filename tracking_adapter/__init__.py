@@ -13,14 +13,24 @@ Examples
 ...                   model_ticks_ms(model, 100.0)).tracks                      # doctest: +SKIP
 """
 
-from tracking_adapter.formats import (load_homographies, read_detections, read_mot,
-                                      write_detections)
+from tracking_adapter.formats import load_homographies, read_detections, read_mot, write_detections
 from tracking_adapter.resample import Resampled, format_resampled, resample
 from tracking_adapter.restamp import RestampSummary, format_summary, restamp, restamp_file
 from tracking_adapter.validate import ValidationReport, format_report, validate
 
 __all__ = [
-    "Resampled", "RestampSummary", "ValidationReport", "format_report", "format_resampled",
-    "format_summary", "load_homographies", "read_detections", "read_mot", "resample", "restamp",
-    "restamp_file", "validate", "write_detections",
+    "Resampled",
+    "RestampSummary",
+    "ValidationReport",
+    "format_report",
+    "format_resampled",
+    "format_summary",
+    "load_homographies",
+    "read_detections",
+    "read_mot",
+    "resample",
+    "restamp",
+    "restamp_file",
+    "validate",
+    "write_detections",
 ]

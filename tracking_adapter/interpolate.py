@@ -42,8 +42,9 @@ class TrackSample:
     nearest_ms: np.ndarray
 
 
-def interpolate_track(times_ms: np.ndarray, values: np.ndarray, instants_ms: np.ndarray,
-                      max_gap_ms: float) -> TrackSample:
+def interpolate_track(
+    times_ms: np.ndarray, values: np.ndarray, instants_ms: np.ndarray, max_gap_ms: float
+) -> TrackSample:
     """Interpolate a track linearly in time between its two detections that bracket each
     instant.
 
@@ -77,14 +78,15 @@ def interpolate_track(times_ms: np.ndarray, values: np.ndarray, instants_ms: np.
     if not len(times):
         return TrackSample(result, np.full(len(instants), BEFORE_TRACK), np.full(len(instants), np.inf))
     index = np.searchsorted(times, instants)
-    nearest = np.minimum(np.abs(instants - times[np.maximum(index - 1, 0)]),
-                         np.abs(times[np.minimum(index, len(times) - 1)] - instants))
+    nearest = np.minimum(
+        np.abs(instants - times[np.maximum(index - 1, 0)]), np.abs(times[np.minimum(index, len(times) - 1)] - instants)
+    )
     status[instants < times[0]] = BEFORE_TRACK
     status[(instants > times[-1]) | ((instants == times[-1]) & (len(times) < 2))] = AFTER_TRACK
     inside = np.flatnonzero(status == INTERPOLATED)
     after = np.clip(np.searchsorted(times, instants[inside], side="right"), 1, len(times) - 1)
     gap = times[after] - times[after - 1]
-    close = (gap <= max_gap_ms) | (nearest[inside] == 0)          # or on a detection
+    close = (gap <= max_gap_ms) | (nearest[inside] == 0)  # or on a detection
     status[inside[~close]] = GAP_OVER_LIMIT
     after, inside, gap = after[close], inside[close], gap[close]
     weight = ((instants[inside] - times[after - 1]) / gap)[:, None]
@@ -96,6 +98,7 @@ def default_gap_ms(clock: CameraClock) -> float:
     """:data:`DEFAULT_GAP_FRAMES` frame periods of a camera (median step), ms of the
     reference clock."""
     if clock.n_frames < 2:
-        raise FlashsyncError(f"camera {clock.name} has {clock.n_frames} frame in the model; "
-                             "give --max-gap-ms or sync a longer video")
+        raise FlashsyncError(
+            f"camera {clock.name} has {clock.n_frames} frame in the model; give --max-gap-ms or sync a longer video"
+        )
     return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))

@@ -57,9 +57,15 @@ class Resampled:
     not_used: dict[str, int] = field(default_factory=dict)
 
 
-def resample(detections: pd.DataFrame, model: SyncModel, ticks_ms: np.ndarray, *,
-             max_gap_ms: float | None = None, exposure_ms: Mapping[str, float] | None = None,
-             source: str = "detections") -> Resampled:
+def resample(
+    detections: pd.DataFrame,
+    model: SyncModel,
+    ticks_ms: np.ndarray,
+    *,
+    max_gap_ms: float | None = None,
+    exposure_ms: Mapping[str, float] | None = None,
+    source: str = "detections",
+) -> Resampled:
     """Interpolate every (camera, object) track at common instants.
 
     Parameters
@@ -93,18 +99,22 @@ def resample(detections: pd.DataFrame, model: SyncModel, ticks_ms: np.ndarray, *
     require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
     if max_gap_ms is not None and not (np.isfinite(max_gap_ms) and max_gap_ms > 0):
         raise FlashsyncError(f"--max-gap-ms {max_gap_ms}: give a positive time in ms")
-    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms,
-                      source=source)
+    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms, source=source)
     unknown = stamped.loc[stamped["restamp_error"] == "unknown camera", "camera"].unique()
     if len(unknown):
-        raise FlashsyncError(f"{source}: camera {', '.join(map(str, unknown))} is not in the model "
-                             f"(it has {', '.join(model.cameras)}); sync its video too or fix the "
-                             "camera names")
+        raise FlashsyncError(
+            f"{source}: camera {', '.join(map(str, unknown))} is not in the model "
+            f"(it has {', '.join(model.cameras)}); sync its video too or fix the "
+            "camera names"
+        )
     not_used = {str(k): int(v) for k, v in stamped["restamp_error"].value_counts().items()}
     usable = stamped["restamp_error"].isna().to_numpy().copy()
     id_column = next((name for name in OBJECT_COLUMNS if name in detections.columns), None)
-    objects, object_names = (pd.factorize(_whole_ids(detections[id_column])) if id_column
-                             else (np.zeros(len(detections), dtype=np.int64), pd.Index(["object"])))
+    objects, object_names = (
+        pd.factorize(_whole_ids(detections[id_column]))
+        if id_column
+        else (np.zeros(len(detections), dtype=np.int64), pd.Index(["object"]))
+    )
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
     for reason, bad in (("x missing or not a number", np.isnan(x)), ("object id missing", objects < 0)):
         _count(not_used, reason, int(np.count_nonzero(usable & bad)))
@@ -125,25 +135,42 @@ def resample(detections: pd.DataFrame, model: SyncModel, ticks_ms: np.ndarray, *
             _count(not_used, "another detection of the object in the frame", len(rows) - len(first))
             times = t[first]
             near = np.flatnonzero((ticks >= times[0] - gap_limit) & (ticks <= times[-1] + gap_limit))
-            sample = interpolate_track(times, np.column_stack([x[first], y[first]]), ticks[near],
-                                       gap_limit)
-            pieces.append(pd.DataFrame({
-                "tick": near, "camera_index": camera_index, "object_index": obj,
-                "x": sample.values[:, 0], "y": sample.values[:, 1], "gap_ms": sample.nearest_ms,
-                "status": sample.status}))
-    found = (pd.concat(pieces, ignore_index=True) if pieces else
-             pd.DataFrame({name: pd.Series(dtype=np.int64) for name in
-                           ("tick", "camera_index", "object_index", "status")}
-                          | {name: pd.Series(dtype=np.float64) for name in ("x", "y", "gap_ms")}))
+            sample = interpolate_track(times, np.column_stack([x[first], y[first]]), ticks[near], gap_limit)
+            pieces.append(
+                pd.DataFrame(
+                    {
+                        "tick": near,
+                        "camera_index": camera_index,
+                        "object_index": obj,
+                        "x": sample.values[:, 0],
+                        "y": sample.values[:, 1],
+                        "gap_ms": sample.nearest_ms,
+                        "status": sample.status,
+                    }
+                )
+            )
+    found = (
+        pd.concat(pieces, ignore_index=True)
+        if pieces
+        else pd.DataFrame(
+            {name: pd.Series(dtype=np.int64) for name in ("tick", "camera_index", "object_index", "status")}
+            | {name: pd.Series(dtype=np.float64) for name in ("x", "y", "gap_ms")}
+        )
+    )
     found = found.sort_values(["tick", "camera_index", "object_index"], kind="stable")
-    tracks = pd.DataFrame({
-        "t_global_ms": ticks[found["tick"].to_numpy()],
-        "camera": pd.array(np.array(list(model.cameras), dtype=object)[found["camera_index"].to_numpy()],
-                           dtype="str"),
-        "object": object_names.take(found["object_index"].to_numpy()).to_numpy(),
-        "x": found["x"].to_numpy(), "y": found["y"].to_numpy(), "gap_ms": found["gap_ms"].to_numpy(),
-        "reason": pd.array(np.array(STATUS, dtype=object)[found["status"].to_numpy()], dtype="str"),
-    })
+    tracks = pd.DataFrame(
+        {
+            "t_global_ms": ticks[found["tick"].to_numpy()],
+            "camera": pd.array(
+                np.array(list(model.cameras), dtype=object)[found["camera_index"].to_numpy()], dtype="str"
+            ),
+            "object": object_names.take(found["object_index"].to_numpy()).to_numpy(),
+            "x": found["x"].to_numpy(),
+            "y": found["y"].to_numpy(),
+            "gap_ms": found["gap_ms"].to_numpy(),
+            "reason": pd.array(np.array(STATUS, dtype=object)[found["status"].to_numpy()], dtype="str"),
+        }
+    )
     return Resampled(tracks, len(detections), not_used)
 
 
@@ -151,27 +178,29 @@ def format_resampled(result: Resampled, source: str, output: str) -> str:
     """One line for the terminal: detections used, rows written, rows refused by reason."""
     tracks = result.tracks
     refused = tracks.loc[tracks["reason"] != "", "reason"].value_counts()
-    text = (f"{source} -> {output}: {result.detections} detections, "
-            f"{tracks.groupby(['camera', 'object']).ngroups} tracks, {len(tracks)} rows, "
-            f"{len(tracks) - int(refused.sum())} interpolated")
+    text = (
+        f"{source} -> {output}: {result.detections} detections, "
+        f"{tracks.groupby(['camera', 'object']).ngroups} tracks, {len(tracks)} rows, "
+        f"{len(tracks) - int(refused.sum())} interpolated"
+    )
     if len(refused):
         text += " (" + ", ".join(f"{count} {reason}" for reason, count in refused.items()) + ")"
     if result.not_used:
-        text += "; detections not used: " + ", ".join(
-            f"{count} {reason}" for reason, count in result.not_used.items())
+        text += "; detections not used: " + ", ".join(f"{count} {reason}" for reason, count in result.not_used.items())
     return text
 
 
-def _require_exposures(stamped: pd.DataFrame, cameras: np.ndarray, usable: np.ndarray,
-                       model: SyncModel) -> None:
+def _require_exposures(stamped: pd.DataFrame, cameras: np.ndarray, usable: np.ndarray, model: SyncModel) -> None:
     """A one-line error naming the cameras whose detections have no mid-exposure time."""
     if "t_center_ms" in stamped:
         usable = usable & stamped["t_center_ms"].isna().to_numpy()
     missing = [name for name in model.cameras if np.any(usable & (cameras == name))]
     if missing:
-        raise FlashsyncError(f"camera {', '.join(missing)}: exposure unknown (not in the model), so "
-                             "its detections have no mid-exposure time; give --exposure "
-                             f"{missing[0]}=MS")
+        raise FlashsyncError(
+            f"camera {', '.join(missing)}: exposure unknown (not in the model), so "
+            "its detections have no mid-exposure time; give --exposure "
+            f"{missing[0]}=MS"
+        )
 
 
 def _whole_ids(ids: pd.Series) -> pd.Series:

@@ -18,9 +18,21 @@ Examples
 from viz.blueprint import sync_blueprint
 from viz.diagnosis import log_diagnosis, save_diagnosis
 from viz.plane import PlaneWarning, rectangle_outline
-from viz.recording import (APPLICATION_ID, BIND, GRPC_PORT, WEB_PORT, log_sync, save_recording,
-                           serve, spawn, viewer_url)
+from viz.recording import APPLICATION_ID, BIND, GRPC_PORT, WEB_PORT, log_sync, save_recording, serve, spawn, viewer_url
 
-__all__ = ["APPLICATION_ID", "BIND", "GRPC_PORT", "PlaneWarning", "WEB_PORT", "log_diagnosis",
-           "log_sync", "rectangle_outline", "save_diagnosis", "save_recording", "serve", "spawn",
-           "sync_blueprint", "viewer_url"]
+__all__ = [
+    "APPLICATION_ID",
+    "BIND",
+    "GRPC_PORT",
+    "PlaneWarning",
+    "WEB_PORT",
+    "log_diagnosis",
+    "log_sync",
+    "rectangle_outline",
+    "save_diagnosis",
+    "save_recording",
+    "serve",
+    "spawn",
+    "sync_blueprint",
+    "viewer_url",
+]

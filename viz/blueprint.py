@@ -56,9 +56,14 @@ def legend_margin(names: Collection[str]) -> float:
     return min(0.4, max(0.08, (_LEGEND_PX[0] + _LEGEND_PX[1] * longest) / PLOT_WIDTH_PX))
 
 
-def sync_blueprint(model: SyncModel, timeline: Timeline, *, video_cameras: Collection[str] = (),
-                   plane: PlaneView | None = None, errors_max_m: float | None = None
-                   ) -> rrb.Blueprint:
+def sync_blueprint(
+    model: SyncModel,
+    timeline: Timeline,
+    *,
+    video_cameras: Collection[str] = (),
+    plane: PlaneView | None = None,
+    errors_max_m: float | None = None,
+) -> rrb.Blueprint:
     """The default layout of a flashsync recording.
 
     Parameters
@@ -81,48 +86,72 @@ def sync_blueprint(model: SyncModel, timeline: Timeline, *, video_cameras: Colle
     videos = [name for name in model.cameras if name in video_cameras]
     n_plots = 1 if errors_max_m is None else 2
     lanes = min(0.4, _LANE_SHARE[0] + _LANE_SHARE[1] * len(model.cameras))
-    plot_px = ((WINDOW_PX[1] - _CHROME_PX[0]) * (1 - _VIDEO_SHARE if videos else 1)
-               * (1 - lanes) / n_plots - _CHROME_PX[1])
-    value_ranges = [ticked_range(max(residuals.residual_extent_ms(model), 1e-6), plot_px,
-                                 symmetric=True)]
+    plot_px = (WINDOW_PX[1] - _CHROME_PX[0]) * (1 - _VIDEO_SHARE if videos else 1) * (1 - lanes) / n_plots - _CHROME_PX[
+        1
+    ]
+    value_ranges = [ticked_range(max(residuals.residual_extent_ms(model), 1e-6), plot_px, symmetric=True)]
     if errors_max_m is not None:
         value_ranges.append(ticked_range(max(errors_max_m, 1e-6), plot_px, symmetric=False))
     gutters = [_LANES_GUTTER_PX] + [value_axis_px(*value_range) for value_range in value_ranges]
     time_axes = [_time_axis(end_s, gutter, max(gutters)) for gutter in gutters]
     series: list[rrb.View] = [
-        rrb.StateTimelineView(origin=events.ROOT, name="flash events per camera "
-                              "(a block runs from an event to the camera's next)",
-                              time_view=time_axes[0]),
-        rrb.TimeSeriesView(origin=residuals.ROOT,
-                           name="residuals of the solve (ms); lines: ±1σ of the sync",
-                           axis_x=time_axes[1], axis_y=rrb.ScalarAxis(range=value_ranges[0]),
-                           plot_legend=legend),
+        rrb.StateTimelineView(
+            origin=events.ROOT,
+            name="flash events per camera (a block runs from an event to the camera's next)",
+            time_view=time_axes[0],
+        ),
+        rrb.TimeSeriesView(
+            origin=residuals.ROOT,
+            name="residuals of the solve (ms); lines: ±1σ of the sync",
+            axis_x=time_axes[1],
+            axis_y=rrb.ScalarAxis(range=value_ranges[0]),
+            plot_legend=legend,
+        ),
     ]
     if errors_max_m is not None:
-        series.append(rrb.TimeSeriesView(
-            origin=validation.ROOT, name="validation error (m) at each camera's detections",
-            axis_x=time_axes[2], axis_y=rrb.ScalarAxis(range=value_ranges[1]), plot_legend=legend))
+        series.append(
+            rrb.TimeSeriesView(
+                origin=validation.ROOT,
+                name="validation error (m) at each camera's detections",
+                axis_x=time_axes[2],
+                axis_y=rrb.ScalarAxis(range=value_ranges[1]),
+                plot_legend=legend,
+            )
+        )
     log = rrb.TextLogView(
-        origin=events.LOG_ENTITY, name="flash log (click a line to go there)",
-        columns=rrb.TextLogColumns(timeline_columns=[rrb.encodings.TimelineColumn(GLOBAL_TIMELINE)],
-                                   text_log_columns=[rrb.encodings.TextLogColumn("Body")]),
-        rows=rrb.TextLogRows(filter_by_log_level=["INFO", "WARN"]))
+        origin=events.LOG_ENTITY,
+        name="flash log (click a line to go there)",
+        columns=rrb.TextLogColumns(
+            timeline_columns=[rrb.encodings.TimelineColumn(GLOBAL_TIMELINE)],
+            text_log_columns=[rrb.encodings.TextLogColumn("Body")],
+        ),
+        rows=rrb.TextLogRows(filter_by_log_level=["INFO", "WARN"]),
+    )
     left: rrb.View | rrb.Container = log
     if plane is not None:
         x_range, y_range = plane.display_bounds()
-        trail = rrb.VisibleTimeRange(GLOBAL_TIMELINE,
-                                     start=rrb.TimeRangeBoundary.cursor_relative(seconds=-TRAIL_S),
-                                     end=rrb.TimeRangeBoundary.cursor_relative())
-        left = rrb.Vertical(rrb.Spatial2DView(origin="/", contents=[f"{PLANE}/**"], name=plane.title(),
-                                              visual_bounds=rrb.VisualBounds2D(x_range=x_range,
-                                                                               y_range=y_range),
-                                              time_ranges=trail),
-                            log, row_shares=[0.55, 0.45])
+        trail = rrb.VisibleTimeRange(
+            GLOBAL_TIMELINE,
+            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-TRAIL_S),
+            end=rrb.TimeRangeBoundary.cursor_relative(),
+        )
+        left = rrb.Vertical(
+            rrb.Spatial2DView(
+                origin="/",
+                contents=[f"{PLANE}/**"],
+                name=plane.title(),
+                visual_bounds=rrb.VisualBounds2D(x_range=x_range, y_range=y_range),
+                time_ranges=trail,
+            ),
+            log,
+            row_shares=[0.55, 0.45],
+        )
     plots = rrb.Vertical(*series, row_shares=[lanes] + [(1 - lanes) / n_plots] * n_plots)
     rows: list[rrb.View | rrb.Container] = []
     if videos:
-        rows.append(rrb.Grid(*[_video_view(model, name) for name in videos],
-                             grid_columns=min(len(videos), VIDEO_COLUMNS)))
+        rows.append(
+            rrb.Grid(*[_video_view(model, name) for name in videos], grid_columns=min(len(videos), VIDEO_COLUMNS))
+        )
     rows.append(rrb.Horizontal(left, plots, column_shares=[_LEFT_SHARE, 1 - _LEFT_SHARE]))
     return rrb.Blueprint(
         rrb.Vertical(*rows, row_shares=[_VIDEO_SHARE, 1 - _VIDEO_SHARE] if videos else None),
@@ -147,13 +176,18 @@ def _time_axis(end_s: float, gutter_px: float, widest_gutter_px: float) -> rrb.T
     """The time axis from 0 to ``end_s`` of a view whose value axis is ``gutter_px`` wide,
     started early enough that 0 is as far right as in the view with the widest one."""
     lead_s = (widest_gutter_px - gutter_px) * end_s / (PLOT_WIDTH_PX - widest_gutter_px)
-    return rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.absolute(seconds=-lead_s),
-                                                 end=rrb.TimeRangeBoundary.absolute(seconds=end_s)))
+    return rrb.TimeAxis(
+        view_range=rrb.TimeRange(
+            start=rrb.TimeRangeBoundary.absolute(seconds=-lead_s), end=rrb.TimeRangeBoundary.absolute(seconds=end_s)
+        )
+    )
 
 
 def _video_view(model: SyncModel, name: str) -> rrb.Spatial2DView:
     """A camera's view, named after it, bounded by its image (also before its first frame)."""
     camera = model.cameras[name]
-    return rrb.Spatial2DView(origin=camera_entity(name), name=name,
-                             visual_bounds=rrb.VisualBounds2D(x_range=(0, camera.width),
-                                                              y_range=(0, camera.height)))
+    return rrb.Spatial2DView(
+        origin=camera_entity(name),
+        name=name,
+        visual_bounds=rrb.VisualBounds2D(x_range=(0, camera.width), y_range=(0, camera.height)),
+    )

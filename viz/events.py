@@ -94,7 +94,8 @@ def event_table(model: SyncModel, detected: pd.DataFrame | None = None) -> pd.Da
         table = matched.assign(edge=pd.NA, band=pd.NA)
     else:
         table = detected[["camera", "event", "frame", "row", "edge", "band"]].merge(
-            matched[["camera", "event", "flash", "inlier"]], on=["camera", "event"], how="left")
+            matched[["camera", "event", "flash", "inlier"]], on=["camera", "event"], how="left"
+        )
     known = table["inlier"].notna().to_numpy()
     inlier = table["inlier"].where(known, False).astype(bool).to_numpy()
     frames = table["frame"].to_numpy(dtype=np.int64)
@@ -103,8 +104,9 @@ def event_table(model: SyncModel, detected: pd.DataFrame | None = None) -> pd.Da
     for name, index in table.groupby("camera", sort=False).indices.items():
         t_global_ms[index] = model.camera(name).t_global_ms(frames[index], rows[index])
     status = np.where(known, np.where(inlier, "matched", "rejected"), "unmatched")
-    return table.assign(frame=frames, flash=table["flash"].astype("Int64"), status=status,
-                        t_global_ms=t_global_ms)[_COLUMNS]
+    return table.assign(frame=frames, flash=table["flash"].astype("Int64"), status=status, t_global_ms=t_global_ms)[
+        _COLUMNS
+    ]
 
 
 def lane_state(flash: object, status: str) -> str:
@@ -124,15 +126,20 @@ def lane_events(events: pd.DataFrame) -> pd.DataFrame:
         edge's where the leading edge is not in the table), sorted by time.
     """
     leading_first = events.assign(_trailing=events["edge"].eq("trailing").fillna(False).astype(bool))
-    first = (leading_first.sort_values(["_trailing", "t_global_ms"], kind="stable")
-             .groupby(["camera", "event"], sort=False).head(1))
+    first = (
+        leading_first.sort_values(["_trailing", "t_global_ms"], kind="stable")
+        .groupby(["camera", "event"], sort=False)
+        .head(1)
+    )
     states = [lane_state(flash, status) for flash, status in zip(first["flash"], first["status"])]
-    return (first.assign(state=states)[["camera", "event", "state", "t_global_ms"]]
-            .sort_values("t_global_ms", kind="stable").reset_index(drop=True))
+    return (
+        first.assign(state=states)[["camera", "event", "state", "t_global_ms"]]
+        .sort_values("t_global_ms", kind="stable")
+        .reset_index(drop=True)
+    )
 
 
-def log_events(recording: rr.RecordingStream, model: SyncModel, events: pd.DataFrame,
-               timeline: Timeline) -> np.ndarray:
+def log_events(recording: rr.RecordingStream, model: SyncModel, events: pd.DataFrame, timeline: Timeline) -> np.ndarray:
     """Log the event lanes and the flash log.
 
     Parameters
@@ -157,16 +164,20 @@ def log_events(recording: rr.RecordingStream, model: SyncModel, events: pd.DataF
         start = readout_start_ms(camera, [0])[0]
         end = readout_end_ms(camera, [camera.n_frames - 1])[0]
         times = np.concatenate([[start], mine["t_global_ms"].to_numpy(), [end]])
-        states = [BEFORE_FIRST_EVENT, *mine["state"], ""]      # "" ends the lane
+        states = [BEFORE_FIRST_EVENT, *mine["state"], ""]  # "" ends the lane
         recording.log(lane_entity(name), configuration, static=True)
-        recording.send_columns(lane_entity(name), indexes=[timeline.column(times)],
-                               columns=rr.StateChange.columns(state=states))
+        recording.send_columns(
+            lane_entity(name), indexes=[timeline.column(times)], columns=rr.StateChange.columns(state=states)
+        )
     lines = _event_lines(model, events)
     instants = timeline.round_up(lines["t_global_ms"].to_numpy(), LOG_STEP_MS)
-    recording.send_columns(LOG_ENTITY, indexes=[timeline.column(instants)],
-                           columns=rr.TextLog.columns(text=lines["text"].tolist(),
-                                                      level=lines["level"].tolist(),
-                                                      color=lines["color"].tolist()))
+    recording.send_columns(
+        LOG_ENTITY,
+        indexes=[timeline.column(instants)],
+        columns=rr.TextLog.columns(
+            text=lines["text"].tolist(), level=lines["level"].tolist(), color=lines["color"].tolist()
+        ),
+    )
     return instants
 
 
@@ -178,10 +189,15 @@ def log_start(recording: rr.RecordingStream, model: SyncModel, timeline: Timelin
     recording.send_recording_name(f"flashsync: {', '.join(model.cameras)}")
     recording.send_property("description", rr.TextDocument(timeline.description(model)))
     sign = "-" if timeline.origin_ms < 0 else "+"
-    texts = [f"start of the recordings: {timeline.first_camera}'s first frame",
-             f"t_global_ms = time {sign} {abs(timeline.origin_ms):.3f} ms ({model.reference}'s clock)"]
-    recording.send_columns(LOG_ENTITY, indexes=[timeline.column(np.full(2, timeline.origin_ms))],
-                           columns=rr.TextLog.columns(text=texts, level=["INFO", "INFO"]))
+    texts = [
+        f"start of the recordings: {timeline.first_camera}'s first frame",
+        f"t_global_ms = time {sign} {abs(timeline.origin_ms):.3f} ms ({model.reference}'s clock)",
+    ]
+    recording.send_columns(
+        LOG_ENTITY,
+        indexes=[timeline.column(np.full(2, timeline.origin_ms))],
+        columns=rr.TextLog.columns(text=texts, level=["INFO", "INFO"]),
+    )
 
 
 def _lane_configuration(n_flashes: int) -> rr.StateConfiguration:
@@ -205,25 +221,36 @@ def _event_lines(model: SyncModel, events: pd.DataFrame) -> pd.DataFrame:
     lines of a flash sit together, in camera order.
     """
     colors = camera_colors(model.cameras)
-    matched = model.events.reindex(columns=["flash", "camera", "event", "frame", "row",
-                                            "residual_ms", "inlier"])
+    matched = model.events.reindex(columns=["flash", "camera", "event", "frame", "row", "residual_ms", "inlier"])
     numbers = flash_numbers(model)
-    flash_ms = pd.Series(flash_instants_ms(model), index=matched.index).groupby(
-        matched["flash"]).transform("min")
+    flash_ms = pd.Series(flash_instants_ms(model), index=matched.index).groupby(matched["flash"]).transform("min")
     camera_order = {name: i for i, name in enumerate(model.cameras)}
     rows = []
     for e, t_ms in zip(matched.itertuples(), flash_ms):
         rejected = not e.inlier
-        rows.append((t_ms, numbers[e.flash], camera_order.get(e.camera, 0),
-                     f"flash {numbers[e.flash]}  {e.camera}  frame {e.frame}  row {e.row:.1f}  "
-                     f"{e.residual_ms:+.4f} ms" + (f"  REJECTED (event {e.event})" if rejected else ""),
-                     "WARN" if rejected else "INFO",
-                     STATUS_COLORS["rejected"] if rejected else colors[e.camera]))
+        rows.append(
+            (
+                t_ms,
+                numbers[e.flash],
+                camera_order.get(e.camera, 0),
+                f"flash {numbers[e.flash]}  {e.camera}  frame {e.frame}  row {e.row:.1f}  "
+                f"{e.residual_ms:+.4f} ms" + (f"  REJECTED (event {e.event})" if rejected else ""),
+                "WARN" if rejected else "INFO",
+                STATUS_COLORS["rejected"] if rejected else colors[e.camera],
+            )
+        )
     unmatched = events[events["status"] == "unmatched"]
     for (camera, event), group in unmatched.groupby(["camera", "event"], sort=False):
         edges = ", ".join(f"{g.edge} frame {g.frame} row {g.row:.1f}" for g in group.itertuples())
-        rows.append((group["t_global_ms"].min(), -1, camera_order.get(camera, 0),
-                     f"unmatched  {camera} event {event}  {group['band'].iloc[0]}: {edges}",
-                     "DEBUG", STATUS_COLORS["unmatched"]))
+        rows.append(
+            (
+                group["t_global_ms"].min(),
+                -1,
+                camera_order.get(camera, 0),
+                f"unmatched  {camera} event {event}  {group['band'].iloc[0]}: {edges}",
+                "DEBUG",
+                STATUS_COLORS["unmatched"],
+            )
+        )
     table = pd.DataFrame(rows, columns=["t_global_ms", "flash", "camera", "text", "level", "color"])
     return table.sort_values(["t_global_ms", "flash", "camera"], kind="stable")

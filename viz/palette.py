@@ -12,8 +12,14 @@ Color = tuple[int, int, int]
 
 # Tableau 10 without red and grey, which mark rejected and unmatched events.
 _CAMERA_COLORS = [
-    (31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189), (140, 86, 75),
-    (227, 119, 194), (188, 189, 34), (23, 190, 207),
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (188, 189, 34),
+    (23, 190, 207),
 ]
 
 STATUS_COLORS: dict[str, Color] = {
@@ -36,11 +42,16 @@ NOW_COLOR: Color = (255, 210, 0)
 # Light fills (black labels read on them) for the flashes in the event lanes, cycling;
 # no red or grey, which mark rejected and unmatched events.
 FLASH_FILLS: list[Color] = [
-    (120, 170, 225), (250, 180, 90), (140, 205, 120), (195, 160, 225),
-    (240, 215, 90), (110, 205, 205), (215, 180, 145), (235, 160, 205),
+    (120, 170, 225),
+    (250, 180, 90),
+    (140, 205, 120),
+    (195, 160, 225),
+    (240, 215, 90),
+    (110, 205, 205),
+    (215, 180, 145),
+    (235, 160, 205),
 ]
-LANE_FILLS: dict[str, Color] = {"rejected": (235, 80, 80), "unmatched": (175, 175, 175),
-                                "before": (228, 228, 228)}
+LANE_FILLS: dict[str, Color] = {"rejected": (235, 80, 80), "unmatched": (175, 175, 175), "before": (228, 228, 228)}
 """Fills of the event lanes: rejected and unmatched events, and a camera's video before
 its first event."""
 

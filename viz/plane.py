@@ -85,13 +85,14 @@ def display_transform(homography: np.ndarray | None, width: int, height: int) ->
     if homography is None:
         return default
     cx, cy, step = width / 2, height / 2, max(height, 1) / 10
-    points = image_to_plane(np.array([cx, cx, cx - step, cx + step]),
-                            np.array([cy - step, cy + step, cy, cy]), np.asarray(homography))
+    points = image_to_plane(
+        np.array([cx, cx, cx - step, cx + step]), np.array([cy - step, cy + step, cy, cy]), np.asarray(homography)
+    )
     up, right = points[0] - points[1], points[3] - points[2]
     if not (np.all(np.isfinite(points)) and np.linalg.norm(up) > 0):
         return default
     up = up / np.linalg.norm(up)
-    mirrored = up[0] * right[1] - up[1] * right[0] > 0      # right is not clockwise of up
+    mirrored = up[0] * right[1] - up[1] * right[0] > 0  # right is not clockwise of up
     display_right = np.array([-up[1], up[0]]) if mirrored else np.array([up[1], -up[0]])
     return np.stack([display_right, -up])
 
@@ -129,8 +130,14 @@ class PlaneView:
     def display_bounds(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """``(x_range, y_range)`` in display coordinates that hold the extent, its tick
         labels and the scale bar."""
-        corners = np.array([[self.low_m[0], self.low_m[1]], [self.high_m[0], self.low_m[1]],
-                            [self.low_m[0], self.high_m[1]], [self.high_m[0], self.high_m[1]]])
+        corners = np.array(
+            [
+                [self.low_m[0], self.low_m[1]],
+                [self.high_m[0], self.low_m[1]],
+                [self.low_m[0], self.high_m[1]],
+                [self.high_m[0], self.high_m[1]],
+            ]
+        )
         shown = corners @ self.to_display.T
         low, high = shown.min(axis=0), shown.max(axis=0)
         margin = 0.12 * float(np.max(high - low))
@@ -153,9 +160,13 @@ class PlaneView:
         return title
 
 
-def plane_view(model: SyncModel, homographies: Mapping[str, np.ndarray] | None,
-               outline_m: np.ndarray | None, points_m: np.ndarray,
-               errors_m: np.ndarray) -> PlaneView:
+def plane_view(
+    model: SyncModel,
+    homographies: Mapping[str, np.ndarray] | None,
+    outline_m: np.ndarray | None,
+    points_m: np.ndarray,
+    errors_m: np.ndarray,
+) -> PlaneView:
     """Decide the plane view: orientation, extent and error arrow scale.
 
     Parameters
@@ -199,8 +210,7 @@ def plane_view(model: SyncModel, homographies: Mapping[str, np.ndarray] | None,
     return PlaneView(to_display, low, high, oriented_as, outline_m, scale)
 
 
-def plane_warnings(points_by_camera: Mapping[str, np.ndarray],
-                   outline_m: np.ndarray | None) -> list[str]:
+def plane_warnings(points_by_camera: Mapping[str, np.ndarray], outline_m: np.ndarray | None) -> list[str]:
     """One line per camera whose detections land where a plane cannot be.
 
     A homography in the wrong direction (plane -> image) puts points hundreds of metres to
@@ -219,8 +229,7 @@ def plane_warnings(points_by_camera: Mapping[str, np.ndarray],
     for name, points in points_by_camera.items():
         finite = points[np.all(np.isfinite(points), axis=1)]
         if len(finite) < len(points):
-            lines.append(f"{len(points) - len(finite)} of {name}'s detections map to infinity "
-                         f"in the plane; {advice}")
+            lines.append(f"{len(points) - len(finite)} of {name}'s detections map to infinity in the plane; {advice}")
         if not len(finite):
             continue
         low, high = np.percentile(finite, 1, axis=0), np.percentile(finite, 99, axis=0)
@@ -229,13 +238,17 @@ def plane_warnings(points_by_camera: Mapping[str, np.ndarray],
             near_low, near_high = outline_m.min(axis=0) - size / 2, outline_m.max(axis=0) + size / 2
             outside = np.mean(np.any((finite < near_low) | (finite > near_high), axis=1))
             if outside > OUTSIDE_SHARE:
-                lines.append(f"{outside:.0%} of {name}'s detections land far outside the plane "
-                             f"outline (x {_span(outline_m[:, 0])}, y {_span(outline_m[:, 1])}): "
-                             f"at x {_span(finite[:, 0])}, y {_span(finite[:, 1])}; {advice}")
+                lines.append(
+                    f"{outside:.0%} of {name}'s detections land far outside the plane "
+                    f"outline (x {_span(outline_m[:, 0])}, y {_span(outline_m[:, 1])}): "
+                    f"at x {_span(finite[:, 0])}, y {_span(finite[:, 1])}; {advice}"
+                )
                 continue
         if np.max(high - low) > ABSURD_EXTENT_M:
-            lines.append(f"{name}'s detections spread over {format_length(float(np.max(high - low)))} "
-                         f"in the plane (x {_span(finite[:, 0])}, y {_span(finite[:, 1])}); {advice}")
+            lines.append(
+                f"{name}'s detections spread over {format_length(float(np.max(high - low)))} "
+                f"in the plane (x {_span(finite[:, 0])}, y {_span(finite[:, 1])}); {advice}"
+            )
     return lines
 
 
@@ -257,15 +270,17 @@ def log_plane(recording: rr.RecordingStream, view: PlaneView) -> None:
     to_display[:2, :2] = view.to_display
     recording.log(PLANE, rr.Transform3D(mat3x3=to_display), static=True)
     if view.outline_m is not None:
-        recording.log(OUTLINE_ENTITY, rr.LineStrips2D([view.outline_m], colors=_OUTLINE_COLOR,
-                                                      radii=rr.Radius.ui_points(1.5)), static=True)
+        recording.log(
+            OUTLINE_ENTITY,
+            rr.LineStrips2D([view.outline_m], colors=_OUTLINE_COLOR, radii=rr.Radius.ui_points(1.5)),
+            static=True,
+        )
     step = view.grid_step_m()
     low, high = view.low_m, view.high_m
     xs = step * np.arange(np.ceil(low[0] / step), np.floor(high[0] / step) + 1)
     ys = step * np.arange(np.ceil(low[1] / step), np.floor(high[1] / step) + 1)
     strips = [[[x, low[1]], [x, high[1]]] for x in xs] + [[[low[0], y], [high[0], y]] for y in ys]
-    recording.log(GRID_ENTITY, rr.LineStrips2D(strips, colors=_GRID_COLOR,
-                                               radii=rr.Radius.ui_points(0.5)), static=True)
+    recording.log(GRID_ENTITY, rr.LineStrips2D(strips, colors=_GRID_COLOR, radii=rr.Radius.ui_points(0.5)), static=True)
     positions, labels = [], []
     for axis, values in ((0, xs), (1, ys)):
         other = 1 - axis
@@ -274,14 +289,16 @@ def log_plane(recording: rr.RecordingStream, view: PlaneView) -> None:
             ends[:, axis] = value
             ends[:, other] = low[other], high[other]
             shown = ends @ view.to_display.T
-            end = ends[np.argmin(shown[:, 0] - shown[:, 1])]      # the bottom or left end
+            end = ends[np.argmin(shown[:, 0] - shown[:, 1])]  # the bottom or left end
             outward = end - (low + high) / 2
             outward[axis] = 0.0
             positions.append(end + 0.04 * np.sign(outward) * np.max(high - low))
             labels.append(f"{'xy'[axis]} {value:g} m")
-    recording.log(TICKS_ENTITY, rr.Points2D(positions, labels=labels, colors=_TICK_COLOR,
-                                            radii=rr.Radius.ui_points(0.0), show_labels=True),
-                  static=True)
+    recording.log(
+        TICKS_ENTITY,
+        rr.Points2D(positions, labels=labels, colors=_TICK_COLOR, radii=rr.Radius.ui_points(0.0), show_labels=True),
+        static=True,
+    )
     if view.error_scale is not None:
         _log_scale_bar(recording, view)
 
@@ -292,9 +309,16 @@ def _log_scale_bar(recording: rr.RecordingStream, view: PlaneView) -> None:
     (x0, x1), (y0, _) = view.display_bounds()
     length = view.arrow_cap_m()
     start = np.array([(x0 + x1 - length) / 2, y0 + 0.025 * (x1 - x0)])
-    bar = np.stack([start, start + [length, 0.0]]) @ view.to_display      # display -> plane m
+    bar = np.stack([start, start + [length, 0.0]]) @ view.to_display  # display -> plane m
     error = format_length(length / view.error_scale)
-    recording.log(SCALE_ENTITY, rr.LineStrips2D([bar], colors=ERROR_COLOR, radii=rr.Radius.ui_points(2.0),
-                                                labels=[f"error {error} ×{view.error_scale:g} "
-                                                        f"(longer: cut, orange)"],
-                                                show_labels=True), static=True)
+    recording.log(
+        SCALE_ENTITY,
+        rr.LineStrips2D(
+            [bar],
+            colors=ERROR_COLOR,
+            radii=rr.Radius.ui_points(2.0),
+            labels=[f"error {error} ×{view.error_scale:g} (longer: cut, orange)"],
+            show_labels=True,
+        ),
+        static=True,
+    )

@@ -77,12 +77,17 @@ SERVER_START_S = 60.0
 Videos = Mapping[str, str | Path] | Iterable[str | Path]
 
 
-def log_sync(model: SyncModel, *, videos: Videos | None = None,
-             events: pd.DataFrame | None = None, detections: pd.DataFrame | None = None,
-             validation: pd.DataFrame | None = None,
-             homographies: Mapping[str, np.ndarray] | None = None,
-             plane_outline_m: np.ndarray | None = None,
-             recording: rr.RecordingStream | None = None) -> rr.RecordingStream:
+def log_sync(
+    model: SyncModel,
+    *,
+    videos: Videos | None = None,
+    events: pd.DataFrame | None = None,
+    detections: pd.DataFrame | None = None,
+    validation: pd.DataFrame | None = None,
+    homographies: Mapping[str, np.ndarray] | None = None,
+    plane_outline_m: np.ndarray | None = None,
+    recording: rr.RecordingStream | None = None,
+) -> rr.RecordingStream:
     """Log a synchronisation and send its default blueprint.
 
     Detections that land where a plane cannot be (see :func:`viz.plane.plane_warnings`)
@@ -126,7 +131,7 @@ def log_sync(model: SyncModel, *, videos: Videos | None = None,
     recording = recording if recording is not None else rr.RecordingStream(APPLICATION_ID)
     timeline = Timeline.of(model)
     log_start(recording, model, timeline)
-    recording.flush()              # the first data on global_time: the viewer opens at 0
+    recording.flush()  # the first data on global_time: the viewer opens at 0
     table = event_table(model, events)
     log_instants = log_events(recording, model, table, timeline)
     log_residuals(recording, model, timeline)
@@ -140,31 +145,38 @@ def log_sync(model: SyncModel, *, videos: Videos | None = None,
         log_flash_rows(recording, timeline, camera, table[table["camera"] == name])
         log_now_line(recording, timeline, camera, also_at_ms=log_instants)
         if stamped_detections is not None:
-            log_frame_detections(recording, timeline, camera,
-                                 stamped_detections[stamped_detections["camera"] == name],
-                                 colors[name])
-    view = _plane(recording, timeline, model, stamped_detections, homographies, validation,
-                  plane_outline_m)
+            log_frame_detections(
+                recording, timeline, camera, stamped_detections[stamped_detections["camera"] == name], colors[name]
+            )
+    view = _plane(recording, timeline, model, stamped_detections, homographies, validation, plane_outline_m)
     errors_max_m = None
     if validation is not None and len(validation):
         errors_max_m = float(np.nanmax(validation["error_m"].to_numpy(dtype=np.float64)))
-    recording.send_blueprint(sync_blueprint(model, timeline, video_cameras=named, plane=view,
-                                            errors_max_m=errors_max_m))
+    recording.send_blueprint(
+        sync_blueprint(model, timeline, video_cameras=named, plane=view, errors_max_m=errors_max_m)
+    )
     return recording
 
 
-def _plane(recording: rr.RecordingStream, timeline: Timeline, model: SyncModel,
-           detections: pd.DataFrame | None, homographies: Mapping[str, np.ndarray] | None,
-           validation: pd.DataFrame | None, outline_m: np.ndarray | None) -> PlaneView | None:
+def _plane(
+    recording: rr.RecordingStream,
+    timeline: Timeline,
+    model: SyncModel,
+    detections: pd.DataFrame | None,
+    homographies: Mapping[str, np.ndarray] | None,
+    validation: pd.DataFrame | None,
+    outline_m: np.ndarray | None,
+) -> PlaneView | None:
     """Log the plane view's data (observations, validation arrows, map); None without any."""
-    projected = project(detections, homographies) if detections is not None and homographies \
-        else None
+    projected = project(detections, homographies) if detections is not None and homographies else None
     if projected is None and validation is None:
         return None
     points = [np.zeros((0, 2))]
     if projected is not None:
-        by_camera = {name: rows[["plane_x", "plane_y"]].to_numpy(dtype=np.float64)
-                     for name, rows in projected.groupby("camera", sort=False)}
+        by_camera = {
+            name: rows[["plane_x", "plane_y"]].to_numpy(dtype=np.float64)
+            for name, rows in projected.groupby("camera", sort=False)
+        }
         for line in plane_warnings(by_camera, outline_m):
             warnings.warn(line, PlaneWarning, stacklevel=3)
         points += by_camera.values()
@@ -177,8 +189,7 @@ def _plane(recording: rr.RecordingStream, timeline: Timeline, model: SyncModel,
     if projected is not None:
         log_observations(recording, timeline, model, projected)
     if validation is not None:
-        log_validation(recording, timeline, model, validation, view.error_scale or 1.0,
-                       view.arrow_cap_m())
+        log_validation(recording, timeline, model, validation, view.error_scale or 1.0, view.arrow_cap_m())
     return view
 
 
@@ -217,22 +228,28 @@ def spawn(model: SyncModel, *, grpc_port: int = GRPC_PORT, **data) -> rr.Recordi
         The keyword arguments of :func:`log_sync` but ``recording``.
     """
     if not _listening(BIND, grpc_port):
-        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
-                                                     or os.environ.get("WAYLAND_DISPLAY")):
-            raise FlashsyncError("the native Rerun viewer needs a display, and neither DISPLAY "
-                                 "nor WAYLAND_DISPLAY is set; save the recording to a file or "
-                                 "serve it to a web browser instead")
+        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+            raise FlashsyncError(
+                "the native Rerun viewer needs a display, and neither DISPLAY "
+                "nor WAYLAND_DISPLAY is set; save the recording to a file or "
+                "serve it to a web browser instead"
+            )
         _check_free(BIND, grpc_port)
-        viewer = subprocess.Popen([str(rerun_program()), "--bind", BIND, "--port", str(grpc_port),
-                                   "--expect-data-soon"], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                  start_new_session=True)
+        viewer = subprocess.Popen(
+            [str(rerun_program()), "--bind", BIND, "--port", str(grpc_port), "--expect-data-soon"],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,
+        )
         deadline = time.monotonic() + SERVER_START_S
         while not _listening(BIND, grpc_port):
             if viewer.poll() is not None or time.monotonic() > deadline:
                 _stop(viewer)
-                raise FlashsyncError(f"the native Rerun viewer did not start (exit code "
-                                     f"{viewer.returncode}); try rerun --port {grpc_port} to see why")
+                raise FlashsyncError(
+                    f"the native Rerun viewer did not start (exit code "
+                    f"{viewer.returncode}); try rerun --port {grpc_port} to see why"
+                )
             time.sleep(0.2)
     recording = rr.RecordingStream(APPLICATION_ID)
     recording.connect_grpc(f"rerun+http://{BIND}:{grpc_port}/proxy")
@@ -241,8 +258,7 @@ def spawn(model: SyncModel, *, grpc_port: int = GRPC_PORT, **data) -> rr.Recordi
     return recording
 
 
-def viewer_url(web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT,
-               host: str = "127.0.0.1") -> str:
+def viewer_url(web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT, host: str = "127.0.0.1") -> str:
     """Address of the web viewer of :func:`serve`, connected to its recording."""
     source = f"rerun+http://{host}:{grpc_port}/proxy"
     return f"http://{host}:{web_port}/?url={urllib.parse.quote(source, safe='')}"
@@ -256,8 +272,15 @@ def url_host(bind: str) -> str:
     return f"[{bind}]" if ":" in bind else bind
 
 
-def serve(model: SyncModel, *, bind: str = BIND, web_port: int = WEB_PORT,
-          grpc_port: int = GRPC_PORT, open_browser: bool = False, **data) -> None:
+def serve(
+    model: SyncModel,
+    *,
+    bind: str = BIND,
+    web_port: int = WEB_PORT,
+    grpc_port: int = GRPC_PORT,
+    open_browser: bool = False,
+    **data,
+) -> None:
     """Serve the recording to web browsers until Ctrl-C.
 
     The recording is written to a temporary ``.rrd`` file, then the ``rerun`` program that
@@ -325,34 +348,47 @@ def rerun_program() -> Path:
     try:
         import rerun_cli
     except ImportError:
-        raise FlashsyncError("the rerun program of rerun-sdk is missing (no package rerun_cli); "
-                             "reinstall rerun-sdk") from None
+        raise FlashsyncError(
+            "the rerun program of rerun-sdk is missing (no package rerun_cli); reinstall rerun-sdk"
+        ) from None
     program = Path(rerun_cli.__file__).with_name("rerun.exe" if sys.platform == "win32" else "rerun")
     if not program.is_file():
-        raise FlashsyncError(f"{program}: the rerun program of rerun-sdk is missing; "
-                             "reinstall rerun-sdk")
+        raise FlashsyncError(f"{program}: the rerun program of rerun-sdk is missing; reinstall rerun-sdk")
     return program
 
 
-def _start_server(recording: Path, log: Path, bind: str, web_port: int,
-                  grpc_port: int) -> subprocess.Popen:
+def _start_server(recording: Path, log: Path, bind: str, web_port: int, grpc_port: int) -> subprocess.Popen:
     """Start ``rerun --serve-web`` on ``recording``; return once both ports listen."""
     for port in (web_port, grpc_port):
         _check_free(bind, port)
     with log.open("wb") as output:
         server = subprocess.Popen(
-            [str(rerun_program()), "--serve-web", "--bind", bind, "--port", str(grpc_port),
-             "--web-viewer-port", str(web_port), str(recording)],
-            stdin=subprocess.DEVNULL, stdout=output, stderr=output)
+            [
+                str(rerun_program()),
+                "--serve-web",
+                "--bind",
+                bind,
+                "--port",
+                str(grpc_port),
+                "--web-viewer-port",
+                str(web_port),
+                str(recording),
+            ],
+            stdin=subprocess.DEVNULL,
+            stdout=output,
+            stderr=output,
+        )
     deadline = time.monotonic() + SERVER_START_S
     try:
         while not all(_listening(bind, port) for port in (web_port, grpc_port)):
             if server.poll() is not None:
                 raise FlashsyncError(f"the Rerun server did not start: {_last_line(log)}")
             if time.monotonic() > deadline:
-                raise FlashsyncError(f"the Rerun server did not listen on {bind} ports {web_port} "
-                                     f"and {grpc_port} within {SERVER_START_S:.0f} s: "
-                                     f"{_last_line(log)}")
+                raise FlashsyncError(
+                    f"the Rerun server did not listen on {bind} ports {web_port} "
+                    f"and {grpc_port} within {SERVER_START_S:.0f} s: "
+                    f"{_last_line(log)}"
+                )
             time.sleep(0.2)
     except BaseException:
         _stop(server)
@@ -363,14 +399,16 @@ def _start_server(recording: Path, log: Path, bind: str, web_port: int,
 def _check_free(bind: str, port: int) -> None:
     """Raise a :class:`FlashsyncError` if ``bind:port`` cannot be listened on."""
     try:
-        family, kind, _, _, address = socket.getaddrinfo(bind, port, type=socket.SOCK_STREAM,
-                                                         flags=socket.AI_PASSIVE)[0]
+        family, kind, _, _, address = socket.getaddrinfo(bind, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)[
+            0
+        ]
         with socket.socket(family, kind) as probe:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             probe.bind(address)
     except OSError as error:
-        raise FlashsyncError(f"cannot listen on {bind} port {port} ({error.strerror or error}); "
-                             "choose another port or address") from None
+        raise FlashsyncError(
+            f"cannot listen on {bind} port {port} ({error.strerror or error}); choose another port or address"
+        ) from None
 
 
 def _listening(bind: str, port: int) -> bool:

@@ -69,25 +69,35 @@ def log_residuals(recording: rr.RecordingStream, model: SyncModel, timeline: Tim
     """
     colors = camera_colors(model.cameras)
     matched = model.events.reindex(columns=["camera", "residual_ms", "inlier"]).assign(
-        t_global_ms=flash_instants_ms(model))
+        t_global_ms=flash_instants_ms(model)
+    )
     for name, camera in model.cameras.items():
         for status, inlier in (("matched", True), ("rejected", False)):
             rows = matched[(matched["camera"] == name) & (matched["inlier"] == inlier)]
             if rows.empty:
                 continue
             color, marker = status_style(status, colors[name])
-            log_series(recording, timeline, residual_entity(name, status),
-                       rr.SeriesPoints(colors=color, markers=marker, marker_sizes=4.0, names=name),
-                       rows["t_global_ms"].to_numpy(), rows["residual_ms"].to_numpy())
+            log_series(
+                recording,
+                timeline,
+                residual_entity(name, status),
+                rr.SeriesPoints(colors=color, markers=marker, marker_sizes=4.0, names=name),
+                rows["t_global_ms"].to_numpy(),
+                rows["residual_ms"].to_numpy(),
+            )
         _log_band(recording, timeline, camera, colors[name])
 
 
-def _log_band(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock,
-              color: Color) -> None:
+def _log_band(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock, color: Color) -> None:
     t_global_ms, sigma = uncertainty_band(camera)
     if not len(sigma):
         return
     for series, sign in (("sigma_plus", 1.0), ("sigma_minus", -1.0)):
-        log_series(recording, timeline, residual_entity(camera.name, series),
-                   rr.SeriesLines(colors=color, widths=1.0, names=camera.name),
-                   t_global_ms, sign * sigma)
+        log_series(
+            recording,
+            timeline,
+            residual_entity(camera.name, series),
+            rr.SeriesLines(colors=color, widths=1.0, names=camera.name),
+            t_global_ms,
+            sign * sigma,
+        )

@@ -35,8 +35,7 @@ def ticked_range(extent: float, height_px: float, *, symmetric: bool) -> tuple[f
     power = 10.0 ** math.floor(math.log10(_positive(extent)))
     tops = [m * power for m in RANGE_TOPS if m * power >= extent * (1 - 1e-12)] + [10 * power]
     for top in tops:
-        low, high = (-RANGE_PAD * top, RANGE_PAD * top) if symmetric \
-            else ((1 - RANGE_PAD) * top, RANGE_PAD * top)
+        low, high = (-RANGE_PAD * top, RANGE_PAD * top) if symmetric else ((1 - RANGE_PAD) * top, RANGE_PAD * top)
         step = 10.0 ** math.floor(math.log10(top) + 1e-9)
         if height_px * step / (high - low) >= TICK_SPACING_PX:
             break
@@ -58,8 +57,10 @@ def nice_floor(value: float, mantissas: Sequence[float] = ROUND) -> float:
 def format_length(metres: float) -> str:
     """A length to 3 significant digits in the unit that reads best: ``"5 mm"``, ``"2 cm"``,
     ``"10 m"``, ``"32.5 km"``."""
-    unit, size = next(((unit, size) for unit, size in (("km", 1000.0), ("m", 1.0), ("cm", 0.01))
-                       if abs(metres) >= size), ("mm", 0.001) if metres else ("m", 1.0))
+    unit, size = next(
+        ((unit, size) for unit, size in (("km", 1000.0), ("m", 1.0), ("cm", 0.01)) if abs(metres) >= size),
+        ("mm", 0.001) if metres else ("m", 1.0),
+    )
     return f"{metres / size:.3g} {unit}"
 
 

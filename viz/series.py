@@ -8,9 +8,15 @@ import rerun as rr
 from viz.timeline import Timeline
 
 
-def log_series(recording: rr.RecordingStream, timeline: Timeline, entity: str,
-               style: rr.SeriesPoints | rr.SeriesLines, t_global_ms: np.ndarray,
-               values: np.ndarray, *indexes: rr.TimeColumn) -> None:
+def log_series(
+    recording: rr.RecordingStream,
+    timeline: Timeline,
+    entity: str,
+    style: rr.SeriesPoints | rr.SeriesLines,
+    t_global_ms: np.ndarray,
+    values: np.ndarray,
+    *indexes: rr.TimeColumn,
+) -> None:
     """Log one series: its style (static) and one scalar per instant.
 
     Parameters
@@ -29,5 +35,8 @@ def log_series(recording: rr.RecordingStream, timeline: Timeline, entity: str,
         Further index columns of length n (e.g. a camera's frame timeline).
     """
     recording.log(entity, style, static=True)
-    recording.send_columns(entity, indexes=[timeline.column(t_global_ms), *indexes],
-                           columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)))
+    recording.send_columns(
+        entity,
+        indexes=[timeline.column(t_global_ms), *indexes],
+        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
+    )

@@ -76,13 +76,10 @@ class Timeline:
     @classmethod
     def of(cls, model: SyncModel) -> Timeline:
         """The timeline of ``model``'s cameras (each with at least one frame)."""
-        starts = {name: float(readout_start_ms(camera, [0])[0])
-                  for name, camera in model.cameras.items()}
-        ends = [float(readout_end_ms(camera, [camera.n_frames - 1])[0])
-                for camera in model.cameras.values()]
+        starts = {name: float(readout_start_ms(camera, [0])[0]) for name, camera in model.cameras.items()}
+        ends = [float(readout_end_ms(camera, [camera.n_frames - 1])[0]) for camera in model.cameras.values()]
         first = min(starts, key=starts.get)
-        return cls(origin_ms=starts[first], duration_ms=max(ends) - starts[first],
-                   first_camera=first)
+        return cls(origin_ms=starts[first], duration_ms=max(ends) - starts[first], first_camera=first)
 
     def column(self, t_global_ms: np.ndarray) -> rr.TimeColumn:
         """A ``global_time`` index column.
@@ -94,8 +91,7 @@ class Timeline:
             rounded to whole nanoseconds.
         """
         shifted_ns = (np.asarray(t_global_ms, dtype=np.float64) - self.origin_ms) * 1e6
-        return rr.TimeColumn(GLOBAL_TIMELINE,
-                             duration=np.round(shifted_ns).astype(np.int64).astype("timedelta64[ns]"))
+        return rr.TimeColumn(GLOBAL_TIMELINE, duration=np.round(shifted_ns).astype(np.int64).astype("timedelta64[ns]"))
 
     def round_up(self, t_global_ms: np.ndarray, step_ms: float) -> np.ndarray:
         """Instants moved on to the next ``global_time`` multiple of ``step_ms`` (the viewer
@@ -106,11 +102,14 @@ class Timeline:
     def frame_columns(self, camera: CameraClock, frames: np.ndarray) -> list[rr.TimeColumn]:
         """Index columns placing each of ``frames`` at its readout start and its frame index."""
         frames = np.asarray(frames, dtype=np.int64)
-        return [self.column(readout_start_ms(camera, frames)),
-                rr.TimeColumn(frame_timeline(camera.name), sequence=frames)]
+        return [
+            self.column(readout_start_ms(camera, frames)),
+            rr.TimeColumn(frame_timeline(camera.name), sequence=frames),
+        ]
 
-    def frame_batches(self, camera: CameraClock, frames: np.ndarray
-                      ) -> tuple[list[rr.TimeColumn], np.ndarray, np.ndarray]:
+    def frame_batches(
+        self, camera: CameraClock, frames: np.ndarray
+    ) -> tuple[list[rr.TimeColumn], np.ndarray, np.ndarray]:
         """Group per-instance data into one batch per frame, shown on that frame only.
 
         Each frame that holds instances gets one row holding all of them; the next frame,
@@ -144,7 +143,9 @@ class Timeline:
 
     def description(self, model: SyncModel) -> str:
         """What ``global_time`` means, in words (the recording's description)."""
-        return (f"global_time 0 is the start of the recordings: the first frame of "
-                f"{self.first_camera} (the earliest camera). t_global_ms (end of exposure of "
-                f"a row on the clock of {model.reference}, the reference camera, as in sync.json "
-                f"and the restamped detections) = global_time + {self.origin_ms:.3f} ms.")
+        return (
+            f"global_time 0 is the start of the recordings: the first frame of "
+            f"{self.first_camera} (the earliest camera). t_global_ms (end of exposure of "
+            f"a row on the clock of {model.reference}, the reference camera, as in sync.json "
+            f"and the restamped detections) = global_time + {self.origin_ms:.3f} ms."
+        )

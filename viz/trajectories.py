@@ -57,16 +57,21 @@ def stamped(detections: pd.DataFrame) -> pd.DataFrame:
     ``id``, as in :mod:`tracking_adapter.validate`), or :data:`NO_OBJECT` for all rows
     without one; ``t_plane_ms`` is ``t_center_ms`` where finite, else ``t_global_ms``.
     """
-    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"),
-                    "restamped detections")
+    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"), "restamped detections")
     numbers = detections[["x", "y", "t_global_ms"]].apply(pd.to_numeric, errors="coerce")
     table = detections[np.isfinite(numbers).all(axis=1)]
     id_column = next((name for name in OBJECT_COLUMNS if name in table), None)
     objects = table[id_column] if id_column else NO_OBJECT
-    center = (pd.to_numeric(table["t_center_ms"], errors="coerce") if "t_center_ms" in table
-              else pd.Series(np.nan, index=table.index))
-    return table.assign(object=objects, frame=table["frame"].astype(np.int64),
-                        t_plane_ms=center.where(np.isfinite(center), table["t_global_ms"]))
+    center = (
+        pd.to_numeric(table["t_center_ms"], errors="coerce")
+        if "t_center_ms" in table
+        else pd.Series(np.nan, index=table.index)
+    )
+    return table.assign(
+        object=objects,
+        frame=table["frame"].astype(np.int64),
+        t_plane_ms=center.where(np.isfinite(center), table["t_global_ms"]),
+    )
 
 
 def project(detections: pd.DataFrame, homographies: Mapping[str, np.ndarray]) -> pd.DataFrame:
@@ -80,14 +85,17 @@ def project(detections: pd.DataFrame, homographies: Mapping[str, np.ndarray]) ->
     rows = detections[detections["camera"].isin(list(homographies))]
     plane = np.full((len(rows), 2), np.nan)
     for name, index in rows.groupby("camera", sort=False).indices.items():
-        plane[index] = image_to_plane(rows["x"].to_numpy(dtype=np.float64)[index],
-                                      rows["y"].to_numpy(dtype=np.float64)[index],
-                                      np.asarray(homographies[name]))
+        plane[index] = image_to_plane(
+            rows["x"].to_numpy(dtype=np.float64)[index],
+            rows["y"].to_numpy(dtype=np.float64)[index],
+            np.asarray(homographies[name]),
+        )
     return rows.assign(plane_x=plane[:, 0], plane_y=plane[:, 1])
 
 
-def log_frame_detections(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock,
-                         detections: pd.DataFrame, color: Color) -> None:
+def log_frame_detections(
+    recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock, detections: pd.DataFrame, color: Color
+) -> None:
     """Draw ``camera``'s detections on the frames that hold them, labelled by object.
 
     A detection ``(x, y)`` (px, pixel centres at integers) is drawn at ``(x, y) +``
@@ -108,15 +116,15 @@ def log_frame_detections(recording: rr.RecordingStream, timeline: Timeline, came
     indexes, order, lengths = timeline.frame_batches(camera, detections["frame"].to_numpy())
     ordered = detections.iloc[order]
     positions = ordered[["x", "y"]].to_numpy(dtype=np.float64) + PIXEL_CENTRE
-    columns = rr.Points2D.columns(positions=positions,
-                                  colors=[color] * len(ordered),
-                                  labels=ordered["object"].astype(str).tolist())
-    recording.send_columns(detections_entity(camera.name), indexes=indexes,
-                           columns=columns.partition(lengths))
+    columns = rr.Points2D.columns(
+        positions=positions, colors=[color] * len(ordered), labels=ordered["object"].astype(str).tolist()
+    )
+    recording.send_columns(detections_entity(camera.name), indexes=indexes, columns=columns.partition(lengths))
 
 
-def log_observations(recording: rr.RecordingStream, timeline: Timeline, model: SyncModel,
-                     projected: pd.DataFrame) -> None:
+def log_observations(
+    recording: rr.RecordingStream, timeline: Timeline, model: SyncModel, projected: pd.DataFrame
+) -> None:
     """Log each camera's detections of each object in the plane, at ``t_plane_ms``.
 
     Parameters
@@ -133,7 +141,13 @@ def log_observations(recording: rr.RecordingStream, timeline: Timeline, model: S
         points = track[["plane_x", "plane_y"]].to_numpy(dtype=np.float64)
         recording.send_columns(
             observation_entity(name, obj),
-            indexes=[timeline.column(track["t_plane_ms"].to_numpy()),
-                     rr.TimeColumn(frame_timeline(name), sequence=track["frame"].to_numpy())],
-            columns=rr.Points2D.columns(positions=points, colors=[colors[name]] * len(points),
-                                        radii=[rr.Radius.ui_points(POINT_RADIUS_UI)] * len(points)))
+            indexes=[
+                timeline.column(track["t_plane_ms"].to_numpy()),
+                rr.TimeColumn(frame_timeline(name), sequence=track["frame"].to_numpy()),
+            ],
+            columns=rr.Points2D.columns(
+                positions=points,
+                colors=[colors[name]] * len(points),
+                radii=[rr.Radius.ui_points(POINT_RADIUS_UI)] * len(points),
+            ),
+        )

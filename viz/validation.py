@@ -37,8 +37,14 @@ def validation_points(validation: pd.DataFrame) -> np.ndarray:
     return validation[["x_b", "y_b"]].to_numpy(dtype=np.float64)
 
 
-def log_validation(recording: rr.RecordingStream, timeline: Timeline, model: SyncModel,
-                   validation: pd.DataFrame, arrow_scale: float, arrow_cap_m: float) -> None:
+def log_validation(
+    recording: rr.RecordingStream,
+    timeline: Timeline,
+    model: SyncModel,
+    validation: pd.DataFrame,
+    arrow_scale: float,
+    arrow_cap_m: float,
+) -> None:
     """Log validation triples: scaled error arrows in the plane and error series.
 
     Parameters
@@ -55,8 +61,7 @@ def log_validation(recording: rr.RecordingStream, timeline: Timeline, model: Syn
         ... but no longer than this, m; those cut have another colour.
     """
     colors = camera_colors(model.cameras)
-    for (camera_a, camera_b, obj), rows in validation.groupby(["camera_a", "camera_b", "object"],
-                                                               sort=False):
+    for (camera_a, camera_b, obj), rows in validation.groupby(["camera_a", "camera_b", "object"], sort=False):
         t_global_ms = rows["t_global_ms"].to_numpy(dtype=np.float64)
         b = rows[["x_b", "y_b"]].to_numpy(dtype=np.float64)
         a = rows[["x_a", "y_a"]].to_numpy(dtype=np.float64)
@@ -66,11 +71,20 @@ def log_validation(recording: rr.RecordingStream, timeline: Timeline, model: Syn
         cut = length > arrow_cap_m
         drawn[cut] *= (arrow_cap_m / length[cut])[:, None]
         recording.send_columns(
-            f"{PLANE}/{ROOT}/{pair}/{entity_part(obj)}/error", indexes=[timeline.column(t_global_ms)],
-            columns=rr.Arrows2D.columns(origins=b, vectors=drawn,
-                                        colors=np.where(cut[:, None], CUT_ERROR_COLOR, ERROR_COLOR),
-                                        radii=[rr.Radius.ui_points(ARROW_RADIUS_UI)] * len(a)))
-        log_series(recording, timeline, f"{ROOT}/{pair}/{entity_part(obj)}",
-                   rr.SeriesPoints(colors=colors[camera_b], markers="Circle", marker_sizes=2.5,
-                                   names=f"at {camera_b}"),
-                   t_global_ms, rows["error_m"].to_numpy(dtype=np.float64))
+            f"{PLANE}/{ROOT}/{pair}/{entity_part(obj)}/error",
+            indexes=[timeline.column(t_global_ms)],
+            columns=rr.Arrows2D.columns(
+                origins=b,
+                vectors=drawn,
+                colors=np.where(cut[:, None], CUT_ERROR_COLOR, ERROR_COLOR),
+                radii=[rr.Radius.ui_points(ARROW_RADIUS_UI)] * len(a),
+            ),
+        )
+        log_series(
+            recording,
+            timeline,
+            f"{ROOT}/{pair}/{entity_part(obj)}",
+            rr.SeriesPoints(colors=colors[camera_b], markers="Circle", marker_sizes=2.5, names=f"at {camera_b}"),
+            t_global_ms,
+            rows["error_m"].to_numpy(dtype=np.float64),
+        )

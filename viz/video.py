@@ -71,8 +71,7 @@ def now_entity(camera: str) -> str:
     return f"{camera_entity(camera)}/now"
 
 
-def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path],
-                  model: SyncModel) -> dict[str, Path]:
+def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path], model: SyncModel) -> dict[str, Path]:
     """Name each video by its camera.
 
     Parameters
@@ -94,13 +93,17 @@ def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path],
     names = [name for name, _ in named]
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:
-        raise FlashsyncError(f"two videos are named {', '.join(duplicates)}; camera names are "
-                             "file stems and must be unique: rename the files")
+        raise FlashsyncError(
+            f"two videos are named {', '.join(duplicates)}; camera names are "
+            "file stems and must be unique: rename the files"
+        )
     for name, path in named:
         if name not in model.cameras:
-            raise FlashsyncError(f"{path}: camera {name!r} is not in the model (it has "
-                                 f"{', '.join(model.cameras)}); give the videos the model was "
-                                 "made from")
+            raise FlashsyncError(
+                f"{path}: camera {name!r} is not in the model (it has "
+                f"{', '.join(model.cameras)}); give the videos the model was "
+                "made from"
+            )
     return dict(named)
 
 
@@ -127,7 +130,8 @@ def viewer_mp4(path: Path, workdir: Path) -> Path:
             raise FlashsyncError(
                 f"{path}: the Rerun viewer cannot play {codec} video (it plays "
                 f"{', '.join(VIEWER_CODECS)}); re-encode it, e.g. "
-                f"ffmpeg -i {path.name} -c:v libx264 {path.stem}.mp4")
+                f"ffmpeg -i {path.name} -c:v libx264 {path.stem}.mp4"
+            )
         if path.suffix.lower() == ".mp4" and "mp4" in container.format.name.split(","):
             return path
         target = workdir / f"{path.stem}.mp4"
@@ -141,8 +145,7 @@ def viewer_mp4(path: Path, workdir: Path) -> Path:
     return target
 
 
-def log_video(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock,
-              path: Path) -> None:
+def log_video(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock, path: Path) -> None:
     """Log ``camera``'s video and one frame reference per frame.
 
     Parameters
@@ -162,11 +165,15 @@ def log_video(recording: rr.RecordingStream, timeline: Timeline, camera: CameraC
     if len(video_nanos) != camera.n_frames:
         raise FlashsyncError(
             f"{path}: {len(video_nanos)} frames, but the model has {camera.n_frames} for camera "
-            f"{camera.name!r}; give the video the model was made from")
+            f"{camera.name!r}; give the video the model was made from"
+        )
     entity = video_entity(camera.name)
     recording.log(entity, asset, static=True)
-    recording.send_columns(entity, indexes=timeline.frame_columns(camera, np.arange(camera.n_frames)),
-                           columns=rr.VideoFrameReference.columns_nanos(video_nanos))
+    recording.send_columns(
+        entity,
+        indexes=timeline.frame_columns(camera, np.arange(camera.n_frames)),
+        columns=rr.VideoFrameReference.columns_nanos(video_nanos),
+    )
 
 
 def log_video_span(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock) -> None:
@@ -181,23 +188,31 @@ def log_video_span(recording: rr.RecordingStream, timeline: Timeline, camera: Ca
     end = readout_end_ms(camera, [camera.n_frames - 1])[0]
     rows: list[tuple[float, str | None]] = []
     if start > timeline.origin_ms:
-        rows += [(timeline.origin_ms, f"{camera.name}: video starts at "
-                  f"+{(start - timeline.origin_ms) / 1000:.3f} s"), (start, None)]
+        rows += [
+            (timeline.origin_ms, f"{camera.name}: video starts at +{(start - timeline.origin_ms) / 1000:.3f} s"),
+            (start, None),
+        ]
     rows.append((end, f"{camera.name}: video ended at +{(end - timeline.origin_ms) / 1000:.3f} s"))
     times, labels = zip(*rows)
     shown = [label for label in labels if label is not None]
     recording.send_columns(
-        status_entity(camera.name), indexes=[timeline.column(np.array(times))],
-        columns=rr.Points2D.columns(positions=[[camera.width / 2, camera.height / 2]] * len(shown),
-                                    labels=shown, radii=[0.0] * len(shown),
-                                    colors=[STATUS_COLORS["unmatched"]] * len(shown))
-        .partition([int(label is not None) for label in labels]))
-    recording.send_columns(video_entity(camera.name), indexes=[timeline.column([end])],
-                           columns=rr.Clear.columns(is_recursive=[False]))
+        status_entity(camera.name),
+        indexes=[timeline.column(np.array(times))],
+        columns=rr.Points2D.columns(
+            positions=[[camera.width / 2, camera.height / 2]] * len(shown),
+            labels=shown,
+            radii=[0.0] * len(shown),
+            colors=[STATUS_COLORS["unmatched"]] * len(shown),
+        ).partition([int(label is not None) for label in labels]),
+    )
+    recording.send_columns(
+        video_entity(camera.name), indexes=[timeline.column([end])], columns=rr.Clear.columns(is_recursive=[False])
+    )
 
 
-def log_flash_rows(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock,
-                   events: pd.DataFrame) -> None:
+def log_flash_rows(
+    recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock, events: pd.DataFrame
+) -> None:
     """Draw each event's edge row across the frame that holds it, and name it.
 
     A horizontal line through the centre of the edge row (``y = row +``
@@ -225,22 +240,33 @@ def log_flash_rows(recording: rr.RecordingStream, timeline: Timeline, camera: Ca
     strips = _across(y, camera.width)
     colors = [STATUS_COLORS[status] for status in events["status"]]
     radii = np.where(trailing, rr.Radius.ui_points(0.75), rr.Radius.ui_points(1.5))
-    recording.send_columns(flash_rows_entity(camera.name), indexes=indexes,
-                           columns=rr.LineStrips2D.columns(strips=strips, colors=colors,
-                                                           radii=radii).partition(lengths))
-    names = [("unmatched" if status == "unmatched" else f"flash {flash}")
-             + (" rejected" if status == "rejected" else "")
-             for flash, status in zip(events["flash"], events["status"])]
+    recording.send_columns(
+        flash_rows_entity(camera.name),
+        indexes=indexes,
+        columns=rr.LineStrips2D.columns(strips=strips, colors=colors, radii=radii).partition(lengths),
+    )
+    names = [
+        ("unmatched" if status == "unmatched" else f"flash {flash}") + (" rejected" if status == "rejected" else "")
+        for flash, status in zip(events["flash"], events["status"])
+    ]
     labels = [f"{name} end" if end else name for name, end in zip(names, trailing)]
     x = np.where(trailing, (1 - LABEL_AT) * camera.width, LABEL_AT * camera.width)
-    recording.send_columns(flash_labels_entity(camera.name), indexes=indexes,
-                           columns=rr.Points2D.columns(positions=np.stack([x, y], axis=1),
-                                                       colors=colors, labels=labels,
-                                                       radii=[0.0] * len(y)).partition(lengths))
+    recording.send_columns(
+        flash_labels_entity(camera.name),
+        indexes=indexes,
+        columns=rr.Points2D.columns(
+            positions=np.stack([x, y], axis=1), colors=colors, labels=labels, radii=[0.0] * len(y)
+        ).partition(lengths),
+    )
 
 
-def log_now_line(recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock,
-                 also_at_ms: np.ndarray | tuple = (), rate_hz: float = NOW_RATE_HZ) -> None:
+def log_now_line(
+    recording: rr.RecordingStream,
+    timeline: Timeline,
+    camera: CameraClock,
+    also_at_ms: np.ndarray | tuple = (),
+    rate_hz: float = NOW_RATE_HZ,
+) -> None:
     """Draw the row exposed at the time cursor: a line across ``camera``'s frame.
 
     At every tick of a ``rate_hz`` grid on ``global_time`` (from 0) within the camera's
@@ -265,27 +291,30 @@ def log_now_line(recording: rr.RecordingStream, timeline: Timeline, camera: Came
     start = readout_start_ms(camera, [0])[0]
     end = readout_end_ms(camera, [camera.n_frames - 1])[0]
     period_ms, origin = 1000.0 / rate_hz, timeline.origin_ms
-    grid = origin + period_ms * np.arange(np.ceil((start - origin) / period_ms),
-                                          np.floor((end - origin) / period_ms) + 1)
+    grid = origin + period_ms * np.arange(
+        np.ceil((start - origin) / period_ms), np.floor((end - origin) / period_ms) + 1
+    )
     also = np.asarray(also_at_ms, dtype=np.float64)
     ticks = np.concatenate([grid, also[(also >= start) & (also <= end)]])
-    ticks = origin + np.unique(np.round((ticks - origin) * 1e6)) / 1e6       # whole ns, once
+    ticks = origin + np.unique(np.round((ticks - origin) * 1e6)) / 1e6  # whole ns, once
     _, rows = camera.locate(ticks)
     shown = np.isfinite(rows)
-    keep = shown | np.concatenate([[False], shown[:-1]])      # a tick that clears the line
+    keep = shown | np.concatenate([[False], shown[:-1]])  # a tick that clears the line
     ticks, rows, shown = ticks[keep], rows[keep], shown[keep]
     entity = now_entity(camera.name)
-    recording.log(entity, rr.LineStrips2D.from_fields(colors=[NOW_COLOR],
-                                                      radii=[rr.Radius.ui_points(1.0)]),
-                  static=True)
-    recording.send_columns(entity, indexes=[timeline.column(ticks)],
-                           columns=rr.LineStrips2D.columns(
-                               strips=_across(rows[shown] + PIXEL_CENTRE, camera.width))
-                           .partition(shown.astype(np.int64)))
+    recording.log(
+        entity, rr.LineStrips2D.from_fields(colors=[NOW_COLOR], radii=[rr.Radius.ui_points(1.0)]), static=True
+    )
+    recording.send_columns(
+        entity,
+        indexes=[timeline.column(ticks)],
+        columns=rr.LineStrips2D.columns(strips=_across(rows[shown] + PIXEL_CENTRE, camera.width)).partition(
+            shown.astype(np.int64)
+        ),
+    )
 
 
 def _across(y: np.ndarray, width: int) -> np.ndarray:
     """Horizontal lines across an image of ``width`` px at heights ``y`` (Rerun image
     coordinates), shape (n, 2, 2)."""
-    return np.stack([np.stack([np.zeros_like(y), y], axis=1),
-                     np.stack([np.full_like(y, width), y], axis=1)], axis=1)
+    return np.stack([np.stack([np.zeros_like(y), y], axis=1), np.stack([np.full_like(y, width), y], axis=1)], axis=1)

@@ -22,8 +22,14 @@ import numpy as np
 from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
 from flashsync.simulation.scenario import CameraSpec, check_scenario
-from flashsync.simulation.scene import (apply_homography, camera_background, camera_homography, make_scene,
-                                        rink_outline_m, rink_to_image)
+from flashsync.simulation.scene import (
+    apply_homography,
+    camera_background,
+    camera_homography,
+    make_scene,
+    rink_outline_m,
+    rink_to_image,
+)
 from flashsync.simulation.truth import camera_truth, ground_truth
 
 _FLASH_SEEN = 0.02  # a frame "sees" a flash when some row gets this fraction of its strength
@@ -301,8 +307,7 @@ def puck_track(view, puck, t_frame_ms):
         xy = apply_homography(view.to_image, puck.position(cam.world_ms(mid)))
         row = np.clip(np.nan_to_num(xy[:, 1], nan=-1.0), -1.0, cam.height)
     with np.errstate(invalid="ignore"):
-        visible = ((xy[:, 0] >= 0) & (xy[:, 0] <= cam.width - 1)
-                   & (xy[:, 1] >= 0) & (xy[:, 1] <= cam.height - 1))
+        visible = (xy[:, 0] >= 0) & (xy[:, 0] <= cam.width - 1) & (xy[:, 1] >= 0) & (xy[:, 1] <= cam.height - 1)
     return xy, visible
 
 
@@ -353,8 +358,11 @@ def camera_lighting(scenario, index):
     missed = missed_flashes(scenario, index)
     return Lighting(
         flashes=tuple(f for k, f in enumerate(scenario.flashes) if k not in missed),
-        switches=tuple(scenario.switches), flicker_depth=scenario.flicker_depth,
-        flicker_hz=scenario.flicker_hz, flicker_phase=scenario.flicker_phase)
+        switches=tuple(scenario.switches),
+        flicker_depth=scenario.flicker_depth,
+        flicker_hz=scenario.flicker_hz,
+        flicker_phase=scenario.flicker_phase,
+    )
 
 
 def _reporting(frames, name, total, progress):
@@ -405,15 +413,20 @@ def render_scenario(scenario, out_dir, progress=None):
         pts, time_base = container_stamps(cam, t_true, camera_rng(scenario, i, 3))
         path = out / f"{cam.name}.{cam.container}"
         images = (render_frame(view, scene, t, lighting, rng) for t in t_true)
-        write_video(path, _reporting(images, cam.name, len(frames), progress), pts, time_base,
-                    crf=cam.crf, fps=cam.fps)
+        write_video(path, _reporting(images, cam.name, len(frames), progress), pts, time_base, crf=cam.crf, fps=cam.fps)
         homographies[cam.name] = view.homography.tolist()
         xy, visible = puck_track(view, scene.puck, t_true)
-        detections += [(cam.name, j, round(float(x), 3), round(float(y), 3), "puck")
-                       for j, ((x, y), v) in enumerate(zip(xy, visible)) if v]
+        detections += [
+            (cam.name, j, round(float(x), 3), round(float(y), 3), "puck")
+            for j, ((x, y), v) in enumerate(zip(xy, visible))
+            if v
+        ]
         missed = missed_flashes(scenario, i)
-        seen = {k: np.flatnonzero(flash_frames(cam, t_true, fl)).tolist()
-                for k, fl in enumerate(scenario.flashes) if k not in missed}
+        seen = {
+            k: np.flatnonzero(flash_frames(cam, t_true, fl)).tolist()
+            for k, fl in enumerate(scenario.flashes)
+            if k not in missed
+        }
         stamps_ms = pts * 1000.0 * float(time_base)
         cameras.append(camera_truth(cam, path.name, frames, t_true, stamps_ms, seen, scenario.cameras[0]))
     truth = ground_truth(scenario, cameras)

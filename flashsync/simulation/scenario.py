@@ -283,23 +283,30 @@ def check_scenario(scenario, source):
     require(scenario.flicker_hz > 0, "flicker_hz must be positive")
     require(0 <= scenario.flicker_depth < 1, "flicker_depth must be in [0, 1)")
     for k, fl in enumerate(scenario.flashes):
-        require(fl.decay_ms > 0 and fl.strength >= 0,
-                f"flash {k}: decay_ms must be > 0 and strength >= 0")
+        require(fl.decay_ms > 0 and fl.strength >= 0, f"flash {k}: decay_ms must be > 0 and strength >= 0")
     for k, sw in enumerate(scenario.switches):
         require(sw.factor > 0, f"switch {k}: factor must be positive")
     ref = scenario.cameras[0]
-    require(ref.drift_rate_ppm_per_s == 0,
-            f"reference camera {ref.name} must have drift_rate_ppm_per_s 0; put another camera first")
+    require(
+        ref.drift_rate_ppm_per_s == 0,
+        f"reference camera {ref.name} must have drift_rate_ppm_per_s 0; put another camera first",
+    )
     for c in scenario.cameras:
         where = f"camera {c.name}"
-        require(isinstance(c.name, str) and _NAME.match(c.name) is not None,
-                f"camera name {c.name!r} is not a plain file stem (letters, digits, _ . -)")
-        require(c.width > 0 and c.height > 0 and c.width % 2 == 0 and c.height % 2 == 0,
-                f"{where}: width and height must be positive and even, got {c.width}x{c.height}")
+        require(
+            isinstance(c.name, str) and _NAME.match(c.name) is not None,
+            f"camera name {c.name!r} is not a plain file stem (letters, digits, _ . -)",
+        )
+        require(
+            c.width > 0 and c.height > 0 and c.width % 2 == 0 and c.height % 2 == 0,
+            f"{where}: width and height must be positive and even, got {c.width}x{c.height}",
+        )
         require(c.fps > 0, f"{where}: fps must be positive")
         require(c.r0 >= 0 and c.r1 >= 0, f"{where}: r0 and r1 must be >= 0")
-        require(0 < c.exposure_ms <= c.frame_period_ms,
-                f"{where}: exposure_ms must be in (0, {c.frame_period_ms:.3f}] (one frame period)")
+        require(
+            0 < c.exposure_ms <= c.frame_period_ms,
+            f"{where}: exposure_ms must be in (0, {c.frame_period_ms:.3f}] (one frame period)",
+        )
         require(c.start_ms >= 0, f"{where}: start_ms must be >= 0 (stamps are non-negative)")
         require(c.container in CONTAINERS, f"{where}: container must be one of {CONTAINERS}")
         require(c.quantize_ms is None or c.quantize_ms > 0, f"{where}: quantize_ms must be positive")
@@ -309,12 +316,18 @@ def check_scenario(scenario, source):
         require(c.n_frames is None or c.n_frames > 0, f"{where}: n_frames must be positive")
         require(scenario.frame_count(c) > 0, f"{where}: records no frame; raise duration_ms")
         require(0 <= c.crf <= 51, f"{where}: crf must be in 0..51")
-        require(all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
-                f"{where}: missed_flashes must be indices of flashes (0..{len(scenario.flashes) - 1})")
-        require(all(len(s) == 2 and s[1] > 0 for s in c.gain_steps),
-                f"{where}: gain_steps must be pairs [world_ms, factor > 0]")
-        require(len(c.position_m) == 3 and c.position_m[2] > 0,
-                f"{where}: position_m must be [x, y, z] with z > 0 (above the ice)")
+        require(
+            all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
+            f"{where}: missed_flashes must be indices of flashes (0..{len(scenario.flashes) - 1})",
+        )
+        require(
+            all(len(s) == 2 and s[1] > 0 for s in c.gain_steps),
+            f"{where}: gain_steps must be pairs [world_ms, factor > 0]",
+        )
+        require(
+            len(c.position_m) == 3 and c.position_m[2] > 0,
+            f"{where}: position_m must be [x, y, z] with z > 0 (above the ice)",
+        )
         require(len(c.look_at_m) == 2, f"{where}: look_at_m must be [x, y]")
         require(0 < c.hfov_deg < 170, f"{where}: hfov_deg must be in (0, 170)")
         try:
@@ -330,8 +343,7 @@ def _build(cls, data, where, source):
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
-            raise FlashsyncError(
-                f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
+            raise FlashsyncError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
     try:
         return cls(**data)
     except TypeError as err:
@@ -383,7 +395,8 @@ def scenario_from_dict(data, source="<dict>"):
     for key in data:
         if key not in names:
             raise FlashsyncError(
-                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
+                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}"
+            )
     if "cameras" in data:
         cams = data["cameras"]
         if not isinstance(cams, list):
@@ -451,19 +464,46 @@ def _flash_schedule(rng, start_ms, stop_ms, count, min_gap_ms, strengths=(0.35, 
     slack = max(stop_ms - start_ms - (count - 1) * min_gap_ms, 0.0)
     offsets = np.sort(rng.uniform(0.0, slack, count)) + np.arange(count) * min_gap_ms
     return tuple(
-        FlashSpec(world_ms=round(float(start_ms + o), 3), strength=round(float(rng.uniform(*strengths)), 3),
-                  decay_ms=decay_ms)
-        for o in offsets)
+        FlashSpec(
+            world_ms=round(float(start_ms + o), 3), strength=round(float(rng.uniform(*strengths)), 3), decay_ms=decay_ms
+        )
+        for o in offsets
+    )
 
 
 def _tiny(duration_ms=2400.0):
     rng = np.random.default_rng(11)
     cams = (
-        CameraSpec("cam1", 320, 180, 25.0, r0=8, r1=4, exposure_ms=10.0, start_ms=0.0,
-                   position_m=(30.0, -10.0, 14.0), look_at_m=(30.0, 12.0), hfov_deg=80.0),
-        CameraSpec("cam2", 320, 180, 30.0, r0=6, r1=6, exposure_ms=8.0, start_ms=1334.5,
-                   offset_ms=-1234.5, drift_ppm=15.0, container="mkv", flash_gain=0.9,
-                   position_m=(-6.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=70.0),
+        CameraSpec(
+            "cam1",
+            320,
+            180,
+            25.0,
+            r0=8,
+            r1=4,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            position_m=(30.0, -10.0, 14.0),
+            look_at_m=(30.0, 12.0),
+            hfov_deg=80.0,
+        ),
+        CameraSpec(
+            "cam2",
+            320,
+            180,
+            30.0,
+            r0=6,
+            r1=6,
+            exposure_ms=8.0,
+            start_ms=1334.5,
+            offset_ms=-1234.5,
+            drift_ppm=15.0,
+            container="mkv",
+            flash_gain=0.9,
+            position_m=(-6.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=70.0,
+        ),
     )
     flashes = _flash_schedule(rng, 0.12 * duration_ms, 0.92 * duration_ms, 4, 0.12 * duration_ms)
     return Scenario("tiny", cams, duration_ms=duration_ms, flashes=flashes, n_players=4, seed=1)
@@ -472,46 +512,164 @@ def _tiny(duration_ms=2400.0):
 def _sample(duration_ms=8000.0):
     rng = np.random.default_rng(2024)
     cams = (
-        CameraSpec("cam1", 640, 360, 30.0, r0=12, r1=8, exposure_ms=10.0, start_ms=0.0,
-                   drift_ppm=5.0, crf=28, noise_std=1.5,
-                   position_m=(30.0, -11.0, 15.0), look_at_m=(30.0, 11.0), hfov_deg=80.0),
-        CameraSpec("cam2", 480, 270, 25.0, r0=10, r1=6, exposure_ms=16.0, start_ms=4471.7,
-                   offset_ms=-4321.7, drift_ppm=-10.0, container="mkv", drop_fraction=0.01,
-                   flash_gain=1.2, crf=28, noise_std=1.5,
-                   position_m=(-7.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=75.0),
-        CameraSpec("cam3", 512, 288, 50.0, r0=14, r1=10, exposure_ms=8.0, start_ms=12115.6,
-                   offset_ms=-12345.6, drift_ppm=20.0, flash_gain=0.8, crf=28, noise_std=1.5,
-                   missed_flashes=(4,),
-                   position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0), hfov_deg=75.0),
-        CameraSpec("cam4", 320, 240, 29.97, r0=8, r1=6, exposure_ms=12.0, start_ms=7420.3,
-                   offset_ms=-7000.3, drift_ppm=12.0, jitter_ms=0.1, crf=28, noise_std=1.5,
-                   position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0), hfov_deg=70.0),
+        CameraSpec(
+            "cam1",
+            640,
+            360,
+            30.0,
+            r0=12,
+            r1=8,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            drift_ppm=5.0,
+            crf=28,
+            noise_std=1.5,
+            position_m=(30.0, -11.0, 15.0),
+            look_at_m=(30.0, 11.0),
+            hfov_deg=80.0,
+        ),
+        CameraSpec(
+            "cam2",
+            480,
+            270,
+            25.0,
+            r0=10,
+            r1=6,
+            exposure_ms=16.0,
+            start_ms=4471.7,
+            offset_ms=-4321.7,
+            drift_ppm=-10.0,
+            container="mkv",
+            drop_fraction=0.01,
+            flash_gain=1.2,
+            crf=28,
+            noise_std=1.5,
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+        ),
+        CameraSpec(
+            "cam3",
+            512,
+            288,
+            50.0,
+            r0=14,
+            r1=10,
+            exposure_ms=8.0,
+            start_ms=12115.6,
+            offset_ms=-12345.6,
+            drift_ppm=20.0,
+            flash_gain=0.8,
+            crf=28,
+            noise_std=1.5,
+            missed_flashes=(4,),
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+        ),
+        CameraSpec(
+            "cam4",
+            320,
+            240,
+            29.97,
+            r0=8,
+            r1=6,
+            exposure_ms=12.0,
+            start_ms=7420.3,
+            offset_ms=-7000.3,
+            drift_ppm=12.0,
+            jitter_ms=0.1,
+            crf=28,
+            noise_std=1.5,
+            position_m=(30.0, 42.0, 17.0),
+            look_at_m=(30.0, 18.0),
+            hfov_deg=70.0,
+        ),
     )
     flashes = _flash_schedule(rng, 800.0, duration_ms - 500.0, 7, 450.0, decay_ms=0.5)
-    return Scenario("sample", cams, duration_ms=duration_ms, flashes=flashes, n_players=10,
-                    color=True, seed=7)
+    return Scenario("sample", cams, duration_ms=duration_ms, flashes=flashes, n_players=10, color=True, seed=7)
 
 
 def _paper(duration_ms=60000.0):
     rng = np.random.default_rng(2017)
     common = dict(fps=25.0, crf=23, noise_std=1.5, drop_fraction=0.003)
     cams = (
-        CameraSpec("cam1", 960, 540, r0=18, r1=12, exposure_ms=10.0, start_ms=0.0,
-                   position_m=(30.0, -11.0, 15.0), look_at_m=(30.0, 11.0), hfov_deg=80.0, **common),
-        CameraSpec("cam2", 960, 540, r0=20, r1=10, exposure_ms=12.0, start_ms=23456.0 + 850.0,
-                   offset_ms=-23456.0, drift_ppm=-10.0, container="mkv", flash_gain=1.1,
-                   position_m=(-7.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=75.0, **common),
-        CameraSpec("cam3", 640, 360, r0=12, r1=8, exposure_ms=8.0, start_ms=41000.5 - 1200.0,
-                   offset_ms=-41000.5, drift_ppm=7.0, quantize_ms=1.0, flash_gain=0.9,
-                   position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0), hfov_deg=75.0, **common),
-        CameraSpec("cam4", 640, 360, r0=14, r1=10, exposure_ms=16.0, start_ms=12000.0 + 400.0,
-                   offset_ms=-12000.0, drift_ppm=4.0, flash_gain=1.0,
-                   position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0), hfov_deg=70.0, **common),
+        CameraSpec(
+            "cam1",
+            960,
+            540,
+            r0=18,
+            r1=12,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            position_m=(30.0, -11.0, 15.0),
+            look_at_m=(30.0, 11.0),
+            hfov_deg=80.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam2",
+            960,
+            540,
+            r0=20,
+            r1=10,
+            exposure_ms=12.0,
+            start_ms=23456.0 + 850.0,
+            offset_ms=-23456.0,
+            drift_ppm=-10.0,
+            container="mkv",
+            flash_gain=1.1,
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam3",
+            640,
+            360,
+            r0=12,
+            r1=8,
+            exposure_ms=8.0,
+            start_ms=41000.5 - 1200.0,
+            offset_ms=-41000.5,
+            drift_ppm=7.0,
+            quantize_ms=1.0,
+            flash_gain=0.9,
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam4",
+            640,
+            360,
+            r0=14,
+            r1=10,
+            exposure_ms=16.0,
+            start_ms=12000.0 + 400.0,
+            offset_ms=-12000.0,
+            drift_ppm=4.0,
+            flash_gain=1.0,
+            position_m=(30.0, 42.0, 17.0),
+            look_at_m=(30.0, 18.0),
+            hfov_deg=70.0,
+            **common,
+        ),
     )
-    flashes = _flash_schedule(rng, 0.05 * duration_ms + 900.0, 0.95 * duration_ms - 1300.0, 12,
-                              0.04 * duration_ms)
-    return Scenario("paper", cams, duration_ms=duration_ms, flashes=flashes, n_players=10,
-                    flicker_depth=0.02, flicker_hz=100.0, flicker_phase=0.7, seed=17)
+    flashes = _flash_schedule(rng, 0.05 * duration_ms + 900.0, 0.95 * duration_ms - 1300.0, 12, 0.04 * duration_ms)
+    return Scenario(
+        "paper",
+        cams,
+        duration_ms=duration_ms,
+        flashes=flashes,
+        n_players=10,
+        flicker_depth=0.02,
+        flicker_hz=100.0,
+        flicker_phase=0.7,
+        seed=17,
+    )
 
 
 _PRESETS = {"sample": _sample, "tiny": _tiny, "paper": _paper}
