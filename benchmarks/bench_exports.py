@@ -27,10 +27,9 @@ import numpy as np
 from flashsync import detect_videos, load_model, synchronize
 from flashsync.demo import VIDEO_SUFFIXES, default_samples
 from flashsync.evaluate import clock_origin_ms, sync_errors, tick_errors_ms
-from flashsync.simulation import load_ground_truth
+from flashsync.io import load_detections, load_ground_truth, load_homographies
 from flashsync.simulation.truth import puck_image_px
 from flashsync.ticks import frame_table, model_ticks_ms
-from tracking_adapter.formats import load_homographies, read_detections
 from tracking_adapter.resample import resample
 
 
@@ -69,7 +68,7 @@ def main() -> None:
     every = float(np.sqrt(np.mean(errors**2)))
     print(f"{'all':<8}{'':>8}{'':>9}{every:>9.4f}")
 
-    tracks = resample(read_detections(args.folder / "detections.csv"), model, ticks).tracks
+    tracks = resample(load_detections(args.folder / "detections.csv"), model, ticks).tracks
     homographies = load_homographies(args.folder / "homographies.json")
     print(f"\nresample at {args.rate:g} Hz: interpolated puck position minus the true one, px")
     print(f"{'camera':<8}{'ticks':>8}{'median':>9}{'p95':>9}{'max':>9}")

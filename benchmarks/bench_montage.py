@@ -29,7 +29,7 @@ import av
 
 from flashsync import detect_videos, save_model, synchronize, write_montage
 from flashsync.demo import VIDEO_SUFFIXES, default_samples
-from flashsync.model_file import load_model
+from flashsync.io import load_model
 
 # Peak resident memory from /proc (getrusage's maximum survives exec: it would be this
 # script's own).

@@ -27,10 +27,10 @@ import numpy as np
 from av.video.reformatter import VideoReformatter
 
 from flashsync.atomic import atomic_output
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.model import CameraClock, SyncModel
 from flashsync.ticks import AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms, tick_period_ms
-from flashsync.timestamps import open_video, video_timestamps
+from flashsync.timestamps import median_step_ms, open_video, video_timestamps
 
 #: Output containers by file extension.
 CONTAINERS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov"}
@@ -127,10 +127,11 @@ def layout(sizes: dict[str, tuple[int, int]], cell: tuple[int, int] | None = Non
 def frame_rate_hz(clock: CameraClock) -> float:
     """A camera's frame rate on the global clock (median step between frames), Hz, to
     0.001 Hz."""
-    steps = np.diff(clock.frame_times_ms)
-    if not steps.size:
-        raise FlashsyncError(f"camera {clock.name} has one frame in the model; give --rate")
-    return round(1000.0 / (clock.alpha * float(np.median(steps))), 3)
+    if clock.n_frames < 2:
+        raise NotEnoughDataError(
+            f"camera {clock.name} has one frame in the model: no frame rate to take; give the rate of the ticks"
+        )
+    return round(1000.0 / (clock.alpha * median_step_ms(clock.frame_times_ms)), 3)
 
 
 def named_videos(paths: Sequence[str | Path], model: SyncModel) -> dict[str, Path]:
@@ -139,19 +140,19 @@ def named_videos(paths: Sequence[str | Path], model: SyncModel) -> dict[str, Pat
     videos: dict[str, Path] = {}
     for path in map(Path, paths):
         if path.stem in videos:
-            raise FlashsyncError(
+            raise InputError(
                 f"{path}: two videos are named {path.stem}; camera names are file stems and must be unique: rename one"
             )
         if not path.is_file():
-            raise FlashsyncError(f"{path}: no such file; check the path")
+            raise InputError(f"{path}: no such file; check the path")
         if path.stem not in model.cameras:
-            raise FlashsyncError(
+            raise InputError(
                 f"{path}: camera {path.stem!r} is not in the model (it has "
                 f"{', '.join(model.cameras)}); give the videos the model was made from"
             )
         count, expected = len(video_timestamps(path)), model.cameras[path.stem].n_frames
         if count != expected:
-            raise FlashsyncError(
+            raise InputError(
                 f"{path}: {count} frames, but the model has {expected} for camera "
                 f"{path.stem!r}; give the video the model was made from"
             )
@@ -206,7 +207,7 @@ def write_montage(
     """
     output = Path(output)
     if output.suffix.lower() not in CONTAINERS:
-        raise FlashsyncError(f"{output}: cannot write '{output.suffix}' video; name it {', '.join(CONTAINERS)}")
+        raise InputError(f"{output}: cannot write '{output.suffix}' video; name it {', '.join(CONTAINERS)}")
     if rate_hz is not None:
         tick_period_ms(rate_hz)  # a bad rate fails before decoding
     named = named_videos(videos, model)
@@ -299,9 +300,9 @@ class _TileReader:
                     next(self._frames)
                 decoded = next(self._frames)
             except StopIteration:
-                raise FlashsyncError(f"{self.path}: ends before frame {frame}; is the file complete?") from None
+                raise InputError(f"{self.path}: ends before frame {frame}; is the file complete?") from None
             except av.FFmpegError as error:
-                raise FlashsyncError(f"{self.path}: cannot decode ({error.strerror}); is the file complete?") from None
+                raise InputError(f"{self.path}: cannot decode ({error.strerror}); is the file complete?") from None
             self._image = self._scaler.reformat(
                 decoded, self.tile.width, self.tile.height, "bgr24", interpolation="AREA"
             ).to_ndarray()

@@ -34,7 +34,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 from flashsync.model import CameraClock, SyncModel
 
 #: Why a camera shows no row at a tick; code 0 (located) has no reason.
@@ -70,17 +70,19 @@ def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
     """
     step_ms = tick_period_ms(rate_hz)
     if not (math.isfinite(start_ms) and math.isfinite(end_ms)):
-        raise FlashsyncError(f"--start-ms {start_ms} / --end-ms {end_ms}: give finite times in ms")
+        raise InputError(f"ticks from {start_ms} to {end_ms} ms: give finite times in ms")
     if not end_ms > start_ms:
-        raise FlashsyncError(
-            f"--end-ms {end_ms} is not after --start-ms {start_ms}; give an end "
-            "after the start (ms on the global clock)"
+        raise InputError(
+            f"{end_ms}: the end of the ticks is not after their start {start_ms}; give an end "
+            "after the start (ms on the global clock)",
+            parameter="end_ms",
         )
     count = math.ceil((end_ms - start_ms) / step_ms - 1e-6)  # a tick at the end is left out
     if count > MAX_TICKS:
-        raise FlashsyncError(
-            f"{count} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
-            f"than {MAX_TICKS}; lower --rate or give a shorter span"
+        raise InputError(
+            f"{rate_hz}: {count} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
+            f"than {MAX_TICKS}; lower the rate or give a shorter span",
+            parameter="rate_hz",
         )
     return start_ms + np.arange(count) * step_ms
 
@@ -88,8 +90,8 @@ def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
 def tick_period_ms(rate_hz: float) -> float:
     """``1000 / rate_hz``, ms, or a one-line error unless the rate is a positive number."""
     if not (math.isfinite(rate_hz) and rate_hz > 0):
-        raise FlashsyncError(
-            f"--rate {rate_hz}: the rate must be a positive number of ticks per second, e.g. --rate 100"
+        raise InputError(
+            f"{rate_hz}: the rate must be a positive number of ticks per second, e.g. 100", parameter="rate_hz"
         )
     return 1000.0 / rate_hz
 
@@ -124,9 +126,10 @@ def model_ticks_ms(
         start_ms = math.ceil(first / step_ms - 1e-6) * step_ms
         start_ms += _best_phase_ms(model, cameras, start_ms, last, step_ms)
     elif end_ms is None and not start_ms < last:
-        raise FlashsyncError(
-            f"--start-ms {start_ms} is not before the end of the recordings "
-            f"({last:.3f} ms on the global clock); give an earlier start"
+        raise InputError(
+            f"{start_ms}: the first tick is not before the end of the recordings "
+            f"({last:.3f} ms on the global clock); give an earlier start",
+            parameter="start_ms",
         )
     return tick_times_ms(rate_hz, start_ms, last if end_ms is None else end_ms)
 

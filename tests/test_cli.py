@@ -9,8 +9,8 @@ import pytest
 from cli_run import one_error_line, run
 
 from flashsync.evaluate import sync_errors
-from flashsync.model_file import load_model
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+from flashsync.io import load_ground_truth, load_model
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
 @pytest.fixture(scope="module")
@@ -270,3 +270,15 @@ def test_timestamps_from_an_rtp_csv(tiny_scenario, tmp_path, capsys):
     code, _, err = run(capsys, "detect", tiny_scenario / "cam1.mp4", "--timestamps", "cam9=x.csv")
     assert code == 1
     one_error_line(err, "--timestamps cam9")
+
+
+def test_library_errors_name_data_and_the_command_adds_its_option(tiny_scenario, capsys):
+    from flashsync.errors import InputError
+    from flashsync.pipeline import detect_videos
+
+    with pytest.raises(InputError) as error:
+        detect_videos([tiny_scenario / "cam1.mp4"], flipped=["cam9"])
+    assert error.value.parameter == "flipped" and "--" not in str(error.value)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "--reference", "cam9")
+    assert code == 1
+    one_error_line(err, "--reference cam9: no such camera among cam1, cam2")

@@ -7,9 +7,8 @@ import pytest
 from cli_run import one_error_line, run
 
 from flashsync.evaluate import clock_origin_ms, sync_errors, tick_errors_ms
+from flashsync.io import load_ground_truth, load_model
 from flashsync.model import CameraClock, SyncModel
-from flashsync.model_file import load_model
-from flashsync.simulation import load_ground_truth
 from flashsync.ticks import REASONS, frame_table, model_ticks_ms, tick_times_ms
 
 
@@ -180,7 +179,7 @@ def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys
         (["--rate", "nan"], ["--rate nan", "positive"]),
         (["--rate", "100", "--start-ms", "2000", "--end-ms", "1000"], ["--end-ms 1000", "not after"]),
         (["--rate", "100", "--start-ms", "99999"], ["--start-ms 99999", "not before the end"]),
-        (["--rate", "1e9"], ["ticks", "lower --rate"]),
+        (["--rate", "1e9"], ["--rate 1000000000", "ticks", "lower the rate"]),
     ],
 )
 def test_frames_refuses_bad_ticks(synced_scenario, tmp_path, capsys, options, words):

@@ -10,7 +10,7 @@ import pytest
 from cli_run import one_error_line, run
 
 from flashsync.cli import main
-from flashsync.model_file import load_model
+from flashsync.io import load_model
 from flashsync.montage import layout, write_montage
 from flashsync.simulation.encode import write_video
 from flashsync.ticks import AFTER, BEFORE, LOCATED, locate_ticks, tick_times_ms

@@ -8,11 +8,9 @@ import pytest
 from cli_run import one_error_line, run
 
 from flashsync.evaluate import clock_origin_ms
-from flashsync.model_file import load_model
-from flashsync.simulation import load_ground_truth
+from flashsync.io import load_detections, load_ground_truth, load_homographies, load_model
 from flashsync.simulation.truth import puck_image_px
 from flashsync.ticks import model_ticks_ms
-from tracking_adapter.formats import load_homographies, read_detections
 from tracking_adapter.interpolate import interpolate_track
 from tracking_adapter.resample import TRACK_COLUMNS, resample
 
@@ -44,7 +42,7 @@ def test_interpolate_track_between_close_detections_only():
 @pytest.fixture(scope="module")
 def resampled(synced_scenario):
     model = load_model(synced_scenario / "sync.json")
-    detections = read_detections(synced_scenario / "detections.csv")
+    detections = load_detections(synced_scenario / "detections.csv")
     return model, detections, resample(detections, model, model_ticks_ms(model, 100.0))
 
 

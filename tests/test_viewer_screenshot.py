@@ -29,8 +29,8 @@ import pytest
 from test_viz import free_port, quiet_rerun, read_blueprint, views  # noqa: F401 (fixture)
 
 import viz
+from flashsync.io import events_to_frame, load_homographies, load_plane_outline
 from flashsync.pipeline import all_events, detect_videos, synchronize
-from tracking_adapter.formats import load_homographies, load_plane_outline
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import validate
 
@@ -73,7 +73,7 @@ def sample(tmp_path_factory, quiet_rerun):  # noqa: F811 (the imported fixture)
         path,
         model,
         videos=videos,
-        events=all_events(detections),
+        events=events_to_frame(all_events(detections)),
         detections=restamped,
         homographies=homographies,
         validation=triples,

@@ -24,10 +24,9 @@ import rerun.chunk
 import viz
 from flashsync.cli import main
 from flashsync.errors import FlashsyncError
-from flashsync.model_file import save_model
+from flashsync.io import events_to_frame, load_homographies, load_plane_outline, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.timestamps import video_timestamps
-from tracking_adapter.formats import load_homographies, load_plane_outline
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import image_to_plane
 from viz.events import event_table, flash_numbers, lane_events
@@ -97,7 +96,7 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
             "error_m": ERRORS_M,
         }
     )
-    events = all_events(detections)
+    events = events_to_frame(all_events(detections))
     spurious = events.iloc[[0]].assign(
         camera="cam1", event=events["event"].max() + 1, frame=10, row=50.25
     )  # an event no other camera saw

@@ -13,8 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 from flashsync.model import CameraClock
+from flashsync.timestamps import median_step_ms
 
 #: Why an instant has no value; code 0 (interpolated) has none.
 STATUS = ("", "before the track", "after the track", "gap over the limit")
@@ -98,7 +99,9 @@ def default_gap_ms(clock: CameraClock) -> float:
     """:data:`DEFAULT_GAP_FRAMES` frame periods of a camera (median step), ms of the
     reference clock."""
     if clock.n_frames < 2:
-        raise FlashsyncError(
-            f"camera {clock.name} has {clock.n_frames} frame in the model; give --max-gap-ms or sync a longer video"
+        raise NotEnoughDataError(
+            f"camera {clock.name} has {clock.n_frames} frame in the model; give the "
+            "longest gap between two detections to interpolate over, or sync a "
+            "longer video"
         )
-    return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
+    return DEFAULT_GAP_FRAMES * clock.alpha * median_step_ms(clock.frame_times_ms)

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
+from flashsync.io.detections import require_columns
 from flashsync.model import SyncModel
-from tracking_adapter.formats import require_columns
 from tracking_adapter.interpolate import STATUS, default_gap_ms, interpolate_track
 from tracking_adapter.restamp import restamp
 from tracking_adapter.validate import OBJECT_COLUMNS
@@ -93,16 +93,16 @@ def resample(
     Examples
     --------
     >>> model = load_model("sync.json")                                      # doctest: +SKIP
-    >>> result = resample(read_detections("puck.csv"), model,
+    >>> result = resample(load_detections("puck.csv"), model,
     ...                   model_ticks_ms(model, 100.0))                      # doctest: +SKIP
     """
     require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
     if max_gap_ms is not None and not (np.isfinite(max_gap_ms) and max_gap_ms > 0):
-        raise FlashsyncError(f"--max-gap-ms {max_gap_ms}: give a positive time in ms")
+        raise InputError(f"{max_gap_ms}: the longest gap must be a positive time in ms", parameter="max_gap_ms")
     stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms, source=source)
     unknown = stamped.loc[stamped["restamp_error"] == "unknown camera", "camera"].unique()
     if len(unknown):
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: camera {', '.join(map(str, unknown))} is not in the model "
             f"(it has {', '.join(model.cameras)}); sync its video too or fix the "
             "camera names"
@@ -196,10 +196,10 @@ def _require_exposures(stamped: pd.DataFrame, cameras: np.ndarray, usable: np.nd
         usable = usable & stamped["t_center_ms"].isna().to_numpy()
     missing = [name for name in model.cameras if np.any(usable & (cameras == name))]
     if missing:
-        raise FlashsyncError(
-            f"camera {', '.join(missing)}: exposure unknown (not in the model), so "
-            "its detections have no mid-exposure time; give --exposure "
-            f"{missing[0]}=MS"
+        raise InputError(
+            f"{missing[0]}=MS: camera {', '.join(missing)}: exposure unknown (not in the model), so "
+            "its detections have no mid-exposure time; give the exposure in ms",
+            parameter="exposure_ms",
         )
 
 

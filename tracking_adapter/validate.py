@@ -31,8 +31,8 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from flashsync.io.detections import require_columns
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter.formats import require_columns
 from tracking_adapter.interpolate import (
     AFTER_TRACK,
     BEFORE_TRACK,
@@ -186,7 +186,7 @@ def validate(
 
     Examples
     --------
-    >>> report = validate(read_detections("puck.csv"), load_model("sync.json"),
+    >>> report = validate(load_detections("puck.csv"), load_model("sync.json"),
     ...                   load_homographies("H.json"))               # doctest: +SKIP
     >>> print(format_report(report))                                  # doctest: +SKIP
     """

@@ -9,7 +9,7 @@ and :mod:`viz.plane` for the plane view.
 Examples
 --------
 >>> import viz                                                            # doctest: +SKIP
->>> from flashsync.model_file import load_model                          # doctest: +SKIP
+>>> from flashsync.io import load_model                                  # doctest: +SKIP
 >>> model = load_model("sync.json")                                      # doctest: +SKIP
 >>> viz.save_recording("sync.rrd", model, videos=["cam1.mp4", "cam2.mkv"])  # doctest: +SKIP
 >>> viz.serve(model, videos=["cam1.mp4", "cam2.mkv"])  # Ctrl-C stops     # doctest: +SKIP

@@ -15,7 +15,7 @@ up). Hovering a point still shows plane metres.
 =====================  =============================================================
 
 The outline is never invented: it comes from the homographies file (``"plane":
-{"outline_m": ...}``, see :func:`tracking_adapter.formats.load_plane_outline`) or from
+{"outline_m": ...}``, see :func:`flashsync.io.homographies.load_plane_outline`) or from
 the caller (``flashsync view --plane``). Without one, the view shows the extent of the
 data.
 """

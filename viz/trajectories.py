@@ -21,8 +21,8 @@ import numpy as np
 import pandas as pd
 import rerun as rr
 
+from flashsync.io.detections import require_columns
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter.formats import require_columns
 from tracking_adapter.validate import OBJECT_COLUMNS, image_to_plane
 from viz.palette import Color, camera_colors
 from viz.plane import PLANE

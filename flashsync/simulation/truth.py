@@ -14,19 +14,13 @@ where ``t_f`` is the true camera time of frame ``f`` and ``q`` the readout row
 (``q = height - 1 - row`` for a flipped camera).
 """
 
-import json
-from dataclasses import asdict, dataclass, field
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from flashsync.atomic import write_text
 from flashsync.errors import FlashsyncError
 from flashsync.simulation.scenario import clock_world_ms
 from flashsync.simulation.scene import make_scene
-
-FORMAT = "flashsync-truth"
-VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -210,21 +204,11 @@ class GroundTruth:
         t = np.asarray(cam.frame_times_ms)[np.asarray(frame)] + (cam.r0 + q) * cam.sensor_row_ms
         return self.global_from_world_ms(cam.world_ms(t))
 
-    def to_dict(self):
-        """Plain dict as stored in ``truth.json``."""
-        return {
-            "format": FORMAT,
-            "version": VERSION,
-            "reference": self.reference,
-            "cameras": {n: asdict(c) for n, c in self.cameras.items()},
-            "flashes": self.flashes,
-            "switches": self.switches,
-            "scenario": self.scenario,
-        }
-
     def save(self, path):
-        """Write ``truth.json`` atomically."""
-        write_text(path, json.dumps(self.to_dict(), indent=1))
+        """Write ``truth.json`` atomically (:func:`flashsync.io.truth.save_ground_truth`)."""
+        from flashsync.io.truth import save_ground_truth  # it reads these records: imported late
+
+        save_ground_truth(self, path)
 
 
 def ground_truth(scenario, cameras):
@@ -258,40 +242,6 @@ def ground_truth(scenario, cameras):
         for s in scenario.switches
     ]
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
-
-
-def load_ground_truth(path):
-    """Read a ``truth.json`` written by `render_scenario`.
-
-    Parameters
-    ----------
-    path : str or Path
-        The file, or the folder holding ``truth.json``.
-
-    Returns
-    -------
-    GroundTruth
-    """
-    path = Path(path)
-    if path.is_dir():
-        path = path / "truth.json"
-    if not path.is_file():
-        raise FlashsyncError(f"{path}: no such ground-truth file; render a scenario first")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as err:
-        raise FlashsyncError(f"{path}: not valid JSON ({err})") from None
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise FlashsyncError(f"{path}: not a flashsync ground-truth file")
-    if data.get("version") != VERSION:
-        raise FlashsyncError(
-            f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})"
-        )
-    cameras = {}
-    for name, c in data["cameras"].items():
-        c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})
-        cameras[name] = CameraTruth(**c)
-    return GroundTruth(data["reference"], cameras, data["flashes"], data["switches"], data["scenario"])
 
 
 def puck_image_px(truth, homography, t_global_ms):
