@@ -25,7 +25,12 @@ EXAMPLES = {
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
     "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
-    "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
+    "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
+    "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+    "  flashsync validate restamped.csv --model sync.json --homographies homographies.json --json validation.json\n"
+    "  flashsync view --model sync.json --videos cam1.mp4 cam2.mkv cam3.mp4 --events events.csv \\\n"
+    "      --detections restamped.csv --homographies homographies.json --validation validation.json --save sync.rrd\n"
+    "  rerun sync.rrd        (or: ... --serve, then open the address it prints)",
     "simulate": "flashsync simulate sample -o sim/",
     "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
@@ -305,13 +310,30 @@ def _parser() -> argparse.ArgumentParser:
         "videos in sync, trajectories, on one global timeline.",
         _run_view,
     )
+    view.epilog += VIEW_UNITS
     view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
-    output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
     output.add_argument(
-        "--serve", action="store_true", help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C"
+        "--spawn", action="store_true", help="open the native viewer (needs a display; it listens on 127.0.0.1)"
+    )
+    output.add_argument(
+        "--serve", action="store_true", help="serve the web viewer (default http://127.0.0.1:9090) until Ctrl-C"
+    )
+    view.add_argument(
+        "--bind",
+        default="127.0.0.1",
+        metavar="ADDRESS",
+        help="IP address --serve listens on (default 127.0.0.1: this machine only; "
+        "0.0.0.0: every IPv4 interface, reachable from other machines)",
+    )
+    view.add_argument("--port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    view.add_argument(
+        "--grpc-port",
+        type=int,
+        default=9876,
+        help="port --serve streams the recording from, or --spawn's viewer listens on (default 9876)",
     )
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
@@ -433,6 +455,17 @@ def _tick_options(parser: argparse.ArgumentParser, rate_default: str | None) -> 
     )
 
 
+VIEW_UNITS = """
+
+units: the time axis (global_time) is seconds from the start of the recordings, the
+earliest first frame of any camera; the recording's description and the first lines of
+the flash log give that instant's t_global_ms (ms, the reference camera's clock).
+Residuals and their +-1 sigma band are in ms; plane positions and validation errors in
+metres (error arrows are drawn enlarged: the factor is in the plane view's title and on
+its scale bar); image positions in px. The plane view is a top view turned as the first
+camera with a homography sees it."""
+
+
 def _view_inputs(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--videos",
@@ -442,9 +475,22 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
         metavar="VIDEO",
         help="videos to show in sync (camera = file stem)",
     )
-    parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
+    parser.add_argument("--events", type=Path, help="events table from detect or sync --events (adds unmatched events)")
     parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
-    parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
+    parser.add_argument(
+        "--homographies",
+        type=Path,
+        help='JSON {camera: 3x3 image px -> plane m matrix}, optionally with "plane": '
+        '{"outline_m": [[x, y], ...]}, the plane\'s outline (m)',
+    )
+    parser.add_argument(
+        "--plane",
+        type=float,
+        nargs=4,
+        metavar=("X0", "Y0", "X1", "Y1"),
+        help="the plane's outline as the rectangle with corners (X0, Y0) and (X1, Y1), m (e.g. 0 0 60 30); "
+        "replaces one in --homographies. Without either, no outline is drawn",
+    )
     parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
 
 
@@ -666,8 +712,17 @@ def _run_validate(args) -> None:
 
 
 def _run_view(args) -> None:
+    import warnings
+
     import viz
-    from flashsync.io import events_to_frame, load_detections, load_events, load_homographies, load_validation
+    from flashsync.io import (
+        events_to_frame,
+        load_detections,
+        load_events,
+        load_homographies,
+        load_plane_outline,
+        load_validation,
+    )
 
     inputs = {
         "--model": [args.model],
@@ -681,16 +736,29 @@ def _run_view(args) -> None:
         "events": events_to_frame(load_events(args.events)) if args.events else None,
         "detections": load_detections(args.detections) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
+        "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
         "validation": load_validation(args.validation) if args.validation else None,
     }
-    if args.save:
-        viz.save_recording(args.save, model, **data)
-        _PLAN.did(args.save)
-        print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
-    elif args.spawn:
-        viz.spawn(model, **data)
-    else:
-        viz.serve(model, **data)
+    if args.plane:
+        data["plane_outline_m"] = viz.rectangle_outline(*args.plane)
+    show = warnings.showwarning
+
+    def plane_warning(message, category, *rest, **options):
+        if not issubclass(category, viz.PlaneWarning):
+            return show(message, category, *rest, **options)
+        print(f"flashsync view: warning: {args.homographies}: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", viz.PlaneWarning)
+        warnings.showwarning = plane_warning
+        if args.save:
+            viz.save_recording(args.save, model, **data)
+            _PLAN.did(args.save)
+            print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
+        elif args.spawn:
+            viz.spawn(model, grpc_port=args.grpc_port, **data)
+        else:
+            viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
 
 
 def _view_files(args) -> dict[str, Path | None]:

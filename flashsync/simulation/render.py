@@ -22,7 +22,14 @@ import numpy as np
 from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
 from flashsync.simulation.scenario import CameraSpec, check_scenario
-from flashsync.simulation.scene import apply_homography, camera_background, camera_homography, make_scene, rink_to_image
+from flashsync.simulation.scene import (
+    apply_homography,
+    camera_background,
+    camera_homography,
+    make_scene,
+    rink_outline_m,
+    rink_to_image,
+)
 from flashsync.simulation.truth import camera_truth, ground_truth
 
 _FLASH_SEEN = 0.02  # a frame "sees" a flash when some row gets this fraction of its strength
@@ -372,7 +379,8 @@ def render_scenario(scenario, out_dir, progress=None):
     Writes ``<camera>.mp4`` or ``<camera>.mkv`` per camera, ``truth.json``,
     ``detections.csv`` (columns ``camera,frame,x,y,object``: the puck's centroid in each
     frame where it is in view, px) and ``homographies.json`` (``{camera: 3x3 image px ->
-    rink metres}``) into `out_dir`, each atomically.
+    rink metres}`` and ``"plane": {"outline_m": [[x, y], ...]}``, the edge of the ice)
+    into `out_dir`, each atomically.
 
     Parameters
     ----------
@@ -427,6 +435,7 @@ def render_scenario(scenario, out_dir, progress=None):
     writer.writerow(["camera", "frame", "x", "y", "object"])
     writer.writerows(detections)
     write_text(out / "detections.csv", buf.getvalue())
+    homographies["plane"] = {"outline_m": rink_outline_m().round(4).tolist()}
     write_text(out / "homographies.json", json.dumps(homographies, indent=1))
     truth.save(out / "truth.json")
     return truth
