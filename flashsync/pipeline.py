@@ -192,6 +192,8 @@ def synchronize(
 
     best = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
+    if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
+        best = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
     report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
@@ -231,6 +233,8 @@ def check_anchors(anchors: Sequence[str]) -> None:
         seen[camera] = number
 
 
+#: The frame times of stamps that change rate taken at the stamps' own rates.
+STAMPS_OWN_RATES = "the stamps' own rate in each segment"
 #: A choice of frame times whose log-likelihood leads the next by less than this is undecided.
 DECIDED_LOG_LIKELIHOOD = 5.0
 
@@ -260,7 +264,7 @@ def _best_frame_times(
             continue
         frame, before, after = clock.rate_changes[0]
         change = f"{video}: its frame stamps change rate at frame {frame} ({before:.3f} -> {after:.3f} ms per frame)"
-        choices = [("the stamps' own rate in each segment", clock.times_ms), *clock.one_rate_alternatives()]
+        choices = [(STAMPS_OWN_RATES, clock.times_ms), *clock.one_rate_alternatives()]
         tried = [(best.score, choices[0][0], clock.times_ms, best)]
         for description, times in choices[1:]:
             trial = dict(best.cameras)
@@ -540,7 +544,8 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
 
 
 def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
-    """Exposure time (ms, reference clock) from the camera's bands, or None without any.
+    """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
+    where the bands give no positive duration: a time per row the events could not tell).
 
     A band's half-fall comes one exposure after its half-rise (rows that saw the whole
     flash are the ones whose exposure window holds it), so its duration is the exposure.
@@ -548,7 +553,8 @@ def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: f
     mine = durations.camera == camera
     if not mine.any():
         return None
-    return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    exposure = float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    return exposure if exposure > 0 else None
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:

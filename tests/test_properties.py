@@ -125,7 +125,7 @@ def test_a_model_round_trips(model):
 CAMERA_CORRUPTIONS = [
     ("alpha", not_a_number | st.sampled_from([0.0, -1.0])),
     ("beta_ms", not_a_number),
-    ("row_time_ms", not_a_number | st.sampled_from([0.0, -0.1])),
+    ("row_time_ms", not_a_number),
     ("width", not_a_whole_number | st.just(0)),
     ("height", not_a_whole_number),
     ("flipped", not_a_flag),
