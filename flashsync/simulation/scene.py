@@ -6,6 +6,8 @@ Each camera sees the ice through a homography between image pixels (pixel centre
 integer coordinates, x right, y down) and rink metres.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
 
 import cv2
@@ -24,7 +26,7 @@ _BLUE = (140, 70, 35)
 _TEAM_COLORS = ((40, 35, 120), (110, 60, 25), (225, 225, 225), (30, 30, 30))
 
 
-def _fold(x, lo, hi):
+def _fold(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Reflect `x` into [lo, hi] as a ball bouncing between two walls."""
     span = hi - lo
     y = np.mod(x - lo, 2.0 * span)
@@ -55,7 +57,7 @@ class Puck:
     color: tuple = (12, 12, 12)
     blur_samples: int = 7
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None] / 1000.0
         free = np.asarray(self.start_m) + np.asarray(self.velocity_mps) * w
@@ -95,7 +97,7 @@ class Player:
     color: tuple = _TEAM_COLORS[0]
     blur_samples: int = 1
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None]
         arg = 2.0 * np.pi * w / np.asarray(self.period_ms) + np.asarray(self.phase)
@@ -126,19 +128,20 @@ class Scene:
     puck: Puck
 
     @property
-    def objects(self):
+    def objects(self) -> tuple:
         """Players then the puck, in drawing order."""
         return self.players + (self.puck,)
 
 
-def _smooth_noise(rng, shape, cell_px, amplitude):
+def _smooth_noise(rng: np.random.Generator, shape: tuple, cell_px: int, amplitude: float) -> np.ndarray:
     """Band-limited noise: a coarse random grid upsampled with cubic interpolation."""
     coarse = rng.normal(0.0, amplitude, (shape[0] // cell_px + 2, shape[1] // cell_px + 2))
     return cv2.resize(coarse.astype(np.float32), (shape[1] + cell_px * 2, shape[0] + cell_px * 2),
                       interpolation=cv2.INTER_CUBIC)[:shape[0], :shape[1]]
 
 
-def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
+def make_texture(rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M,
+                 margin_m: float = TEXTURE_MARGIN_M) -> np.ndarray:
     """Draw the rink: ice with scratches and markings, boards with ads, stands around.
 
     Parameters
@@ -158,10 +161,10 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     h = int(round((RINK_WIDTH_M + 2 * margin_m) * s))
     w = int(round((RINK_LENGTH_M + 2 * margin_m) * s))
 
-    def px(x_m, y_m):
+    def px(x_m: float, y_m: float) -> tuple[int, int]:
         return int(round((x_m + margin_m) * s)), int(round((y_m + margin_m) * s))
 
-    def ln(metres):
+    def ln(metres: float) -> int:
         return max(1, int(round(metres * s)))
 
     # Stands, in 0.5 m seats: sections of seat rows around the rink, half the seats taken.
@@ -228,16 +231,19 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     return cv2.GaussianBlur(img, (0, 0), 0.7)
 
 
-def make_scene(seed, n_players=8, puck_speed_mps=36.0):
+def make_scene(seed: int, n_players: int = 8, puck_speed_mps: float = 36.0,
+               player_radius_m: tuple[float, float] = (0.4, 0.55)) -> Scene:
     """Generate the rink and its objects from a seed.
 
     Parameters
     ----------
     seed : int
     n_players : int
-        Number of skaters.
+        Number of skaters (dark and bright team colours in turn), on paths that cross.
     puck_speed_mps : float
         Puck speed, m/s.
+    player_radius_m : (float, float)
+        Range of the skaters' disc radii, metres (uniform).
 
     Returns
     -------
@@ -253,14 +259,14 @@ def make_scene(seed, n_players=8, puck_speed_mps=36.0):
             centre_m=centre, amplitude_m=amp,
             period_ms=(rng.uniform(9000, 20000), rng.uniform(7000, 16000)),
             phase=(rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi)),
-            radius_m=rng.uniform(0.4, 0.55), color=_TEAM_COLORS[i % len(_TEAM_COLORS)]))
+            radius_m=rng.uniform(*player_radius_m), color=_TEAM_COLORS[i % len(_TEAM_COLORS)]))
     angle = rng.uniform(0, 2 * np.pi)
     puck = Puck(start_m=(rng.uniform(10, 50), rng.uniform(5, 25)),
                 velocity_mps=(puck_speed_mps * np.cos(angle), puck_speed_mps * np.sin(angle)))
     return Scene(texture, TEXTURE_PX_PER_M, TEXTURE_MARGIN_M, tuple(players), puck)
 
 
-def rink_to_image(camera):
+def rink_to_image(camera) -> np.ndarray:
     """Projection of the ice plane into the image of a pinhole camera above it.
 
     Parameters
@@ -300,7 +306,7 @@ def rink_to_image(camera):
     return k @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ centre])
 
 
-def camera_homography(camera):
+def camera_homography(camera) -> np.ndarray:
     """Homography from image pixels to rink metres, ``H[2, 2] = 1``.
 
     ``[X, Y, 1] ~ H @ [u, v, 1]``; the inverse of `rink_to_image`, scaled so that the
@@ -310,7 +316,7 @@ def camera_homography(camera):
     return h / h[2, 2]
 
 
-def apply_homography(h, points):
+def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Map points through a homography.
 
     Parameters
@@ -332,7 +338,8 @@ def apply_homography(h, points):
         return np.where(den[..., None] > 0, num / den[..., None], np.nan)
 
 
-def camera_background(scene, homography, width, height, color):
+def camera_background(scene: Scene, homography: np.ndarray, width: int, height: int, color: bool
+                      ) -> np.ndarray:
     """The static rink as a camera sees it, before lighting.
 
     Parameters
