@@ -38,6 +38,25 @@ PULSES = {"led": dict(strength=0.3, decay_ms=0.0, hold_ms=1.0),
           "cosine": dict(strength=0.3, decay_ms=0.3, rise_ms=0.8, rise="cosine")}
 
 
+def intensity(x: np.ndarray, flash: FlashSpec) -> np.ndarray:
+    """The pulse at peak 1, written out piece by piece."""
+    r, h, d = flash.rise_ms, flash.hold_ms, flash.decay_ms
+    u = x / max(r, 1e-300)
+    rising = u if flash.rise == "linear" else (1 - np.cos(np.pi * u)) / 2
+    tail = np.exp(-(x - r - h) / d) if d > 0 else np.zeros_like(x)
+    return np.select([x < 0, x < r, x < r + h], [0.0, rising, 1.0], tail)
+
+
+@pytest.mark.parametrize("shape", [*PULSES, "exponential"])
+def test_closed_form_pulse_integrals_match_numerical_ones(shape):
+    flash = FlashSpec(0.0, **PULSES.get(shape, dict(strength=0.3, decay_ms=0.5)))
+    x = np.linspace(-1.0, 12.0, 1_300_001)
+    given = np.concatenate([[0.0], np.cumsum((intensity(x[1:], flash) + intensity(x[:-1], flash)) / 2 * np.diff(x))])
+    given /= given[-1]
+    assert np.max(np.abs(flash_remaining(x, flash) - (1 - given))) < 1e-5
+    assert half_light_ms(flash) == pytest.approx(np.interp(0.5, given, x), abs=1e-4)
+
+
 def test_pulse_shapes_integrate_exactly_and_the_half_rise_follows_the_shape(tmp_path):
     spec = camera(exposure_ms=4.0, n_frames=8)
     flashes = tuple(flash_on_row(spec, 2 + 2 * k, 40.3, **pulse) for k, pulse in enumerate(PULSES.values()))
