@@ -1,7 +1,7 @@
 """flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
 
 Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12]
-     python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s 30]
+     python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
 into a temporary folder (removed afterwards) and run as a new user would, with no options,
@@ -134,7 +134,7 @@ def rig_line(info: dict, table: pd.DataFrame) -> str:
             f"{solved['exposure_error_ms'].abs().max():.2f} ms | T_row {solved['row_time_error_pct'].abs().max():.2f} % | "
             f"z {z.max() if len(z) else float('nan'):.1f} pair-in-2σ {100 * solved['pair_within_2sigma'].min():.0f} % | "
             f"false {info['false_events']} missed {info['missed_flashes']} out {info['left_out']} "
-            f"flip {info['wrong_flip']} | {info['total_s']:.0f} s")
+            f"flip {info['wrong_flip']} | {info['total_s']:.0f} s ({info['render_s']:.0f} render)")
 
 
 def distribution(values: pd.Series, unit: str = "", scale: float = 1.0) -> str:
@@ -201,7 +201,8 @@ def main() -> None:
     parser.add_argument("--max-height", type=int, default=540, help="largest image height of random rigs")
     parser.add_argument("--duration-s", type=float, default=12.0, help="length of random rigs, s")
     parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
-    parser.add_argument("--recipe-duration-s", type=float, default=30.0, help="length of recipe rigs, s")
+    parser.add_argument("--recipe-duration-s", type=float,
+                        help="length of recipe rigs, s (default: each recipe's own, 15 min for long-pair)")
     parser.add_argument("--recipe-seed", type=int, default=0)
     parser.add_argument("--keep", type=Path, help="keep the rendered rigs in this folder")
     parser.add_argument("--json", type=Path, help="write every rig and camera result here")
@@ -209,7 +210,8 @@ def main() -> None:
     scenarios = []
     if args.recipes:
         names = list(RECIPES) if args.recipes == "all" else args.recipes.split(",")
-        scenarios += [recipe(n, args.recipe_seed, args.recipe_duration_s * 1000.0) for n in names]
+        duration_ms = args.recipe_duration_s * 1000.0 if args.recipe_duration_s else None
+        scenarios += [recipe(n, args.recipe_seed, duration_ms) for n in names]
     if args.seeds or not args.recipes:
         scenarios += [random_rig(s, max_height=args.max_height, duration_ms=args.duration_s * 1000.0)
                       for s in parse_seeds(args.seeds or "0:20")]

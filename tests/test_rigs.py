@@ -71,6 +71,11 @@ def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
     assert len(twelve) == 12 and all((c.width, c.height, c.miss_probability) == (320, 180, 0.3) for c in twelve)
     assert rigs["rolling-flicker"].cameras[0].exposure_ms == 0.5 and rigs["rolling-flicker"].flicker_depth == 0.03
     assert not rigs["flash-free"].flashes
+    assert [c.jitter_ms for c in rigs["jittered-stamps"].cameras] == [0.0, 1.2, 0.0]
+    assert rigs["stamp-rate-change"].cameras[1].stamp_rate_changes == ((150, 1.5),)  # 300 frames in 10 s
+    long = recipe("long-pair")
+    assert long.duration_ms == 900_000.0 and len(long.flashes) == 30
+    assert long.cameras[1].drift_rate_ppm_per_s > 0 and long.player_radius_m == (0.55, 1.1)
     for name, rig in rigs.items():
         assert all(c.tone in ("srgb", "gamma") and 18 <= c.crf <= 30 for c in rig.cameras), name
         assert all(f.shape in ("linear rise", "rectangular") for f in rig.flashes), name

@@ -11,13 +11,14 @@ import numpy as np
 
 from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
+from flashsync.simulation.scenario import CameraSpec
 
 MP4_TIME_BASE = Fraction(1, 90000)
 MKV_TIME_BASE = Fraction(1, 1000)
 _FORMATS = {".mp4": "mp4", ".mkv": "matroska"}
 
 
-def stamp_clock_ms(camera, t_true_ms: np.ndarray) -> np.ndarray:
+def stamp_clock_ms(camera: CameraSpec, t_true_ms: np.ndarray) -> np.ndarray:
     """Camera times as the muxer stamps them: the true time, except that after each of
     ``camera.stamp_rate_changes`` ``(sensor frame, factor)`` the stamps advance ``factor``
     times as fast (cumulative), from that frame's true time on; ms, shape of `t_true_ms`."""
@@ -30,7 +31,8 @@ def stamp_clock_ms(camera, t_true_ms: np.ndarray) -> np.ndarray:
     return stamp
 
 
-def container_stamps(camera, t_true_ms: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, Fraction]:
+def container_stamps(camera: CameraSpec, t_true_ms: np.ndarray, rng: np.random.Generator
+                     ) -> tuple[np.ndarray, Fraction]:
     """Container timestamps a camera reports for its frames.
 
     The stamp is the true camera time (through `stamp_clock_ms`, which changes its rate

@@ -164,7 +164,7 @@ def ambient_light(start_w: np.ndarray, end_w: np.ndarray, lighting: Lighting) ->
     omega = 2.0 * np.pi * lighting.flicker_hz / 1000.0
     m, phase = lighting.flicker_depth, lighting.flicker_phase
 
-    def integral(x, y):
+    def integral(x: np.ndarray, y: np.ndarray) -> np.ndarray:
         return (y - x) + (m / omega) * (_waveform_integral(omega * y + phase, lighting.flicker_waveform)
                                         - _waveform_integral(omega * x + phase, lighting.flicker_waveform))
 

@@ -19,6 +19,7 @@ import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -26,8 +27,8 @@ from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
 from flashsync.simulation.light import Lighting, ambient_light, flash_light
 from flashsync.simulation.scenario import CameraSpec, FlashSpec, Scenario, check_scenario
-from flashsync.simulation.scene import (Puck, Scene, apply_homography, camera_background, camera_homography,
-                                        make_scene, rink_to_image)
+from flashsync.simulation.scene import (Player, Puck, Scene, apply_homography, camera_background,
+                                        camera_homography, make_scene, rink_to_image)
 from flashsync.simulation.sensor import sensor_response, shading
 from flashsync.simulation.truth import GroundTruth, camera_truth, ground_truth
 
@@ -125,7 +126,8 @@ def frame_gain(camera: CameraSpec, t_frame_ms: float) -> float:
     return float(np.prod([f for at, f in camera.gain_steps if at < w]))
 
 
-def _draw_object(refl: np.ndarray, view: CameraView, obj, t_frame_ms: float, color) -> None:
+def _draw_object(refl: np.ndarray, view: CameraView, obj: Player | Puck, t_frame_ms: float,
+                 color: np.ndarray | np.float32) -> None:
     """Composite a moving disc into `refl` in place, each row at its own exposure times."""
     cam = view.camera
     height, width = refl.shape[:2]
@@ -160,7 +162,7 @@ def _draw_object(refl: np.ndarray, view: CameraView, obj, t_frame_ms: float, col
     patch += alpha * (color - patch)
 
 
-def _object_color(obj, color: bool) -> np.ndarray | np.float32:
+def _object_color(obj: Player | Puck, color: bool) -> np.ndarray | np.float32:
     """Object reflectance as BGR (3,) or grey scalar."""
     bgr = np.asarray(obj.color, dtype=np.float32)
     return bgr if color else np.float32(bgr @ [0.114, 0.587, 0.299])
@@ -295,7 +297,8 @@ def camera_lighting(scenario: Scenario, index: int) -> Lighting:
         flicker_waveform=scenario.flicker_waveform)
 
 
-def _reporting(frames, name: str, total: int, progress):
+def _reporting(frames: Iterable[np.ndarray], name: str, total: int,
+               progress: Callable[[str, int, int], None] | None) -> Iterator[np.ndarray]:
     """Yield from `frames`, calling ``progress(name, done, total)`` after each."""
     for done, frame in enumerate(frames, start=1):
         yield frame
@@ -303,7 +306,8 @@ def _reporting(frames, name: str, total: int, progress):
             progress(name, done, total)
 
 
-def render_scenario(scenario: Scenario, out_dir: str | Path, progress=None) -> GroundTruth:
+def render_scenario(scenario: Scenario, out_dir: str | Path,
+                    progress: Callable[[str, int, int], None] | None = None) -> GroundTruth:
     """Render every camera of a scenario to video files, with ground truth.
 
     Writes ``<camera>.mp4`` or ``<camera>.mkv`` per camera, ``truth.json``,

@@ -217,7 +217,7 @@ def _recipe_camera(rng: np.random.Generator, name: str, width: int, height: int,
     sensor["tone"] = str(rng.choice(["srgb", "gamma"]))
     spec = CameraSpec(name, width, height, fps, exposure_ms=exposure_ms, **_hidden_rows(rng, height),
                       **_clock(rng, duration_ms, reference), **sensor, **random_pose(rng, width, height))
-    return dataclasses.replace(spec, drift_rate_ppm_per_s=0.0, **fields)
+    return dataclasses.replace(spec, **{"drift_rate_ppm_per_s": 0.0, **fields})
 
 
 def _recipe(name: str, seed: int, duration_ms: float, cameras: list[tuple], flashes: int = 12,
@@ -268,7 +268,7 @@ def _hd(seed: int, duration_ms: float) -> Scenario:
     return _recipe("hd", seed, duration_ms, [
         ("cam1", 1920, 1080, NTSC_30, 2.0, dict(drift_ppm=0.0)),
         ("cam2", 1280, 720, NTSC_30, 4.0, dict(drift_ppm=8.0)),
-        ("cam3", 1280, 720, NTSC_60, 3.0, dict(drift_ppm=-10.0))])
+        ("cam3", 1280, 720, NTSC_60, 3.0, dict(drift_ppm=10.0))])
 
 
 def _twelve(seed: int, duration_ms: float) -> Scenario:
@@ -293,6 +293,28 @@ def _large_movers(seed: int, duration_ms: float) -> Scenario:
         n_players=10, player_radius_m=(0.55, 1.1))
 
 
+def _long_pair(seed: int, duration_ms: float) -> Scenario:
+    return _recipe("long-pair", seed, duration_ms, [
+        ("cam1", 320, 240, 25.0, 8.0, dict(position_m=(30.0, -4.0, 10.0), look_at_m=(30.0, 12.0), hfov_deg=60.0)),
+        ("cam2", 320, 240, 30.0, 8.0, dict(position_m=(30.0, 34.0, 10.0), look_at_m=(30.0, 18.0), hfov_deg=60.0,
+                                           drift_ppm=12.0, drift_rate_ppm_per_s=0.01))],
+        flashes=30, n_players=10, player_radius_m=(0.55, 1.1))
+
+
+def _jittered_stamps(seed: int, duration_ms: float) -> Scenario:
+    return _recipe("jittered-stamps", seed, duration_ms, [
+        ("cam1", 640, 360, 25.0, 4.0, {}),
+        ("cam2", 640, 360, 30.0, 5.0, dict(jitter_ms=1.2)),
+        ("cam3", 640, 360, 50.0, 3.0, {})])
+
+
+def _stamp_rate_change(seed: int, duration_ms: float) -> Scenario:
+    middle = int(duration_ms * 30.0 / 1000.0) // 2
+    return _recipe("stamp-rate-change", seed, duration_ms, [
+        ("cam1", 640, 360, 25.0, 4.0, {}),
+        ("cam2", 640, 360, 30.0, 5.0, dict(stamp_rate_changes=((middle, 1.5),)))])
+
+
 def _flash_free(seed: int, duration_ms: float) -> Scenario:
     return _recipe("flash-free", seed, duration_ms, [
         ("cam1", 320, 240, 25.0, 8.0, {}),
@@ -300,26 +322,41 @@ def _flash_free(seed: int, duration_ms: float) -> Scenario:
         flashes=0, flicker_depth=0.05, flicker_hz=100.0, n_players=20)
 
 
-#: Named rigs: ``RECIPES[name](seed, duration_ms) -> Scenario``. The first six are the rows
-#: of the honest-numbers issue's table; ``rolling-flicker`` (a 30 fps camera with a 0.5 ms
-#: exposure under 3 % 100 Hz flicker), ``large-movers`` (ten players 8-16 px in radius
-#: at 320x240, three in four dark) and ``flash-free`` (5 % flicker, twenty players, no flash) are the
-#: real-light issue's.
-RECIPES: dict[str, Callable[[int, float], Scenario]] = {
-    "four-ms-drops": _four_ms_drops,
-    "three-rates-flipped": _three_rates_flipped,
-    "twin-flipped": _twin_flipped,
-    "twin-drops": _twin_drops,
-    "hd": _hd,
-    "twelve": _twelve,
-    "rolling-flicker": _rolling_flicker,
-    "large-movers": _large_movers,
-    "flash-free": _flash_free,
+#: Named rigs: ``RECIPES[name] = (build(seed, duration_ms) -> Scenario, default duration
+#: ms)``. The first six are the rows of the honest-numbers issue's table (``hd``: clocks 8
+#: and 10 ppm apart, as in the discrepancy issue); ``rolling-flicker`` (a 30 fps camera with a
+#: 0.5 ms exposure under 3 % 100 Hz flicker), ``large-movers`` (ten players 8-16 px in
+#: radius at 320x240, three in four dark), ``long-pair`` (the same two cameras for 15
+#: minutes, 30 flashes, a drift that changes with time) and ``flash-free`` (5 % flicker,
+#: twenty players, no flash) are the real-light issue's; ``jittered-stamps`` (stamps of one
+#: camera jittered by 1.2 ms) and ``stamp-rate-change`` (one camera's stamps advance 1.5x as
+#: fast from its middle frame on) the stamp faults of the silent-harm issue.
+RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
+    "four-ms-drops": (_four_ms_drops, 30_000.0),
+    "three-rates-flipped": (_three_rates_flipped, 30_000.0),
+    "twin-flipped": (_twin_flipped, 30_000.0),
+    "twin-drops": (_twin_drops, 30_000.0),
+    "hd": (_hd, 40_000.0),
+    "twelve": (_twelve, 30_000.0),
+    "rolling-flicker": (_rolling_flicker, 30_000.0),
+    "large-movers": (_large_movers, 30_000.0),
+    "long-pair": (_long_pair, 900_000.0),
+    "flash-free": (_flash_free, 30_000.0),
+    "jittered-stamps": (_jittered_stamps, 30_000.0),
+    "stamp-rate-change": (_stamp_rate_change, 30_000.0),
 }
 
 
-def recipe(name: str, seed: int = 0, duration_ms: float = 30_000.0) -> Scenario:
+def recipe(name: str, seed: int = 0, duration_ms: float | None = None) -> Scenario:
     """The named rig of `RECIPES`, its random settings drawn from `seed`.
+
+    Parameters
+    ----------
+    name : str
+    seed : int
+    duration_ms : float, optional
+        Recording length, ms; the recipe's own (30 s, 40 s for ``hd``, 15 min for
+        ``long-pair``) by default.
 
     Examples
     --------
@@ -328,4 +365,5 @@ def recipe(name: str, seed: int = 0, duration_ms: float = 30_000.0) -> Scenario:
     """
     if name not in RECIPES:
         raise FlashsyncError(f"unknown rig recipe '{name}'; choose one of {', '.join(RECIPES)}")
-    return RECIPES[name](seed, duration_ms)
+    build, default_ms = RECIPES[name]
+    return build(seed, default_ms if duration_ms is None else duration_ms)

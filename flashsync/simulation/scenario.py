@@ -345,7 +345,7 @@ def check_scenario(scenario: Scenario, source: str) -> None:
         What to name in the message (a file or ``scenario 'tiny'``).
     """
 
-    def require(ok, what):
+    def require(ok: bool, what: str) -> None:
         if not ok:
             raise FlashsyncError(f"{source}: {what}")
 
@@ -417,7 +417,7 @@ def check_scenario(scenario: Scenario, source: str) -> None:
             raise FlashsyncError(f"{source}: {err}") from None
 
 
-def _build(cls: type, data: dict, where: str, source: str):
+def _build(cls: type, data: dict, where: str, source: str) -> object:
     """Instantiate dataclass `cls` from dict `data`, refusing unknown keys."""
     if not isinstance(data, dict):
         raise FlashsyncError(f"{source}: {where} must be a mapping of field names to values")

@@ -9,11 +9,15 @@ integer coordinates, x right, y down) and rink metres.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError
+
+if TYPE_CHECKING:
+    from flashsync.simulation.scenario import CameraSpec
 
 RINK_LENGTH_M = 60.0
 RINK_WIDTH_M = 30.0
@@ -266,7 +270,7 @@ def make_scene(seed: int, n_players: int = 8, puck_speed_mps: float = 36.0,
     return Scene(texture, TEXTURE_PX_PER_M, TEXTURE_MARGIN_M, tuple(players), puck)
 
 
-def rink_to_image(camera) -> np.ndarray:
+def rink_to_image(camera: CameraSpec) -> np.ndarray:
     """Projection of the ice plane into the image of a pinhole camera above it.
 
     Parameters
@@ -306,7 +310,7 @@ def rink_to_image(camera) -> np.ndarray:
     return k @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ centre])
 
 
-def camera_homography(camera) -> np.ndarray:
+def camera_homography(camera: CameraSpec) -> np.ndarray:
     """Homography from image pixels to rink metres, ``H[2, 2] = 1``.
 
     ``[X, Y, 1] ~ H @ [u, v, 1]``; the inverse of `rink_to_image`, scaled so that the
