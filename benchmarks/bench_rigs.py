@@ -146,46 +146,56 @@ def distribution(values: pd.Series, unit: str = "", scale: float = 1.0) -> str:
             f"mean {v.mean():+8.3f} {unit}")
 
 
-def summary(infos: list[dict], tables: pd.DataFrame) -> str:
-    lines = []
-    ok = [i for i in infos if "failure" not in i]
-    lines.append(f"rigs: {len(infos)}, solved {len(ok)}, failed {len(infos) - len(ok)}; cameras: "
-                 f"{sum(i['cameras'] for i in infos)}, solved {int(tables['solved'].sum()) if len(tables) else 0}")
-    if not len(tables):
-        return "\n".join(lines)
-    solved = tables[tables["solved"]]
-    others = solved[~solved["reference"]]
-    lines.append("over rigs (all cameras of a rig pooled):")
-    lines.append(f"  sync RMS ms              {distribution(pd.Series([i['rms_ms'] for i in ok]), 'ms')}")
-    lines.append(f"  sync max ms              {distribution(pd.Series([i['max_ms'] for i in ok]), 'ms')}")
-    lines.append("over solved cameras:")
-    lines.append(f"  sync RMS ms              {distribution(solved['rms_ms'], 'ms')}")
-    lines.append(f"  sync max ms              {distribution(solved['max_ms'], 'ms')}")
-    lines.append(f"  exposure error ms        {distribution(solved['exposure_error_ms'], 'ms')}")
-    for label, part in (("  exposure <= 6 ms", solved[solved["exposure_ms"] <= 6.0]),
-                        ("  exposure > 6 ms ", solved[solved["exposure_ms"] > 6.0])):
-        lines.append(f"{label}  err ms  {distribution(part['exposure_error_ms'], 'ms')}")
-    lines.append(f"  |time per row error| %   {distribution(solved['row_time_error_pct'].abs(), '%')}")
-    for label, part in (("  equal-rate rigs", solved[solved["equal_rate"]]),
-                        ("  mixed-rate rigs", solved[~solved["equal_rate"]])):
-        lines.append(f"{label}  |T_row| %  {distribution(part['row_time_error_pct'].abs(), '%')}")
-    lines.append(f"  error/σ RMS (non-ref)    {distribution(others['z_rms'])}")
-    lines.append(f"  within 2σ % (non-ref)    {distribution(others['within_2sigma'], '%', 100)}")
-    lines.append(f"  pair error/σ RMS         {distribution(solved['pair_z_rms'])}")
-    lines.append(f"  pair within 2σ %         {distribution(solved['pair_within_2sigma'], '%', 100)}")
-    lines.append(f"  predicted σ RMS ms       {distribution(solved['sigma_rms_ms'], 'ms')}")
-    lines.append(f"  false events per camera  {distribution(tables['false_events'])}")
-    lines.append(f"  missed flashes per cam.  {distribution(tables['missed_flashes'])}")
-    target = solved[(solved["shared_flashes"] >= 8) & (solved["height"] >= 360)]
+def camera_block(cameras: pd.DataFrame) -> list[str]:
+    """Distribution lines of the accuracy of solved cameras."""
+    others = cameras[~cameras["reference"]]
+    lines = [f"  sync RMS ms              {distribution(cameras['rms_ms'], 'ms')}",
+             f"  sync max ms              {distribution(cameras['max_ms'], 'ms')}"]
+    for label, part in (("exposure <= 6 ms, err ms", cameras[cameras["exposure_ms"] <= 6.0]),
+                        ("exposure > 6 ms, err ms", cameras[cameras["exposure_ms"] > 6.0])):
+        lines.append(f"  {label:<25}{distribution(part['exposure_error_ms'], 'ms')}")
+    for label, part in (("|T_row error| %, equal", cameras[cameras["equal_rate"]]),
+                        ("|T_row error| %, mixed", cameras[~cameras["equal_rate"]])):
+        lines.append(f"  {label:<25}{distribution(part['row_time_error_pct'].abs(), '%')}")
+    lines += [f"  error/σ RMS (non-ref)    {distribution(others['z_rms'])}",
+              f"  within 2σ % (non-ref)    {distribution(others['within_2sigma'], '%', 100)}",
+              f"  pair error/σ RMS         {distribution(cameras['pair_z_rms'])}",
+              f"  pair within 2σ %         {distribution(cameras['pair_within_2sigma'], '%', 100)}",
+              f"  predicted σ RMS ms       {distribution(cameras['sigma_rms_ms'], 'ms')}"]
+    target = cameras[(cameras["shared_flashes"] >= 8) & (cameras["height"] >= 360)]
     if len(target):
         meets = ((target["rms_ms"] <= TARGET_RMS_MS) & (target["max_ms"] <= TARGET_MAX_MS)
                  & (target["exposure_error_ms"].abs() <= TARGET_EXPOSURE_MS))
-        lines.append(f"cameras with >= 8 shared flashes and >= 360 rows: {len(target)}; meet RMS <= {TARGET_RMS_MS} "
-                     f"ms, max <= {TARGET_MAX_MS} ms and exposure within {TARGET_EXPOSURE_MS} ms: {int(meets.sum())}")
-        lines.append(f"  sync RMS ms              {distribution(target['rms_ms'], 'ms')}")
-        lines.append(f"  sync max ms              {distribution(target['max_ms'], 'ms')}")
-    lines.append(f"cameras left out: {int((~tables['solved']).sum())}; solved upside-down wrong: "
-                 f"{int((solved['flip_ok'] == False).sum())}")  # noqa: E712
+        lines += [f"  >= 8 shared flashes and >= 360 rows: {len(target)} cameras, {int(meets.sum())} meet RMS <= "
+                  f"{TARGET_RMS_MS} ms, max <= {TARGET_MAX_MS} ms and exposure within {TARGET_EXPOSURE_MS} ms",
+                  f"    sync RMS ms            {distribution(target['rms_ms'], 'ms')}",
+                  f"    sync max ms            {distribution(target['max_ms'], 'ms')}"]
+    return lines
+
+
+def summary(infos: list[dict], tables: pd.DataFrame) -> str:
+    """The distribution over rigs and cameras (exposures split at 6 ms, time per row by
+    equal and mixed frame rates), over all solved cameras and over the rigs whose readout
+    directions all came out right (a wrong one makes every other number of its rig moot)."""
+    ok = [i for i in infos if "failure" not in i]
+    lines = [f"rigs: {len(infos)}, solved {len(ok)}, failed {len(infos) - len(ok)}; cameras: "
+             f"{sum(i['cameras'] for i in infos)}, solved {int(tables['solved'].sum()) if len(tables) else 0}"]
+    if not len(tables):
+        return "\n".join(lines)
+    solved = tables[tables["solved"]]
+    wrong = solved[~solved["flip_ok"].astype(bool)]
+    clean = solved[~solved["rig"].isin(wrong["rig"])]
+    lines += [f"readout direction wrong: {len(wrong)} cameras in {wrong['rig'].nunique()} rigs; cameras left out: "
+              f"{int((~tables['solved']).sum())}",
+              "over rigs (all cameras of a rig pooled):",
+              f"  sync RMS ms              {distribution(pd.Series([i['rms_ms'] for i in ok]), 'ms')}",
+              f"  sync max ms              {distribution(pd.Series([i['max_ms'] for i in ok]), 'ms')}",
+              f"all solved cameras ({len(solved)}):", *camera_block(solved),
+              f"cameras of the {clean['rig'].nunique()} rigs with every readout direction right ({len(clean)}):",
+              *camera_block(clean),
+              "detection, every camera:",
+              f"  false events             {distribution(tables['false_events'])}",
+              f"  missed flashes           {distribution(tables['missed_flashes'])}"]
     return "\n".join(lines)
 
 
@@ -206,7 +216,17 @@ def main() -> None:
     parser.add_argument("--recipe-seed", type=int, default=0)
     parser.add_argument("--keep", type=Path, help="keep the rendered rigs in this folder")
     parser.add_argument("--json", type=Path, help="write every rig and camera result here")
+    parser.add_argument("--summarise", type=Path, metavar="JSON", help="print the lines and summary of a --json "
+                                                                       "file of an earlier run, render nothing")
     args = parser.parse_args()
+    if args.summarise:
+        saved = json.loads(args.summarise.read_text())
+        cameras = pd.DataFrame(saved["cameras"])
+        for info in saved["rigs"]:
+            print(rig_line(info, cameras[cameras["rig"] == info["rig"]] if len(cameras) else cameras))
+        print()
+        print(summary(saved["rigs"], cameras))
+        return
     scenarios = []
     if args.recipes:
         names = list(RECIPES) if args.recipes == "all" else args.recipes.split(",")
