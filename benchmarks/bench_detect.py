@@ -38,8 +38,11 @@ SIZES = {"720p": (1280, 720), "1080p": (1920, 1080), "2160p": (3840, 2160)}
 def make_clip(path: Path, width: int, height: int, n_frames: int, fps: float = 25.0) -> None:
     """A textured scene with moving dark blobs; every ~40th frame holds a flash band."""
     rng = np.random.default_rng(0)
-    texture = cv2.resize(rng.uniform(60, 200, (height // 8, width // 8)).astype(np.float32),
-                         (width, height), interpolation=cv2.INTER_CUBIC)
+    texture = cv2.resize(
+        rng.uniform(60, 200, (height // 8, width // 8)).astype(np.float32),
+        (width, height),
+        interpolation=cv2.INTER_CUBIC,
+    )
     rows = np.arange(height, dtype=np.float32)[:, None]
 
     def frames():
@@ -78,8 +81,7 @@ def fps(function, path: Path) -> float:
 def startup_seconds() -> float:
     """Wall time of ``flashsync detect --help``: interpreter, imports, nothing decoded."""
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "flashsync", "detect", "--help"], check=True,
-                   capture_output=True)
+    subprocess.run([sys.executable, "-m", "flashsync", "detect", "--help"], check=True, capture_output=True)
     return time.perf_counter() - start
 
 
@@ -92,8 +94,10 @@ def main() -> None:
     args = parser.parse_args()
     folder = args.dir or Path(tempfile.mkdtemp(prefix="flashsync-bench-"))
     folder.mkdir(parents=True, exist_ok=True)
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"PyAV {av.__version__}, {args.frames} frames per clip, best of {args.rounds} rounds")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"PyAV {av.__version__}, {args.frames} frames per clip, best of {args.rounds} rounds"
+    )
     print(f"{'size':<7} {'decode fps':>11} {'detect fps':>11} {'ratio':>6}   per-round ratios")
     for name in args.sizes.split(","):
         width, height = SIZES[name]
@@ -104,11 +108,13 @@ def main() -> None:
         decode, detect = [], []
         for round_ in range(args.rounds):
             pair = [(decode, decode_only), (detect, detect_video)]
-            for results, function in pair[::1 if round_ % 2 else -1]:
+            for results, function in pair[:: 1 if round_ % 2 else -1]:
                 results.append(fps(function, path))
         ratios = np.array(detect) / np.array(decode)
-        print(f"{name:<7} {max(decode):>11.1f} {max(detect):>11.1f} {max(detect) / max(decode):>6.2f}"
-              f"   median {np.median(ratios):.2f}, {ratios.min():.2f}-{ratios.max():.2f}")
+        print(
+            f"{name:<7} {max(decode):>11.1f} {max(detect):>11.1f} {max(detect) / max(decode):>6.2f}"
+            f"   median {np.median(ratios):.2f}, {ratios.min():.2f}-{ratios.max():.2f}"
+        )
     print(f"start-up of `flashsync detect`: {startup_seconds():.1f} s once per command")
 
 

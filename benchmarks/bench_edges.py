@@ -29,10 +29,22 @@ def edge_errors(width: int, height: int, crf: int, seed: int, folder: Path) -> t
     rng = np.random.default_rng(seed)
     row_ms = 1000.0 / FPS / (R0 + height + R1)
     rows, strengths = rng.uniform(0.1 * height, 0.97 * height, FLASHES), rng.uniform(0.25, 0.45, FLASHES)
-    flashes = tuple(FlashSpec(world_ms=(4 + 6 * i) * 1000.0 / FPS + (R0 + row) * row_ms, strength=strength)
-                    for i, (row, strength) in enumerate(zip(rows, strengths)))
-    camera = CameraSpec("cam", width, height, FPS, r0=R0, r1=R1, exposure_ms=float(rng.choice([4.0, 8.0, 16.0])),
-                        n_frames=6 * FLASHES + 7, noise_std=1.0, crf=crf)
+    flashes = tuple(
+        FlashSpec(world_ms=(4 + 6 * i) * 1000.0 / FPS + (R0 + row) * row_ms, strength=strength)
+        for i, (row, strength) in enumerate(zip(rows, strengths))
+    )
+    camera = CameraSpec(
+        "cam",
+        width,
+        height,
+        FPS,
+        r0=R0,
+        r1=R1,
+        exposure_ms=float(rng.choice([4.0, 8.0, 16.0])),
+        n_frames=6 * FLASHES + 7,
+        noise_std=1.0,
+        crf=crf,
+    )
     truth = render_scenario(Scenario("edges", (camera,), flashes=flashes, n_players=4, seed=seed), folder)
     events = detect_video(folder / "cam.mp4").events
     leading = events[events["edge"] == "leading"]
@@ -49,8 +61,10 @@ def main() -> None:
     parser.add_argument("--sizes", default="320x180,640x360")
     parser.add_argument("--crf", default="0,23")
     args = parser.parse_args()
-    print(f"{'size':<9} {'crf':>3} {'edges':>5} {'rms':>6} {'mean':>7} {'median':>7} {'p95':>6} {'max':>6}"
-          "  (rows, |error| but the mean; saturated apart)")
+    print(
+        f"{'size':<9} {'crf':>3} {'edges':>5} {'rms':>6} {'mean':>7} {'median':>7} {'p95':>6} {'max':>6}"
+        "  (rows, |error| but the mean; saturated apart)"
+    )
     for size in args.sizes.split(","):
         width, height = map(int, size.split("x"))
         for crf in map(int, args.crf.split(",")):
@@ -62,10 +76,16 @@ def main() -> None:
                 saturated.append(flag)
             error, flag = np.concatenate(errors), np.concatenate(saturated)
             clean = np.abs(error[~flag])
-            print(f"{size:<9} {crf:>3} {clean.size:>5} {np.sqrt(np.mean(clean**2)):>6.3f} "
-                  f"{error[~flag].mean():>+7.3f} {np.median(clean):>7.3f} {np.percentile(clean, 95):>6.3f} "
-                  f"{clean.max():>6.2f}"
-                  + (f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag]**2)):.3f}" if flag.any() else ""))
+            print(
+                f"{size:<9} {crf:>3} {clean.size:>5} {np.sqrt(np.mean(clean**2)):>6.3f} "
+                f"{error[~flag].mean():>+7.3f} {np.median(clean):>7.3f} {np.percentile(clean, 95):>6.3f} "
+                f"{clean.max():>6.2f}"
+                + (
+                    f"  saturated: {flag.sum()} edges, rms {np.sqrt(np.mean(error[flag] ** 2)):.3f}"
+                    if flag.any()
+                    else ""
+                )
+            )
 
 
 if __name__ == "__main__":

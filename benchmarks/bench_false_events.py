@@ -21,12 +21,11 @@ from flashsync.simulation import CameraSpec, Scenario, render_scenario
 
 def flash_free_scenario(minutes: float) -> Scenario:
     duration_ms = minutes * 60_000.0
-    steps = tuple((t, 1.15 if i % 2 == 0 else 1 / 1.15)
-                  for i, t in enumerate(range(60_000, int(duration_ms), 120_000)))
-    camera = CameraSpec("quiet", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5,
-                        crf=26, gain_steps=steps)
-    return Scenario("flash-free", (camera,), duration_ms=duration_ms, flicker_depth=0.03,
-                    flicker_hz=100.0, n_players=12, seed=21)
+    steps = tuple((t, 1.15 if i % 2 == 0 else 1 / 1.15) for i, t in enumerate(range(60_000, int(duration_ms), 120_000)))
+    camera = CameraSpec("quiet", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5, crf=26, gain_steps=steps)
+    return Scenario(
+        "flash-free", (camera,), duration_ms=duration_ms, flicker_depth=0.03, flicker_hz=100.0, n_players=12, seed=21
+    )
 
 
 def main() -> None:
@@ -42,8 +41,10 @@ def main() -> None:
     detection = detect_video(video)
     elapsed = time.perf_counter() - start
     events = detection.events
-    print(f"{args.minutes:g} min, {len(detection.frame_times_ms)} frames: {events['event'].nunique() if len(events) else 0} "
-          f"false events ({len(events)} edges), detection {len(detection.frame_times_ms) / elapsed:.0f} fps")
+    print(
+        f"{args.minutes:g} min, {len(detection.frame_times_ms)} frames: {events['event'].nunique() if len(events) else 0} "
+        f"false events ({len(events)} edges), detection {len(detection.frame_times_ms) / elapsed:.0f} fps"
+    )
     if len(events):
         print(events.to_string())
 

@@ -39,10 +39,16 @@ def make_model(n_frames: int) -> SyncModel:
     clocks = {}
     for index, name in enumerate(CAMERAS):
         clocks[name] = CameraClock(
-            name=name, frame_times_ms=np.arange(n_frames) * FRAME_MS + 7.0 * index,
-            height=HEIGHT, width=WIDTH, alpha=1 + 3e-6 * index, beta_ms=-11.0 * index,
-            row_time_ms=FRAME_MS / 1125, covariance=np.diag([1e-12, 1e-4, 1e-10]),
-            exposure_ms=2.0)
+            name=name,
+            frame_times_ms=np.arange(n_frames) * FRAME_MS + 7.0 * index,
+            height=HEIGHT,
+            width=WIDTH,
+            alpha=1 + 3e-6 * index,
+            beta_ms=-11.0 * index,
+            row_time_ms=FRAME_MS / 1125,
+            covariance=np.diag([1e-12, 1e-4, 1e-10]),
+            exposure_ms=2.0,
+        )
     return SyncModel(reference=CAMERAS[0], cameras=clocks)
 
 
@@ -61,8 +67,7 @@ def write_detections_csv(path: Path, rows: int, n_frames: int, seed: int = 0) ->
                 pa.array(rng.integers(0, 50, n)),
                 pa.array(np.round(rng.uniform(0, 1, n), 3)),
             ]
-            lines = pc.binary_join_element_wise(
-                *(pc.cast(column, pa.string()) for column in columns), ",")
+            lines = pc.binary_join_element_wise(*(pc.cast(column, pa.string()) for column in columns), ",")
             text = pc.binary_join(pa.ListArray.from_arrays([0, n], lines), "\n")[0]
             file.write(text.as_buffer())
             file.write(b"\n")
@@ -79,7 +84,7 @@ def main() -> None:
     parser.add_argument("rows", nargs="?", type=int, default=10_000_000)
     parser.add_argument("--dir", type=Path, help="working directory (kept)")
     arguments = parser.parse_args()
-    n_frames = 108_000                                      # one hour at 30 fps
+    n_frames = 108_000  # one hour at 30 fps
     with tempfile.TemporaryDirectory() as scratch:
         directory = arguments.dir or Path(scratch)
         directory.mkdir(parents=True, exist_ok=True)

@@ -54,11 +54,12 @@ def main() -> None:
     solution = solve_clocks(events, args.cameras, priors=priors)
     elapsed = time.perf_counter() - start
     solved = np.array([[s.alpha, s.beta_ms, s.row_time_ms] for s in solution.cameras])
-    print(f"{args.cameras} cameras x {args.flashes} flashes: {len(events.camera)} events, "
-          f"solved in {elapsed:.3f} s")
-    print(f"largest errors: drift {np.max(np.abs(solved[:, 0] - truth[:, 0])) * 1e6:.4f} ppm, "
-          f"shift {np.max(np.abs(solved[:, 1] - truth[:, 1])):.4f} ms, "
-          f"time per row {np.max(np.abs(solved[:, 2] / truth[:, 2] - 1)) * 100:.4f} %")
+    print(f"{args.cameras} cameras x {args.flashes} flashes: {len(events.camera)} events, solved in {elapsed:.3f} s")
+    print(
+        f"largest errors: drift {np.max(np.abs(solved[:, 0] - truth[:, 0])) * 1e6:.4f} ppm, "
+        f"shift {np.max(np.abs(solved[:, 1] - truth[:, 1])):.4f} ms, "
+        f"time per row {np.max(np.abs(solved[:, 2] / truth[:, 2] - 1)) * 100:.4f} %"
+    )
 
 
 if __name__ == "__main__":

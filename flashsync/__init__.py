@@ -15,5 +15,16 @@ from flashsync.model import CameraClock, SyncModel
 from flashsync.model_file import load_model, save_model
 from flashsync.pipeline import all_events, detect_videos, synchronize
 
-__all__ = ["CameraClock", "DetectorSettings", "EventDetector", "FlashsyncError", "SyncModel",
-           "all_events", "detect_video", "detect_videos", "load_model", "save_model", "synchronize"]
+__all__ = [
+    "CameraClock",
+    "DetectorSettings",
+    "EventDetector",
+    "FlashsyncError",
+    "SyncModel",
+    "all_events",
+    "detect_video",
+    "detect_videos",
+    "load_model",
+    "save_model",
+    "synchronize",
+]

@@ -41,104 +41,169 @@ def main(argv: list[str] | None = None) -> int:
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="flashsync", description="Synchronise rolling-shutter cameras to a fraction of a "
-        "millisecond from the bands that flashes leave in their frames.")
+        prog="flashsync",
+        description="Synchronise rolling-shutter cameras to a fraction of a "
+        "millisecond from the bands that flashes leave in their frames.",
+    )
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     def command(name: str, help_text: str, run) -> argparse.ArgumentParser:
-        sub = commands.add_parser(name, help=help_text, description=help_text,
-                                  epilog=f"example:\n  {EXAMPLES[name]}",
-                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub = commands.add_parser(
+            name,
+            help=help_text,
+            description=help_text,
+            epilog=f"example:\n  {EXAMPLES[name]}",
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
         sub.set_defaults(run=run)
         return sub
 
     detect = command("detect", "Detect flash events (band edges) in videos.", _run_detect)
     detect.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
-    detect.add_argument("-o", "--output", type=Path, default=Path("events.csv"),
-                        help="events table, .csv or .parquet (default: events.csv)")
+    detect.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("events.csv"),
+        help="events table, .csv or .parquet (default: events.csv)",
+    )
     _detection_options(detect)
 
     sync = command("sync", "Detect, match and solve: write the model file sync.json.", _run_sync)
     sync.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
-    sync.add_argument("-o", "--output", type=Path, default=Path("sync.json"),
-                      help="model file (default: sync.json)")
+    sync.add_argument("-o", "--output", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     sync.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
-    sync.add_argument("--row-time", action="append", default=[], metavar="CAMERA=MS",
-                      help="known time per row of a camera in ms (datasheet); repeatable")
-    sync.add_argument("--anchor", action="append", default=[], metavar="CAMERA:EVENT",
-                      help="events (0-based per camera) that are one flash; optional, repeatable")
+    sync.add_argument(
+        "--row-time",
+        action="append",
+        default=[],
+        metavar="CAMERA=MS",
+        help="known time per row of a camera in ms (datasheet); repeatable",
+    )
+    sync.add_argument(
+        "--anchor",
+        action="append",
+        default=[],
+        metavar="CAMERA:EVENT",
+        help="events (0-based per camera) that are one flash; optional, repeatable",
+    )
     sync.add_argument("--events", type=Path, help="also write the detected events table here")
-    sync.add_argument("--pairwise", action="store_true",
-                      help="also solve every pair of cameras on its own and print that table")
-    sync.add_argument("--json", type=Path, metavar="OUT.json",
-                      help="also write the tables, rejected events and warnings as JSON")
-    sync.add_argument("--rrd", type=Path, metavar="OUT.rrd",
-                      help="also write a Rerun recording of the result (events, residuals, videos)")
+    sync.add_argument(
+        "--pairwise", action="store_true", help="also solve every pair of cameras on its own and print that table"
+    )
+    sync.add_argument(
+        "--json", type=Path, metavar="OUT.json", help="also write the tables, rejected events and warnings as JSON"
+    )
+    sync.add_argument(
+        "--rrd",
+        type=Path,
+        metavar="OUT.rrd",
+        help="also write a Rerun recording of the result (events, residuals, videos)",
+    )
     _detection_options(sync)
 
     restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
     restamp.add_argument("detections", type=Path, metavar="DETECTIONS")
-    restamp.add_argument("--model", type=Path, default=Path("sync.json"),
-                         help="model file (default: sync.json in the current folder)")
-    restamp.add_argument("-o", "--output", type=Path,
-                         help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv)")
+    restamp.add_argument(
+        "--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json in the current folder)"
+    )
+    restamp.add_argument(
+        "-o", "--output", type=Path, help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv)"
+    )
     restamp.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
-    restamp.add_argument("--exposure", action="append", default=[], metavar="CAMERA=MS",
-                         help="exposure time of a camera in ms: adds t_center_ms; repeatable")
+    restamp.add_argument(
+        "--exposure",
+        action="append",
+        default=[],
+        metavar="CAMERA=MS",
+        help="exposure time of a camera in ms: adds t_center_ms; repeatable",
+    )
     restamp.add_argument("--std", action="store_true", help="add t_global_std_ms from the solve")
-    restamp.add_argument("--strict", action="store_true",
-                         help="exit with code 1 if any row could not be stamped")
+    restamp.add_argument("--strict", action="store_true", help="exit with code 1 if any row could not be stamped")
 
-    validate = command("validate", "Cross-camera interpolation errors of a fast object, with "
-                       "sub-frame and frame-level sync.", _run_validate)
+    validate = command(
+        "validate",
+        "Cross-camera interpolation errors of a fast object, with sub-frame and frame-level sync.",
+        _run_validate,
+    )
     validate.add_argument("detections", nargs="+", type=Path, metavar="DETECTIONS")
-    validate.add_argument("--model", type=Path, default=Path("sync.json"),
-                          help="model file (default: sync.json)")
-    validate.add_argument("--homographies", type=Path, required=True,
-                          help="JSON {camera: 3x3 image->plane (metres) matrix}")
-    validate.add_argument("--max-gap-ms", type=float,
-                          help="longest gap between bracketing observations (default 2.5 frames)")
-    validate.add_argument("--exposure", action="append", default=[], metavar="CAMERA=MS",
-                          help="exposure time of a camera in ms; repeatable")
+    validate.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    validate.add_argument(
+        "--homographies", type=Path, required=True, help="JSON {camera: 3x3 image->plane (metres) matrix}"
+    )
+    validate.add_argument(
+        "--max-gap-ms", type=float, help="longest gap between bracketing observations (default 2.5 frames)"
+    )
+    validate.add_argument(
+        "--exposure",
+        action="append",
+        default=[],
+        metavar="CAMERA=MS",
+        help="exposure time of a camera in ms; repeatable",
+    )
     validate.add_argument("--json", type=Path, metavar="OUT.json", help="also write the report as JSON")
 
-    view = command("view", "Show a synchronisation in the Rerun viewer: events, residuals, "
-                   "videos in sync, trajectories, on one global timeline.", _run_view)
+    view = command(
+        "view",
+        "Show a synchronisation in the Rerun viewer: events, residuals, "
+        "videos in sync, trajectories, on one global timeline.",
+        _run_view,
+    )
     view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
     output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
-    output.add_argument("--serve", action="store_true",
-                        help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C")
+    output.add_argument(
+        "--serve", action="store_true", help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C"
+    )
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
-    simulate.add_argument("scenario", nargs="?", default="sample",
-                          help="preset name or a YAML/JSON scenario file (default: sample)")
+    simulate.add_argument(
+        "scenario", nargs="?", default="sample", help="preset name or a YAML/JSON scenario file (default: sample)"
+    )
     simulate.add_argument("-o", "--output", type=Path, required=True, help="output folder")
 
-    diagnose = command("diagnose", "Find where the plain time model and the measurement disagree, "
-                       "name the missing effects one by one and show the gap shrink.", _run_diagnose)
+    diagnose = command(
+        "diagnose",
+        "Find where the plain time model and the measurement disagree, "
+        "name the missing effects one by one and show the gap shrink.",
+        _run_diagnose,
+    )
     diagnose.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
     diagnose.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
     diagnose.add_argument("--json", type=Path, metavar="OUT.json", help="also write the steps as JSON")
-    diagnose.add_argument("--rrd", type=Path, metavar="OUT.rrd",
-                          help="also write a Rerun recording of the residuals after each step")
+    diagnose.add_argument(
+        "--rrd", type=Path, metavar="OUT.rrd", help="also write a Rerun recording of the residuals after each step"
+    )
     _detection_options(diagnose)
 
-    demo = command("demo", "Run detect -> sync -> restamp on the shipped sample and compare "
-                   "with its ground truth.", _run_demo)
+    demo = command(
+        "demo", "Run detect -> sync -> restamp on the shipped sample and compare with its ground truth.", _run_demo
+    )
     demo.add_argument("--samples", type=Path, help="sample folder (default: the shipped samples/)")
-    demo.add_argument("-o", "--output", type=Path, default=Path("flashsync-demo"),
-                      help="folder for the demo's outputs (default: flashsync-demo)")
-    demo.add_argument("--rrd", type=Path, metavar="OUT.rrd",
-                      help="also write a Rerun recording of the demo (videos, events, puck)")
+    demo.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        default=Path("flashsync-demo"),
+        help="folder for the demo's outputs (default: flashsync-demo)",
+    )
+    demo.add_argument(
+        "--rrd", type=Path, metavar="OUT.rrd", help="also write a Rerun recording of the demo (videos, events, puck)"
+    )
     return parser
 
 
 def _view_inputs(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--videos", nargs="+", type=Path, default=[], metavar="VIDEO",
-                        help="videos to show in sync (camera = file stem)")
+    parser.add_argument(
+        "--videos",
+        nargs="+",
+        type=Path,
+        default=[],
+        metavar="VIDEO",
+        help="videos to show in sync (camera = file stem)",
+    )
     parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
     parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
     parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
@@ -146,11 +211,21 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
 
 
 def _detection_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--flipped", action="append", default=[], metavar="CAMERA",
-                        help="camera mounted upside down (reads bottom-up); repeatable")
-    parser.add_argument("--timestamps", action="append", default=[], metavar="CAMERA=FILE.csv",
-                        help="frame timestamps of a camera from a CSV (column t_ms, or rtp for 90 kHz "
-                        "RTP stamps; one row per frame) instead of the container's; repeatable")
+    parser.add_argument(
+        "--flipped",
+        action="append",
+        default=[],
+        metavar="CAMERA",
+        help="camera mounted upside down (reads bottom-up); repeatable",
+    )
+    parser.add_argument(
+        "--timestamps",
+        action="append",
+        default=[],
+        metavar="CAMERA=FILE.csv",
+        help="frame timestamps of a camera from a CSV (column t_ms, or rtp for 90 kHz "
+        "RTP stamps; one row per frame) instead of the container's; repeatable",
+    )
 
 
 def _timestamp_files(values: list[str]) -> dict[str, Path]:
@@ -168,8 +243,7 @@ def _progress(camera: str, total: int):
     """One progress bar per video (shown on a terminal only)."""
     from tqdm import tqdm
 
-    bar = tqdm(total=total or None, desc=camera, unit="frame", leave=False, disable=None,
-               position=next(_BAR_POSITIONS))
+    bar = tqdm(total=total or None, desc=camera, unit="frame", leave=False, disable=None, position=next(_BAR_POSITIONS))
     return bar.update
 
 
@@ -180,11 +254,15 @@ def _run_detect(args) -> None:
     from flashsync.pipeline import all_events, detect_videos
     from flashsync.tables import write_table
 
-    events = all_events(detect_videos(args.videos, args.flipped, progress=_progress,
-                           timestamps=_timestamp_files(args.timestamps)))
+    events = all_events(
+        detect_videos(args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps))
+    )
     write_table(events, args.output)
-    print(f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
-          f"in {len(args.videos)} videos -> {args.output}", file=sys.stderr)
+    print(
+        f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
+        f"in {len(args.videos)} videos -> {args.output}",
+        file=sys.stderr,
+    )
 
 
 def _run_sync(args) -> None:
@@ -193,12 +271,16 @@ def _run_sync(args) -> None:
     from flashsync.atomic import write_text
     from flashsync.model_file import save_model
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
-    from flashsync.report import (pairwise_table, pairwise_text, rejected_events, sync_summary,
-                                  sync_table)
+    from flashsync.report import pairwise_table, pairwise_text, rejected_events, sync_summary, sync_table
     from flashsync.tables import write_table
 
-    detections = detect_videos(args.videos, args.flipped, estimate_readout=True, progress=_progress,
-                               timestamps=_timestamp_files(args.timestamps))
+    detections = detect_videos(
+        args.videos,
+        args.flipped,
+        estimate_readout=True,
+        progress=_progress,
+        timestamps=_timestamp_files(args.timestamps),
+    )
     if args.events:
         write_table(all_events(detections), args.events)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
@@ -211,13 +293,21 @@ def _run_sync(args) -> None:
     print(sync_table(model, report))
     rejected = rejected_events(model)
     for event in rejected.itertuples():
-        print(f"rejected: {event.camera} event {event.event} (frame {event.frame}, row {event.row:.1f}), "
-              f"residual {event.residual_ms:+.3f} ms")
+        print(
+            f"rejected: {event.camera} event {event.event} (frame {event.frame}, row {event.row:.1f}), "
+            f"residual {event.residual_ms:+.3f} ms"
+        )
     pairwise = None
     if args.pairwise:
-        pairwise = pairwise_table(solve_pairs([d.read_flipped(model.cameras[d.camera].flipped)
-                                               if d.camera in model.cameras else d for d in detections],
-                                              **options))
+        pairwise = pairwise_table(
+            solve_pairs(
+                [
+                    d.read_flipped(model.cameras[d.camera].flipped) if d.camera in model.cameras else d
+                    for d in detections
+                ],
+                **options,
+            )
+        )
         print()
         print(pairwise_text(pairwise))
     if args.json:
@@ -250,13 +340,22 @@ def _run_restamp(args) -> int:
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
     model = load_model(args.model)
-    summary = restamp_file(args.detections, output, model, camera=args.camera,
-                           exposure_ms=_per_camera_ms("--exposure", args.exposure), with_std=args.std)
+    summary = restamp_file(
+        args.detections,
+        output,
+        model,
+        camera=args.camera,
+        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        with_std=args.std,
+    )
     print(format_summary(summary), file=sys.stderr)
     if "unknown camera" in summary.failed:
-        print(f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model} "
-              f"({', '.join(model.cameras)}); their rows are kept without t_global_ms - sync those "
-              "videos too or fix the camera names", file=sys.stderr)
+        print(
+            f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model} "
+            f"({', '.join(model.cameras)}); their rows are kept without t_global_ms - sync those "
+            "videos too or fix the camera names",
+            file=sys.stderr,
+        )
         return 1
     return 1 if args.strict and summary.stamped < summary.rows else 0
 
@@ -272,9 +371,14 @@ def _run_validate(args) -> None:
     from tracking_adapter.validate import format_report, validate
 
     detections = pd.concat([read_detections(path) for path in args.detections], ignore_index=True)
-    report = validate(detections, load_model(args.model), load_homographies(args.homographies),
-                      max_gap_ms=args.max_gap_ms, exposure_ms=_per_camera_ms("--exposure", args.exposure),
-                      source=", ".join(map(str, args.detections)))
+    report = validate(
+        detections,
+        load_model(args.model),
+        load_homographies(args.homographies),
+        max_gap_ms=args.max_gap_ms,
+        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        source=", ".join(map(str, args.detections)),
+    )
     print(format_report(report))
     if args.json:
         write_text(args.json, json.dumps(report.to_dict(), indent=1))
@@ -290,16 +394,19 @@ def _run_view(args) -> None:
     from tracking_adapter.formats import load_homographies, read_detections
 
     model = load_model(args.model)
-    data = {"videos": args.videos or None,
-            "events": read_detections(args.events) if args.events else None,
-            "detections": read_detections(args.detections) if args.detections else None,
-            "homographies": load_homographies(args.homographies) if args.homographies else None}
+    data = {
+        "videos": args.videos or None,
+        "events": read_detections(args.events) if args.events else None,
+        "detections": read_detections(args.detections) if args.detections else None,
+        "homographies": load_homographies(args.homographies) if args.homographies else None,
+    }
     if args.validation:
         try:
             triples = json.loads(args.validation.read_text())["triples"]
         except (OSError, ValueError, KeyError, TypeError) as error:
-            raise FlashsyncError(f"{args.validation}: not the JSON of 'flashsync validate --json' "
-                                 f"({type(error).__name__}: {error})") from None
+            raise FlashsyncError(
+                f"{args.validation}: not the JSON of 'flashsync validate --json' ({type(error).__name__}: {error})"
+            ) from None
         data["validation"] = pd.DataFrame.from_records(triples)
     if args.save:
         viz.save_recording(args.save, model, **data)
@@ -324,8 +431,10 @@ def _run_diagnose(args) -> None:
     from flashsync.diagnose import diagnose, format_diagnosis
     from flashsync.pipeline import detect_videos
 
-    diagnosis = diagnose(detect_videos(args.videos, args.flipped, progress=_progress,
-                           timestamps=_timestamp_files(args.timestamps)), args.reference)
+    diagnosis = diagnose(
+        detect_videos(args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps)),
+        args.reference,
+    )
     print(format_diagnosis(diagnosis))
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))

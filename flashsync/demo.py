@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -27,17 +27,22 @@ def default_samples() -> Path:
     return shipped if shipped.is_dir() else Path("samples")
 
 
-def run_demo(samples: Path | None, output: Path,
-             progress: Callable[[str, int], Callable[[int], None]] | None = None,
-             recording: Path | None = None) -> str:
+def run_demo(
+    samples: Path | None,
+    output: Path,
+    progress: Callable[[str, int], Callable[[int], None]] | None = None,
+    recording: Path | None = None,
+) -> str:
     """Run the chain on ``samples`` (videos, ``truth.json``, ``detections.csv``), write
     ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output`` (and a Rerun
     recording to ``recording`` if given); return the report."""
     samples = samples or default_samples()
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
-        raise FlashsyncError(f"{samples}: no sample videos with truth.json; run the demo from the "
-                             "repository, or give --samples DIR (flashsync simulate sample -o DIR)")
+        raise FlashsyncError(
+            f"{samples}: no sample videos with truth.json; run the demo from the "
+            "repository, or give --samples DIR (flashsync simulate sample -o DIR)"
+        )
     started = time.perf_counter()
     detections = detect_videos(videos, estimate_readout=True, progress=progress)
     write_table(all_events(detections), output / "events.csv")
@@ -50,8 +55,7 @@ def run_demo(samples: Path | None, output: Path,
     errors = sync_errors(model, truth)
     detection_error = stamp_errors(read_detections(output / "restamped.csv"), model, truth)
 
-    lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "",
-             sync_table(model, report), ""]
+    lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "", sync_table(model, report), ""]
     lines += [f"warning: {w}" for w in report.warnings]
     lines.append("synchronisation error against ground truth, every frame and row:")
     for row in errors.itertuples():
@@ -59,14 +63,18 @@ def run_demo(samples: Path | None, output: Path,
     overall = float(np.sqrt(np.mean(errors["rms_ms"] ** 2)))
     lines.append(f"  {'all':<10} RMS {overall:.4f} ms")
     lines.append(f"re-stamped {format_summary(summary)}")
-    lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms "
-                 "against truth")
+    lines.append(f"puck detections: t_global_ms RMS error {np.sqrt(np.mean(detection_error**2)):.4f} ms against truth")
     lines.append(f"outputs in {output}/: events.csv sync.json restamped.csv")
     if recording is not None:
         import viz
 
-        viz.save_recording(recording, model, videos=videos, events=all_events(detections),
-                           detections=read_detections(output / "restamped.csv"),
-                           homographies=load_homographies(samples / "homographies.json"))
+        viz.save_recording(
+            recording,
+            model,
+            videos=videos,
+            events=all_events(detections),
+            detections=read_detections(output / "restamped.csv"),
+            homographies=load_homographies(samples / "homographies.json"),
+        )
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import statistics
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
 
 import numba
 import numpy as np
@@ -39,8 +39,19 @@ from flashsync.timestamps import check_timestamps
 #: Profile level (fraction of white) of a row whose pixels are clipped.
 SATURATED = 0.98
 
-EVENT_COLUMNS = ["camera", "event", "frame", "t_frame_ms", "row", "edge", "band", "rise_rows",
-                 "strength", "quality", "flags"]
+EVENT_COLUMNS = [
+    "camera",
+    "event",
+    "frame",
+    "t_frame_ms",
+    "row",
+    "edge",
+    "band",
+    "rise_rows",
+    "strength",
+    "quality",
+    "flags",
+]
 
 
 @dataclass(frozen=True)
@@ -117,7 +128,7 @@ class EventDetector:
         self.camera = camera
         self.height = height
         self.settings = settings
-        self._history: np.ndarray | None = None      # (history, height, blocks) ring of profiles
+        self._history: np.ndarray | None = None  # (history, height, blocks) ring of profiles
         self._n_history = self._next = 0
         self._noise: deque[float] = deque(maxlen=25)
         self._open: _Event | None = None
@@ -141,7 +152,8 @@ class EventDetector:
             self._remember(readout)
             return
         change, noise, peak, lit_start, lit_stop = _relative_change(
-            self._history[:self._n_history], readout, self.settings.min_level, self.settings.min_step)
+            self._history[: self._n_history], readout, self.settings.min_level, self.settings.min_step
+        )
         if np.isfinite(noise):
             self._noise.append(noise)
         sigma = max(statistics.median(self._noise), 1e-4) if self._noise else 1e-4
@@ -152,8 +164,18 @@ class EventDetector:
             signed = sign * change
             for start, stop in _runs(signed > threshold, gap=2):
                 if stop - start >= max(self.settings.min_rows, self.height // 100):
-                    segments.append(_Segment(frame, t_frame_ms, signed, int(start), int(stop), sign,
-                                             bool(np.max(readout[start:stop]) >= SATURATED), sigma))
+                    segments.append(
+                        _Segment(
+                            frame,
+                            t_frame_ms,
+                            signed,
+                            int(start),
+                            int(stop),
+                            sign,
+                            bool(np.max(readout[start:stop]) >= SATURATED),
+                            sigma,
+                        )
+                    )
         self._remember(readout)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
 
@@ -211,11 +233,12 @@ class EventDetector:
         first, last = event.segments[0], event.segments[-1]
         if kind == "pulse" and first.sign < 0:
             return
-        plateau = float(np.median(np.concatenate([s.change[s.start:s.stop] for s in event.segments])))
+        plateau = float(np.median(np.concatenate([s.change[s.start : s.stop] for s in event.segments])))
         window = max(6, self.height // 40)
         leading, leading_rise = _local_edge(_rising_crossing, first, plateau, window, kind)
-        trailing, trailing_rise = (_local_edge(_falling_crossing, last, plateau, window, kind)
-                                   if trailing_visible else (None, np.nan))
+        trailing, trailing_rise = (
+            _local_edge(_falling_crossing, last, plateau, window, kind) if trailing_visible else (None, np.nan)
+        )
         flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
         flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
         flags |= {"leading_hidden"} if leading is None else set()
@@ -225,11 +248,21 @@ class EventDetector:
             if row is None:
                 continue
             stored = self.height - 1 - row if self.settings.flipped else row
-            self.events.append({
-                "camera": self.camera, "event": self._n_events, "frame": segment.frame,
-                "t_frame_ms": segment.t_frame_ms, "row": stored, "edge": edge, "band": kind,
-                "rise_rows": rise, "strength": first.sign * plateau, "quality": plateau / first.sigma,
-                "flags": "|".join(sorted(flags))})
+            self.events.append(
+                {
+                    "camera": self.camera,
+                    "event": self._n_events,
+                    "frame": segment.frame,
+                    "t_frame_ms": segment.t_frame_ms,
+                    "row": stored,
+                    "edge": edge,
+                    "band": kind,
+                    "rise_rows": rise,
+                    "strength": first.sign * plateau,
+                    "quality": plateau / first.sigma,
+                    "flags": "|".join(sorted(flags)),
+                }
+            )
         self._n_events += 1
 
 
@@ -255,8 +288,9 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
         n_lit = 0
         for b in range(blocks):
             if k == 5:
-                baseline = _median5(history[0, r, b], history[1, r, b], history[2, r, b],
-                                    history[3, r, b], history[4, r, b])
+                baseline = _median5(
+                    history[0, r, b], history[1, r, b], history[2, r, b], history[3, r, b], history[4, r, b]
+                )
             else:
                 for i in range(k):
                     column[i] = history[i, r, b]
@@ -317,8 +351,7 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
-def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
-                kind: str) -> tuple[float | None, float]:
+def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: str) -> tuple[float | None, float]:
     """Sub-row edge of a band and its rise (rows from 25 % to 75 % of the local plateau).
 
     The edge is the half-rise point for a pulse, the foot of the ramp for a step.
@@ -338,10 +371,10 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int,
             return row, np.nan
         if row > foot:
             settle = min(int(np.ceil(row + 5 * (row - foot))), segment.stop - window)
-            inside = segment.change[max(settle, int(row) + 1):settle + window]
+            inside = segment.change[max(settle, int(row) + 1) : settle + window]
         else:
             settle = max(int(row + 5 * (row - foot)), segment.start + window)
-            inside = segment.change[settle - window:min(settle, int(row))]
+            inside = segment.change[settle - window : min(settle, int(row))]
         if not np.isfinite(inside).any():
             break
         level = float(np.nanmedian(inside))
@@ -368,7 +401,7 @@ def _rising_crossing(values: np.ndarray, level: float, start: int, stop: int) ->
         i -= 1
     while i < stop and values[i] < level:
         i += 1
-    if i < _EDGE_CONTEXT or i == stop or np.isnan(values[i - _EDGE_CONTEXT:i]).any():
+    if i < _EDGE_CONTEXT or i == stop or np.isnan(values[i - _EDGE_CONTEXT : i]).any():
         return None
     return i - 1 + (level - values[i - 1]) / (values[i] - values[i - 1])
 
@@ -383,7 +416,7 @@ def _falling_crossing(values: np.ndarray, level: float, start: int, stop: int) -
         i += 1
     while i >= start and values[i] < level:
         i -= 1
-    if i > last - _EDGE_CONTEXT or i < start or np.isnan(values[i + 1:i + 1 + _EDGE_CONTEXT]).any():
+    if i > last - _EDGE_CONTEXT or i < start or np.isnan(values[i + 1 : i + 1 + _EDGE_CONTEXT]).any():
         return None
     return i + (values[i] - level) / (values[i] - values[i + 1])
 
@@ -412,10 +445,12 @@ class CameraDetection:
         return replace(self, events=self.alternative, alternative=self.events, flipped=flipped)
 
 
-def detect_video(path: str | Path, flipped: bool | None = False,
-                 settings: DetectorSettings | None = None,
-                 progress: Callable[[str, int], Callable[[int], None] | None] | None = None,
-                 ) -> CameraDetection:
+def detect_video(
+    path: str | Path,
+    flipped: bool | None = False,
+    settings: DetectorSettings | None = None,
+    progress: Callable[[str, int], Callable[[int], None] | None] | None = None,
+) -> CameraDetection:
     """Decode a video once and detect its flash events.
 
     Parameters
@@ -435,8 +470,7 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     update = progress(info.camera, info.n_frames_hint) if progress else None
     directions = [False, True] if flipped is None else [flipped]
     base = settings or DetectorSettings()
-    detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction))
-                 for direction in directions]
+    detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction)) for direction in directions]
     times = []
     for frame, (t_ms, profile) in enumerate(profiles):
         times.append(t_ms)
@@ -448,5 +482,13 @@ def detect_video(path: str | Path, flipped: bool | None = False,
     if len(frame_times) < 2:
         raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
     events = [detector.finish() for detector in detectors]
-    return CameraDetection(info.camera, info.path, info.width, info.height, frame_times, events[0],
-                           directions[0], events[1] if len(events) > 1 else None)
+    return CameraDetection(
+        info.camera,
+        info.path,
+        info.width,
+        info.height,
+        frame_times,
+        events[0],
+        directions[0],
+        events[1] if len(events) > 1 else None,
+    )

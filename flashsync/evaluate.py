@@ -22,7 +22,8 @@ covariance); pass another one to try a new definition of sigma:
 
 from __future__ import annotations
 
-from typing import Any, Callable, Mapping, Protocol
+from collections.abc import Callable, Mapping
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
@@ -60,8 +61,9 @@ def probes(camera: CameraClock, row_step: int = 8) -> tuple[np.ndarray, np.ndarr
     return np.meshgrid(np.arange(camera.n_frames), row, indexing="ij")
 
 
-def probe_errors(model: SyncModel, truth: TrueClock, name: str, frames: np.ndarray, rows: np.ndarray,
-                 origin_ms: float | None = None) -> np.ndarray:
+def probe_errors(
+    model: SyncModel, truth: TrueClock, name: str, frames: np.ndarray, rows: np.ndarray, origin_ms: float | None = None
+) -> np.ndarray:
     """Model minus truth (ms) of camera `name` at (frames, rows), origin removed; shape of
     the broadcast of `frames` and `rows`."""
     origin = clock_origin_ms(model, truth) if origin_ms is None else origin_ms
@@ -77,19 +79,23 @@ def sync_errors(model: SyncModel, truth: TrueClock, row_step: int = 8) -> pd.Dat
     rows = []
     for name, camera in model.cameras.items():
         error = probe_errors(model, truth, name, *probes(camera, row_step), origin)
-        rows.append({"camera": name, "rms_ms": float(np.sqrt(np.mean(error**2))),
-                     "max_ms": float(np.max(np.abs(error)))})
+        rows.append(
+            {"camera": name, "rms_ms": float(np.sqrt(np.mean(error**2))), "max_ms": float(np.max(np.abs(error)))}
+        )
     return pd.DataFrame(rows)
 
 
 def clock_origin_ms(model: SyncModel, truth: TrueClock) -> float:
     """Model minus truth on the reference camera's frame 0, row 0, ms: the origin convention."""
-    return float(model.camera(model.reference).t_global_ms(0, 0.0)
-                 - truth.global_time_ms(model.reference, np.array([0]), np.array([0.0]))[0])
+    return float(
+        model.camera(model.reference).t_global_ms(0, 0.0)
+        - truth.global_time_ms(model.reference, np.array([0]), np.array([0.0]))[0]
+    )
 
 
-def true_location(truth: TrueClock, camera: CameraClock, t_global_ms: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def true_location(
+    truth: TrueClock, camera: CameraClock, t_global_ms: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where `camera` truly images global instants: frame, stored row (rows in the vertical
     blanking lie beyond the image) and whether it was recording then (within one frame
     period after the start of a frame's readout).
@@ -132,8 +138,9 @@ def _z_stats(error: np.ndarray, sigma: np.ndarray) -> tuple[float, float]:
     return float(np.sqrt(np.mean(z**2))), float(np.mean(np.abs(error) <= 2.0 * sigma))
 
 
-def pair_errors(model: SyncModel, truth: TrueClock, name: str, other: str, row_step: int = 8,
-                sigma: Sigma = predicted_std_ms) -> tuple[np.ndarray, np.ndarray]:
+def pair_errors(
+    model: SyncModel, truth: TrueClock, name: str, other: str, row_step: int = 8, sigma: Sigma = predicted_std_ms
+) -> tuple[np.ndarray, np.ndarray]:
     """Errors (ms) of ``t_name - t_other`` at the probes of `name`, with the sigma of the
     difference, ``sqrt(sigma_name**2 + sigma_other**2)``; probes at instants when `other`
     was not recording are left out. Both arrays of shape (n,)."""
@@ -149,8 +156,9 @@ def pair_errors(model: SyncModel, truth: TrueClock, name: str, other: str, row_s
     return (error - error_other)[recording], std[recording]
 
 
-def camera_accuracy(model: SyncModel, truth: TrueRig, row_step: int = 8,
-                    sigma: Sigma = predicted_std_ms) -> pd.DataFrame:
+def camera_accuracy(
+    model: SyncModel, truth: TrueRig, row_step: int = 8, sigma: Sigma = predicted_std_ms
+) -> pd.DataFrame:
     """Per camera of the truth, how far the model is from it.
 
     Columns: ``camera``; ``reference``; ``solved`` (in the model); ``rms_ms``, ``max_ms``
@@ -179,11 +187,17 @@ def camera_accuracy(model: SyncModel, truth: TrueRig, row_step: int = 8,
         z_rms, within = _z_stats(error, std) if name != model.reference else (float("nan"), float("nan"))
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
-        row.update(rms_ms=float(np.sqrt(np.mean(error**2))), max_ms=float(np.max(np.abs(error))),
-                   sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
-                   exposure_error_ms=exposure - true.exposure_ms,
-                   row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
-                   z_rms=z_rms, within_2sigma=within, pair_z_rms=pair_z_rms, pair_within_2sigma=pair_within)
+        row.update(
+            rms_ms=float(np.sqrt(np.mean(error**2))),
+            max_ms=float(np.max(np.abs(error))),
+            sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
+            exposure_error_ms=exposure - true.exposure_ms,
+            row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
+            z_rms=z_rms,
+            within_2sigma=within,
+            pair_z_rms=pair_z_rms,
+            pair_within_2sigma=pair_within,
+        )
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -192,7 +206,10 @@ def stamp_errors(stamped: pd.DataFrame, model: SyncModel, truth: TrueClock) -> n
     """``t_global_ms`` of re-stamped detections (columns camera, frame, y) minus truth, ms;
     rows without a stamp are left out."""
     stamped = stamped[stamped["t_global_ms"].notna()]
-    errors = [group["t_global_ms"].to_numpy() - clock_origin_ms(model, truth)
-              - truth.global_time_ms(name, group["frame"].to_numpy(), group["y"].to_numpy())
-              for name, group in stamped.groupby("camera", sort=False)]
+    errors = [
+        group["t_global_ms"].to_numpy()
+        - clock_origin_ms(model, truth)
+        - truth.global_time_ms(name, group["frame"].to_numpy(), group["y"].to_numpy())
+        for name, group in stamped.groupby("camera", sort=False)
+    ]
     return np.concatenate(errors) if errors else np.empty(0)

@@ -39,8 +39,13 @@ class PairAlignment:
     ambiguous: bool
 
 
-def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-               anchor: tuple[int, int] | None = None, n_candidates: int = 8) -> PairAlignment | None:
+def align_pair(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    tolerance_ms: float,
+    anchor: tuple[int, int] | None = None,
+    n_candidates: int = 8,
+) -> PairAlignment | None:
     """Coarse alignment of two cameras' event times (ms, own clocks).
 
     Parameters
@@ -70,13 +75,15 @@ def align_pair(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
     if not results:
         return None
     best = results[0]
-    rivals = [r for r in results[1:] if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches))
-              and abs(r.beta - best.beta) > tolerance_ms]
+    rivals = [
+        r
+        for r in results[1:]
+        if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches)) and abs(r.beta - best.beta) > tolerance_ms
+    ]
     return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals))
 
 
-def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float,
-                      n_candidates: int) -> np.ndarray:
+def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float, n_candidates: int) -> np.ndarray:
     """The shifts (ms) that line up most event pairs, strongest first."""
     differences = np.sort((times_a[:, None] - times_b[None, :]).ravel())
     span = max(np.ptp(times_a), np.ptp(times_b))
@@ -91,8 +98,12 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     return np.asarray(chosen)
 
 
-def _refine(times_a: np.ndarray, times_b: np.ndarray, shift: float, tolerance_ms: float,
-            ) -> PairAlignment | None:
+def _refine(
+    times_a: np.ndarray,
+    times_b: np.ndarray,
+    shift: float,
+    tolerance_ms: float,
+) -> PairAlignment | None:
     """Alternate one-to-one matching and an affine fit, starting from ``shift``."""
     alpha, beta = 1.0, shift
     span = max(np.ptp(times_a), np.ptp(times_b))
@@ -130,8 +141,10 @@ def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) ->
     return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
 
 
-def group_flashes(n_events: dict[str, int], alignments: dict[tuple[str, str], PairAlignment],
-                  ) -> dict[tuple[str, int], int]:
+def group_flashes(
+    n_events: dict[str, int],
+    alignments: dict[tuple[str, str], PairAlignment],
+) -> dict[tuple[str, int], int]:
     """Merge pairwise matches into flashes: groups holding at most one event per camera.
 
     Pairs are merged strongest first (most matches); a merge that would put two events of one
@@ -173,8 +186,10 @@ def parse_anchors(anchors: list[str], n_events: dict[str, int]) -> dict[str, int
     for text in anchors:
         camera, _, index = text.rpartition(":")
         if camera not in n_events or not index.isdigit():
-            raise FlashsyncError(f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
-                                 f"{', '.join(n_events)} and a 0-based event index")
+            raise FlashsyncError(
+                f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
+                f"{', '.join(n_events)} and a 0-based event index"
+            )
         if int(index) >= n_events[camera]:
             raise FlashsyncError(f"--anchor {text}: {camera} has only {n_events[camera]} sync events")
         result[camera] = int(index)

@@ -102,8 +102,9 @@ class CameraClock:
         t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
         q = self.readout_row(row)
         t_frame, q = np.broadcast_arrays(t_frame, q)
-        gradient = np.concatenate([np.stack([t_frame, np.ones_like(t_frame), q], axis=-1),
-                                   hat_basis(self.drift_knots_ms, t_frame)], axis=-1)
+        gradient = np.concatenate(
+            [np.stack([t_frame, np.ones_like(t_frame), q], axis=-1), hat_basis(self.drift_knots_ms, t_frame)], axis=-1
+        )
         variance = np.einsum("...i,ij,...j->...", gradient, self.covariance, gradient)
         return np.sqrt(np.maximum(variance, 0.0))
 
@@ -165,4 +166,5 @@ class SyncModel:
         except KeyError:
             raise FlashsyncError(
                 f"camera {name!r} is not in the model (it has {', '.join(self.cameras)}); "
-                "sync its video too or fix the camera name") from None
+                "sync its video too or fix the camera name"
+            ) from None

@@ -18,7 +18,8 @@ TIME_CONVENTION = (
     "t_global_ms = alpha * t_frame_ms + beta_ms + warp(t_frame_ms) + q * row_time_ms, the "
     "end-of-exposure instant of stored row r (q = r, or height - 1 - r when flipped) on the "
     "reference camera's clock, ms; warp is piecewise linear through drift_warp_ms at the "
-    "interior drift_knots_ms (zero at the end knots), absent for an affine clock")
+    "interior drift_knots_ms (zero at the end knots), absent for an affine clock"
+)
 
 
 def save_model(model: SyncModel, path: str | Path) -> None:
@@ -38,25 +39,29 @@ def load_model(path: str | Path) -> SyncModel:
     """Read a model written by :func:`save_model`; a clear error for anything else."""
     path = Path(path)
     if not path.is_file():
-        raise FlashsyncError(f"{path}: no such model file; run 'flashsync sync VIDEO...' first "
-                             "or name the model with --model")
+        raise FlashsyncError(
+            f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the model with --model"
+        )
     try:
         document = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise FlashsyncError(f"{path}: not a flashsync model file ({error})") from None
     if not isinstance(document, dict) or document.get("format") != FORMAT:
-        raise FlashsyncError(f"{path}: not a flashsync model file (no \"format\": \"{FORMAT}\")")
+        raise FlashsyncError(f'{path}: not a flashsync model file (no "format": "{FORMAT}")')
     if document.get("version") != VERSION:
-        raise FlashsyncError(f"{path}: model format version {document.get('version')} is not "
-                             f"supported (this flashsync reads version {VERSION}); sync again")
+        raise FlashsyncError(
+            f"{path}: model format version {document.get('version')} is not "
+            f"supported (this flashsync reads version {VERSION}); sync again"
+        )
     try:
         cameras = [_camera_from_dict(entry) for entry in document["cameras"]]
-        return SyncModel(reference=document["reference"],
-                         cameras={camera.name: camera for camera in cameras},
-                         events=pd.DataFrame.from_records(document["events"]))
+        return SyncModel(
+            reference=document["reference"],
+            cameras={camera.name: camera for camera in cameras},
+            events=pd.DataFrame.from_records(document["events"]),
+        )
     except (KeyError, TypeError, ValueError) as error:
-        raise FlashsyncError(f"{path}: damaged model file ({type(error).__name__}: {error}); "
-                             "sync again") from None
+        raise FlashsyncError(f"{path}: damaged model file ({type(error).__name__}: {error}); sync again") from None
 
 
 def _camera_to_dict(camera: CameraClock) -> dict:
@@ -69,8 +74,7 @@ def _camera_to_dict(camera: CameraClock) -> dict:
         "alpha": camera.alpha,
         "beta_ms": camera.beta_ms,
         "row_time_ms": camera.row_time_ms,
-        "std": dict(zip(["alpha", "beta_ms", "row_time_ms"],
-                        np.sqrt(np.diag(camera.covariance))[:3].tolist())),
+        "std": dict(zip(["alpha", "beta_ms", "row_time_ms"], np.sqrt(np.diag(camera.covariance))[:3].tolist())),
         "drift_knots_ms": camera.drift_knots_ms.tolist(),
         "drift_warp_ms": camera.drift_warp_ms.tolist(),
         "covariance": camera.covariance.tolist(),

@@ -14,12 +14,12 @@ direction of cameras where it is not given, and the joint robust solve.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from itertools import combinations
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -40,10 +40,14 @@ NOMINAL_ROW_TIME_STD = 0.08
 MIN_SHARED_FLASHES = 3
 
 
-def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
-                  estimate_readout: bool = False, settings: DetectorSettings | None = None,
-                  progress: Callable[[str, int], Callable[[int], None]] | None = None,
-                  timestamps: dict[str, Path] | None = None) -> list[CameraDetection]:
+def detect_videos(
+    paths: Sequence[str | Path],
+    flipped: Sequence[str] = (),
+    estimate_readout: bool = False,
+    settings: DetectorSettings | None = None,
+    progress: Callable[[str, int], Callable[[int], None]] | None = None,
+    timestamps: dict[str, Path] | None = None,
+) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
     Parameters
@@ -63,8 +67,9 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
     stems = [p.stem for p in paths]
     duplicates = sorted({s for s in stems if stems.count(s) > 1})
     if duplicates:
-        raise FlashsyncError(f"camera names come from file stems and {', '.join(duplicates)} is "
-                             "given twice; rename one of the videos")
+        raise FlashsyncError(
+            f"camera names come from file stems and {', '.join(duplicates)} is given twice; rename one of the videos"
+        )
     timestamps = timestamps or {}
     for option, names in (("--flipped", flipped), ("--timestamps", timestamps)):
         unknown = sorted(set(names) - set(stems))
@@ -80,7 +85,8 @@ def detect_videos(paths: Sequence[str | Path], flipped: Sequence[str] = (),
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
             raise FlashsyncError(
                 f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
-                f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame")
+                f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
+            )
         return with_frame_times(detection, stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
@@ -112,9 +118,12 @@ class SyncReport:
     sigma_ms: float = float("nan")
 
 
-def synchronize(detections: Sequence[CameraDetection], reference: str | None = None,
-                row_times: dict[str, float] | None = None, anchors: Sequence[str] = (),
-                ) -> tuple[SyncModel, SyncReport]:
+def synchronize(
+    detections: Sequence[CameraDetection],
+    reference: str | None = None,
+    row_times: dict[str, float] | None = None,
+    anchors: Sequence[str] = (),
+) -> tuple[SyncModel, SyncReport]:
     """Match events across cameras and solve every camera's clock.
 
     Parameters
@@ -139,8 +148,9 @@ def synchronize(detections: Sequence[CameraDetection], reference: str | None = N
     return best.model(reference), report
 
 
-def _best_readout(cameras: dict[str, CameraDetection], undecided: list[str],
-                  attempt: Callable[[dict[str, CameraDetection]], _Attempt]) -> _Attempt:
+def _best_readout(
+    cameras: dict[str, CameraDetection], undecided: list[str], attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> _Attempt:
     """The readout directions of the ``undecided`` cameras that explain the events best
     (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
     best of all single flips, until none helps. Raises the first failure if nothing solves."""
@@ -176,8 +186,9 @@ def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[
         except FlashsyncError as error:
             results.append((a.camera, b.camera, str(error)))
             continue
-        results.append((a.camera, b.camera, model if b.camera in model.cameras
-                        else f"{b.camera} could not be tied to {a.camera}"))
+        results.append(
+            (a.camera, b.camera, model if b.camera in model.cameras else f"{b.camera} could not be tied to {a.camera}")
+        )
     return results
 
 
@@ -204,70 +215,102 @@ class _Attempt:
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
         sigma = max(self.solution.sigma_ms, 1e-4)
         period = max(_frame_period(d) for d in self.cameras.values())
-        return (n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5)
-                - (n_events - n_inliers) * np.log(period))
+        return n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_events - n_inliers) * np.log(period)
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}
         for index, name in enumerate(self.connected):
             d, s = self.cameras[name], self.solution.cameras[index]
-            clocks[name] = CameraClock(name, d.frame_times_ms, d.height, d.width, s.alpha, s.beta_ms,
-                                       s.row_time_ms, d.flipped, s.covariance,
-                                       _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
-                                       str(d.video), s.knots_ms, s.warp_ms)
+            clocks[name] = CameraClock(
+                name,
+                d.frame_times_ms,
+                d.height,
+                d.width,
+                s.alpha,
+                s.beta_ms,
+                s.row_time_ms,
+                d.flipped,
+                s.covariance,
+                _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                str(d.video),
+                s.knots_ms,
+                s.warp_ms,
+            )
         n_events = len(self.observations)
         events = self.observations.assign(
             t_global_ms=self.solution.flash_ms[self.observations["flash"].to_numpy()],
             residual_ms=self.solution.residual_ms[:n_events],
-            inlier=self.solution.inlier[:n_events])
+            inlier=self.solution.inlier[:n_events],
+        )
         return SyncModel(reference, clocks, events.drop(columns=["camera_index", "q"]))
 
 
-def _attempt(cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None,
-             anchors: Sequence[str]) -> _Attempt:
+def _attempt(
+    cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None, anchors: Sequence[str]
+) -> _Attempt:
     """Match and solve with the cameras' current readout directions."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
-    warnings = [f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at "
-                "least 2); left out" for name in cameras if name not in usable]
+    warnings = [
+        f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at least 2); left out"
+        for name in cameras
+        if name not in usable
+    ]
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
-        raise FlashsyncError(f"need two or more cameras with at least two flash events each; found "
-                             f"{counts}; check that the videos show flashes (or lights switching)")
-    alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable},
-                              anchors)
+        raise FlashsyncError(
+            f"need two or more cameras with at least two flash events each; found "
+            f"{counts}; check that the videos show flashes (or lights switching)"
+        )
+    alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable}, anchors)
     flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
     connected = _connected(reference, usable, alignments)
-    warnings += [f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
-                 f"with the other cameras; cannot be tied to {reference}; left out"
-                 for name in usable if name not in connected]
+    warnings += [
+        f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
+        f"with the other cameras; cannot be tied to {reference}; left out"
+        for name in usable
+        if name not in connected
+    ]
     if reference not in connected or len(connected) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
-                             "check that the videos overlap in time and saw the same flashes")
+        raise FlashsyncError(
+            f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
+            "check that the videos overlap in time and saw the same flashes"
+        )
     observations = _observations(connected, sync_events, flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
     solution = solve_with_drift_model(
-        Events(observations["camera_index"].to_numpy(), observations["flash"].to_numpy(),
-               observations["t_frame_ms"].to_numpy(), observations["q"].to_numpy()),
-        len(connected), connected.index(reference), durations=durations, priors=Priors(priors))
+        Events(
+            observations["camera_index"].to_numpy(),
+            observations["flash"].to_numpy(),
+            observations["t_frame_ms"].to_numpy(),
+            observations["q"].to_numpy(),
+        ),
+        len(connected),
+        connected.index(reference),
+        durations=durations,
+        priors=Priors(priors),
+    )
     return _Attempt(cameras, connected, alignments, warnings, observations, durations, solution)
 
 
 def with_frame_times(detection: CameraDetection, times_ms: np.ndarray) -> CameraDetection:
     """The detection with other frame times (ms, one per decoded frame), its events' frame
     times too."""
+
     def retimed(events: pd.DataFrame | None) -> pd.DataFrame | None:
         if events is None:
             return None
         return events.assign(t_frame_ms=times_ms[events["frame"].to_numpy(dtype=np.int64)])
 
-    return replace(detection, frame_times_ms=times_ms, events=retimed(detection.events),
-                   alternative=retimed(detection.alternative))
+    return replace(
+        detection, frame_times_ms=times_ms, events=retimed(detection.events), alternative=retimed(detection.alternative)
+    )
 
 
-def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, pd.DataFrame],
-                 anchors: Sequence[str]) -> dict[tuple[str, str], PairAlignment]:
+def _align_pairs(
+    cameras: dict[str, CameraDetection], sync_events: dict[str, pd.DataFrame], anchors: Sequence[str]
+) -> dict[tuple[str, str], PairAlignment]:
     """Coarse alignment of every pair of cameras; pairs sharing too few or ambiguous flashes
     are left out."""
     anchor_events = parse_anchors(list(anchors), {n: len(e) for n, e in sync_events.items()})
@@ -276,9 +319,12 @@ def _align_pairs(cameras: dict[str, CameraDetection], sync_events: dict[str, pd.
     names = list(cameras)
     alignments = {}
     for i, name_a in enumerate(names):
-        for name_b in names[i + 1:]:
-            anchor = ((anchor_events[name_a], anchor_events[name_b])
-                      if name_a in anchor_events and name_b in anchor_events else None)
+        for name_b in names[i + 1 :]:
+            anchor = (
+                (anchor_events[name_a], anchor_events[name_b])
+                if name_a in anchor_events and name_b in anchor_events
+                else None
+            )
             alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
             if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
                 alignments[(name_a, name_b)] = alignment
@@ -361,17 +407,26 @@ def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str
     return [name for name in names if name in reached]
 
 
-def _observations(names: list[str], sync_events: dict[str, pd.DataFrame],
-                  flashes: dict[tuple[str, int], int]) -> pd.DataFrame:
+def _observations(
+    names: list[str], sync_events: dict[str, pd.DataFrame], flashes: dict[tuple[str, int], int]
+) -> pd.DataFrame:
     """One row per (camera, event) that belongs to a flash seen by >= 2 connected cameras."""
     rows = []
     for index, name in enumerate(names):
         for i, event in sync_events[name].iterrows():
             if (name, i) in flashes:
-                rows.append({"flash": flashes[(name, i)], "camera": name, "camera_index": index,
-                             "event": int(event["event"]), "frame": int(event["frame"]),
-                             "row": float(event["row"]), "q": float(event["q"]),
-                             "t_frame_ms": float(event["t_frame_ms"])})
+                rows.append(
+                    {
+                        "flash": flashes[(name, i)],
+                        "camera": name,
+                        "camera_index": index,
+                        "event": int(event["event"]),
+                        "frame": int(event["frame"]),
+                        "row": float(event["row"]),
+                        "q": float(event["q"]),
+                        "t_frame_ms": float(event["t_frame_ms"]),
+                    }
+                )
     table = pd.DataFrame(rows)
     counts = table.groupby("flash")["camera"].transform("size")
     table = table[counts >= 2].copy()

@@ -9,9 +9,9 @@ length.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
 
 import av
 import cv2
@@ -57,12 +57,10 @@ def luma_plane(frame: av.VideoFrame) -> np.ndarray:
 
 
 #: 8-bit pixel formats whose first plane is the luma; others are converted to gray.
-_PLANAR_LUMA = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "nv12",
-                "nv21", "gray"}
+_PLANAR_LUMA = {"yuv420p", "yuvj420p", "yuv422p", "yuvj422p", "yuv444p", "yuvj444p", "nv12", "nv21", "gray"}
 
 
-def row_profile(luma: np.ndarray, black: float = 0.0, white: float = 255.0,
-                blocks: int = DEFAULT_BLOCKS) -> np.ndarray:
+def row_profile(luma: np.ndarray, black: float = 0.0, white: float = 255.0, blocks: int = DEFAULT_BLOCKS) -> np.ndarray:
     """Mean luma of each row in ``blocks`` equal column blocks, as a fraction of the way
     from ``black`` to ``white`` (DN); the ``width % blocks`` rightmost columns are left out.
 
@@ -88,7 +86,7 @@ def row_profile(luma: np.ndarray, black: float = 0.0, white: float = 255.0,
     height, width = luma.shape
     blocks = min(blocks, width)
     block = width // blocks
-    pixels = np.ascontiguousarray(luma[:, :block * blocks])      # a view for a plain frame
+    pixels = np.ascontiguousarray(luma[:, : block * blocks])  # a view for a plain frame
     sums = cv2.reduce(pixels.reshape(height * blocks, block), 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S)
     profile = sums.reshape(height, blocks).astype(np.float32)
     profile *= 1.0 / (block * (white - black))
@@ -129,9 +127,9 @@ def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tu
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
-                    raise FlashsyncError(f"{path}: a frame has no timestamp; remux the file "
-                                         "(ffmpeg -i IN -c copy OUT.mkv)")
-                yield float(frame.pts * frame.time_base) * 1000.0, row_profile(luma_plane(frame),
-                                                                               *luma_range(frame))
+                    raise FlashsyncError(
+                        f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)"
+                    )
+                yield float(frame.pts * frame.time_base) * 1000.0, row_profile(luma_plane(frame), *luma_range(frame))
         except av.FFmpegError as error:
             raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None

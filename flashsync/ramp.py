@@ -52,16 +52,20 @@ def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, ri
     float: the fitted edge, rows; ``row`` itself where fewer than six rows are usable, the
     fit does not converge or it would move the edge by more than two rows.
     """
-    k = max(rise / np.log(3.0), 0.3)            # 25 % -> 75 % of an exponential ramp: k ln 3
-    first, last = int(np.floor(row - 3 - 2 * k)), int(np.ceil(row + 2 + 6 * k))   # flat side, tail
+    k = max(rise / np.log(3.0), 0.3)  # 25 % -> 75 % of an exponential ramp: k ln 3
+    first, last = int(np.floor(row - 3 - 2 * k)), int(np.ceil(row + 2 + 6 * k))  # flat side, tail
     x = np.arange(max(first, 0), min(last, len(values) - 1) + 1)
     y = values[x]
     keep = np.isfinite(y) & (x != _censored_foot(values, row, rising))
     if keep.sum() < 6:
         return row
-    fitted, converged = _fit_ramp(x[keep].astype(np.float64), y[keep].astype(np.float64),
-                                  np.array([row - k * np.log(2.0), k, START_BLUR, level]), 0.05 * level,
-                                  rising)
+    fitted, converged = _fit_ramp(
+        x[keep].astype(np.float64),
+        y[keep].astype(np.float64),
+        np.array([row - k * np.log(2.0), k, START_BLUR, level]),
+        0.05 * level,
+        rising,
+    )
     refined = fitted[0] + fitted[1] * np.log(2.0)
     return float(refined) if converged and abs(refined - row) <= 2.0 else row
 
@@ -72,7 +76,7 @@ def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
     dead zone and the detector's 1.5 DN step floor it reads exactly 0, so it only says
     "less than that", and the fit leaves it out rather than pull the ramp late."""
     step = -1 if rising else 1
-    first = int(np.floor(row)) + (1 if rising else 0)       # a row over the half level
+    first = int(np.floor(row)) + (1 if rising else 0)  # a row over the half level
     while 0 <= first + step < len(values) and values[first + step] != 0 and np.isfinite(values[first + step]):
         first += step
     foot = first + step
@@ -101,7 +105,7 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
             shape = _shape(x[i], p, rising)
             residual[i] = p[3] * shape - y[i]
             jacobian[i, 3] = shape
-        for j in range(3):                       # forward differences; the plateau is linear
+        for j in range(3):  # forward differences; the plateau is linear
             step = 1e-6 * max(1.0, abs(p[j]))
             moved = p.copy()
             moved[j] += step
@@ -110,7 +114,7 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
         weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
         normal = jacobian.T @ (jacobian * weight[:, None])
         gradient = jacobian.T @ (weight * residual)
-        normal[2, 2] += (f_scale / BLUR_PRIOR_STD) ** 2          # the prior's residual and slope
+        normal[2, 2] += (f_scale / BLUR_PRIOR_STD) ** 2  # the prior's residual and slope
         gradient[2] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[2]
         for _ in range(30):
             trial = _clamp(p - _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient))
@@ -119,7 +123,7 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
                 break
             damping *= 10.0
         else:
-            return p, True                       # no step lowers the cost: at the minimum
+            return p, True  # no step lowers the cost: at the minimum
         moved_most = np.max(np.abs(trial - p))
         p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
         if moved_most < 1e-7 * (1.0 + np.max(np.abs(p))):
@@ -194,11 +198,11 @@ def _solve_spd(a, b):  # pragma: no cover - compiled
             else:
                 return np.zeros(n)
     out = b.copy()
-    for i in range(n):                           # forward: low z = b
+    for i in range(n):  # forward: low z = b
         for m in range(i):
             out[i] -= low[i, m] * out[m]
         out[i] /= low[i, i]
-    for i in range(n - 1, -1, -1):               # back: low^T x = z
+    for i in range(n - 1, -1, -1):  # back: low^T x = z
         for m in range(i + 1, n):
             out[i] -= low[m, i] * out[m]
         out[i] /= low[i, i]

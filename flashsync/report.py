@@ -3,7 +3,7 @@ rejected events, as DataFrames, aligned text and JSON-able dicts."""
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -47,9 +47,13 @@ def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
         }
         if report is not None and name in report.frame_clocks:
             clock = report.frame_clocks[name]
-            row |= {"frame_period_ms": clock.period_ms, "stamps_steady": clock.steady,
-                    "stamp_quantum_ms": clock.quantum_ms, "stamp_noise_ms": clock.stamp_noise_ms,
-                    "dropped_frames": clock.dropped}
+            row |= {
+                "frame_period_ms": clock.period_ms,
+                "stamps_steady": clock.steady,
+                "stamp_quantum_ms": clock.quantum_ms,
+                "stamp_noise_ms": clock.stamp_noise_ms,
+                "dropped_frames": clock.dropped,
+            }
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -58,16 +62,22 @@ def sync_table(model: SyncModel, report=None) -> str:
     """The per-camera table as aligned text; ``*`` marks the reference, ``^`` a camera that
     reads bottom-up."""
     table = camera_table(model, report)
-    lines = [f"{'camera':<12} {'drift ppm':>10} {'rows/s':>8} {'shift ms':>14} {'± ms':>7} "
-             f"{'T_row ms':>10} {'± %':>5} {'sync ± ms':>9} {'exp ms':>6} {'events':>6} {'rej':>3} "
-             f"{'res std ms':>10}" + (f" {'stamps':>22}" if report is not None else "")]
+    lines = [
+        f"{'camera':<12} {'drift ppm':>10} {'rows/s':>8} {'shift ms':>14} {'± ms':>7} "
+        f"{'T_row ms':>10} {'± %':>5} {'sync ± ms':>9} {'exp ms':>6} {'events':>6} {'rej':>3} "
+        f"{'res std ms':>10}" + (f" {'stamps':>22}" if report is not None else "")
+    ]
     for row in table.itertuples():
         name = row.camera + ("*" if row.reference else "") + ("^" if row.flipped else "")
-        exposure = f"{row.exposure_ms:>6.2f}" if row.exposure_ms is not None and np.isfinite(row.exposure_ms) else f"{'-':>6}"
-        line = (f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>8.4f} {row.shift_ms:>14.3f} "
-                f"{row.shift_std_ms:>7.4f} {row.row_time_ms:>10.6f} "
-                f"{100 * row.row_time_std_ms / row.row_time_ms:>5.2f} {row.sync_std_ms:>9.4f} {exposure} "
-                f"{row.events:>6d} {row.rejected:>3d} {row.residual_std_ms:>10.4f}")
+        exposure = (
+            f"{row.exposure_ms:>6.2f}" if row.exposure_ms is not None and np.isfinite(row.exposure_ms) else f"{'-':>6}"
+        )
+        line = (
+            f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>8.4f} {row.shift_ms:>14.3f} "
+            f"{row.shift_std_ms:>7.4f} {row.row_time_ms:>10.6f} "
+            f"{100 * row.row_time_std_ms / row.row_time_ms:>5.2f} {row.sync_std_ms:>9.4f} {exposure} "
+            f"{row.events:>6d} {row.rejected:>3d} {row.residual_std_ms:>10.4f}"
+        )
         if report is not None:
             line += f" {_stamps(row):>22}"
         lines.append(line)
@@ -99,28 +109,36 @@ def pairwise_table(pairs: Sequence[tuple[str, str, SyncModel | str]]) -> pd.Data
             continue
         table = camera_table(result).set_index("camera")
         inliers = result.events["inlier"].astype(bool)
-        rows.append(row | {
-            "drift_ppm": table.loc[b, "drift_ppm"],
-            "shift_ms": table.loc[b, "shift_ms"],
-            "row_time_a_ms": table.loc[a, "row_time_ms"],
-            "row_time_b_ms": table.loc[b, "row_time_ms"],
-            "events": int(table.loc[b, "events"]),
-            "residual_std_ms": float(np.std(result.events.loc[inliers, "residual_ms"])),
-            "error": ""})
+        rows.append(
+            row
+            | {
+                "drift_ppm": table.loc[b, "drift_ppm"],
+                "shift_ms": table.loc[b, "shift_ms"],
+                "row_time_a_ms": table.loc[a, "row_time_ms"],
+                "row_time_b_ms": table.loc[b, "row_time_ms"],
+                "events": int(table.loc[b, "events"]),
+                "residual_std_ms": float(np.std(result.events.loc[inliers, "residual_ms"])),
+                "error": "",
+            }
+        )
     return pd.DataFrame(rows)
 
 
 def pairwise_text(table: pd.DataFrame) -> str:
     """The pairwise table as aligned text."""
-    lines = [f"{'pair':<22} {'drift ppm':>10} {'shift ms':>14} {'T_row a ms':>11} {'T_row b ms':>11} "
-             f"{'events':>6} {'res std ms':>10}"]
+    lines = [
+        f"{'pair':<22} {'drift ppm':>10} {'shift ms':>14} {'T_row a ms':>11} {'T_row b ms':>11} "
+        f"{'events':>6} {'res std ms':>10}"
+    ]
     for row in table.itertuples():
         pair = f"{row.camera_a} -> {row.camera_b}"
         if row.error:
             lines.append(f"{pair:<22} {row.error}")
             continue
-        lines.append(f"{pair:<22} {row.drift_ppm:>10.3f} {row.shift_ms:>14.3f} {row.row_time_a_ms:>11.6f} "
-                     f"{row.row_time_b_ms:>11.6f} {row.events:>6d} {row.residual_std_ms:>10.4f}")
+        lines.append(
+            f"{pair:<22} {row.drift_ppm:>10.3f} {row.shift_ms:>14.3f} {row.row_time_a_ms:>11.6f} "
+            f"{row.row_time_b_ms:>11.6f} {row.events:>6d} {row.residual_std_ms:>10.4f}"
+        )
     return "\n".join(lines)
 
 
@@ -132,8 +150,11 @@ def sync_summary(model: SyncModel, report=None, pairwise: pd.DataFrame | None = 
         "rejected_events": _records(rejected_events(model)),
     }
     if report is not None:
-        summary |= {"warnings": list(report.warnings), "flipped_found": list(report.flipped_found),
-                    "residual_sigma_ms": report.sigma_ms}
+        summary |= {
+            "warnings": list(report.warnings),
+            "flipped_found": list(report.flipped_found),
+            "residual_sigma_ms": report.sigma_ms,
+        }
     if pairwise is not None:
         summary["pairwise"] = _records(pairwise)
     return summary
@@ -142,5 +163,7 @@ def sync_summary(model: SyncModel, report=None, pairwise: pd.DataFrame | None = 
 def _records(table: pd.DataFrame) -> list[dict]:
     """Rows as dicts of plain Python values (NaN as None)."""
     clean = table.astype(object).where(table.notna(), None)
-    return [{key: (value.item() if isinstance(value, np.generic) else value) for key, value in row.items()}
-            for row in clean.to_dict(orient="records")]
+    return [
+        {key: (value.item() if isinstance(value, np.generic) else value) for key, value in row.items()}
+        for row in clean.to_dict(orient="records")
+    ]

@@ -100,11 +100,18 @@ class Solution:
     n_unknowns: int
 
 
-def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
-                 durations: Durations | None = None, priors: Priors | None = None,
-                 drift_knots: dict[int, np.ndarray] | None = None,
-                 event_sigma_ms: float = 0.05, reject_sigma: float = 5.0,
-                 cauchy_k: float = 2.385, iterations: int = 10) -> Solution:
+def solve_clocks(
+    events: Events,
+    n_cameras: int,
+    reference: int = 0,
+    durations: Durations | None = None,
+    priors: Priors | None = None,
+    drift_knots: dict[int, np.ndarray] | None = None,
+    event_sigma_ms: float = 0.05,
+    reject_sigma: float = 5.0,
+    cauchy_k: float = 2.385,
+    iterations: int = 10,
+) -> Solution:
     """Solve all cameras' clocks jointly and robustly.
 
     Parameters
@@ -126,13 +133,18 @@ def solve_clocks(events: Events, n_cameras: int, reference: int = 0,
         When the equations cannot determine every unknown.
     """
     with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
-        return _solve(_System(events, n_cameras, reference, durations, priors or Priors({}, None),
-                              drift_knots or {}, event_sigma_ms),
-                      n_cameras, reject_sigma, cauchy_k, iterations)
+        return _solve(
+            _System(
+                events, n_cameras, reference, durations, priors or Priors({}, None), drift_knots or {}, event_sigma_ms
+            ),
+            n_cameras,
+            reject_sigma,
+            cauchy_k,
+            iterations,
+        )
 
 
-def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float,
-           iterations: int) -> Solution:
+def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float, iterations: int) -> Solution:
     """The robust iterations of :func:`solve_clocks` on a built system."""
     weights = np.ones(system.n_equations)
     for _ in range(iterations):
@@ -147,11 +159,16 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
     covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
-    seen = np.bincount(system.flash_index[inlier[: len(system.flash_index)]],
-                       minlength=len(system.flash_ids)) > 0
+    seen = np.bincount(system.flash_index[inlier[: len(system.flash_index)]], minlength=len(system.flash_ids)) > 0
     flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
-    return Solution([system.camera_solution(x, covariance, c) for c in range(n_cameras)],
-                    flash_ms, residual, inlier, sigma, system.n_unknowns)
+    return Solution(
+        [system.camera_solution(x, covariance, c) for c in range(n_cameras)],
+        flash_ms,
+        residual,
+        inlier,
+        sigma,
+        system.n_unknowns,
+    )
 
 
 #: Segments per camera tried for a clock whose rate changes (1 = affine).
@@ -162,8 +179,7 @@ MIN_EVENTS_PER_SEGMENT = 4
 MIN_BIC_GAIN = 10.0
 
 
-def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0,
-                           **options) -> Solution:
+def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0, **options) -> Solution:
     """:func:`solve_clocks` with the drift model chosen by the data.
 
     Each camera's clock is tried affine, then with its rate changing piecewise-linearly
@@ -215,15 +231,24 @@ class _System:
     events, durations, then priors.
     """
 
-    def __init__(self, events: Events, n_cameras: int, reference: int, durations: Durations | None,
-                 priors: Priors, drift_knots: dict[int, np.ndarray], event_sigma_ms: float):
+    def __init__(
+        self,
+        events: Events,
+        n_cameras: int,
+        reference: int,
+        durations: Durations | None,
+        priors: Priors,
+        drift_knots: dict[int, np.ndarray],
+        event_sigma_ms: float,
+    ):
         camera = np.asarray(events.camera, dtype=np.int64)
         t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
         q = np.asarray(events.q, dtype=np.float64)
         self.flash_ids, flash = np.unique(np.asarray(events.flash, dtype=np.int64), return_inverse=True)
         self.flash_index = flash
-        self.mid_ms = np.array([np.median(t_frame[camera == c]) if np.any(camera == c) else 0.0
-                                for c in range(n_cameras)])
+        self.mid_ms = np.array(
+            [np.median(t_frame[camera == c]) if np.any(camera == c) else 0.0 for c in range(n_cameras)]
+        )
         self.param_columns = np.full((n_cameras, 3), -1)
         n_columns = 0
         for c in range(n_cameras):
@@ -259,8 +284,9 @@ class _System:
 
         rows = n_events + np.arange(len(durations.camera))
         triplets.add(rows, self.param_columns[durations.camera, 2], durations.dq)
-        triplets.add(rows, np.array([duration_column[c] for c in durations.camera], dtype=np.int64),
-                     -np.ones(len(rows)))
+        triplets.add(
+            rows, np.array([duration_column[c] for c in durations.camera], dtype=np.int64), -np.ones(len(rows))
+        )
         rhs.append(-durations.dt_frame_ms)
         self.n_equations = n_events + len(rows)
 
@@ -278,12 +304,14 @@ class _System:
         matrix = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
-            raise FlashsyncError("the matched events leave a camera parameter undetermined; "
-                                 "each camera needs events on flashes shared with other cameras")
+            raise FlashsyncError(
+                "the matched events leave a camera parameter undetermined; "
+                "each camera needs events on flashes shared with other cameras"
+            )
         self.column_scale = 1.0 / norms
         self.matrix = (matrix @ sparse.diags(self.column_scale)).tocsc()
         self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
-        self.flashes = self.matrix[:, self.n_camera_columns:].tocsr()
+        self.flashes = self.matrix[:, self.n_camera_columns :].tocsr()
 
     def _reduced(self, weights: np.ndarray):
         """The normal equations with the flash times eliminated.
@@ -312,7 +340,8 @@ class _System:
             raise FlashsyncError(
                 "the matched events cannot separate every camera's drift, shift and time per row "
                 "(too few flashes, or all at the same rows); record more flashes seen by several "
-                "cameras, or give --row-time")
+                "cameras, or give --row-time"
+            )
         return factor, coupling, d, right_cams, right_flashes
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
@@ -322,7 +351,8 @@ class _System:
         if n_used < self.n_unknowns:
             raise FlashsyncError(
                 f"the cameras share too few events: {n_used} equations for {self.n_unknowns} "
-                "unknowns; record more flashes seen by several cameras, or give --row-time")
+                "unknowns; record more flashes seen by several cameras, or give --row-time"
+            )
         factor, coupling, d, right_cams, right_flashes = self._reduced(weights)
         x_cams = linalg.cho_solve(factor, right_cams - coupling @ (right_flashes / d))
         x_flashes = (right_flashes - coupling.T @ x_cams) / d
@@ -352,8 +382,14 @@ class _System:
         jacobian = np.eye(len(columns))
         jacobian[1, 0] = -self.mid_ms[c]
         drift, shift, row_time = values[:3]
-        return CameraSolution(1.0 + drift, shift - drift * self.mid_ms[c], row_time,
-                              jacobian @ local @ jacobian.T, self.knots.get(c, np.zeros(0)), values[3:])
+        return CameraSolution(
+            1.0 + drift,
+            shift - drift * self.mid_ms[c],
+            row_time,
+            jacobian @ local @ jacobian.T,
+            self.knots.get(c, np.zeros(0)),
+            values[3:],
+        )
 
 
 def _informative(durations: Durations | None, n_cameras: int) -> Durations:
@@ -384,5 +420,6 @@ class _Triplets:
         self.values.append(values[keep])
 
     def matrix(self, shape: tuple[int, int]) -> sparse.csr_matrix:
-        return sparse.csr_matrix((np.concatenate(self.values),
-                                  (np.concatenate(self.rows), np.concatenate(self.columns))), shape=shape)
+        return sparse.csr_matrix(
+            (np.concatenate(self.values), (np.concatenate(self.rows), np.concatenate(self.columns))), shape=shape
+        )

@@ -35,14 +35,16 @@ def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
     if not np.all(np.isfinite(times)):
         raise FlashsyncError(
             f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; "
-            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
+        )
     steps = np.diff(times)
     if np.any(steps <= 0):
         bad = int(np.argmax(steps <= 0)) + 1
         raise FlashsyncError(
             f"{source}: frame timestamps are not increasing at frame {bad} "
             f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); remux the file or give the "
-            "timestamps as CSV")
+            "timestamps as CSV"
+        )
     return times
 
 
@@ -65,7 +67,8 @@ def video_timestamps(path: str | Path) -> np.ndarray:
     if any(p is None for p in pts):
         raise FlashsyncError(
             f"{path}: {sum(p is None for p in pts)} frames have no timestamp; remux the file "
-            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV")
+            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
+        )
     times = np.sort(np.asarray(pts, dtype=np.float64)) * float(time_base) * 1000.0
     return check_timestamps(times, str(path))
 
@@ -99,8 +102,7 @@ def csv_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
     candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
     found = [name for name in candidates if name in table.columns]
     if not found:
-        raise FlashsyncError(
-            f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
+        raise FlashsyncError(f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
     values = pd.to_numeric(table[found[0]], errors="coerce").to_numpy()
     if found[0] == "rtp":
         if np.any(~np.isfinite(values)):

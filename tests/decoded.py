@@ -15,8 +15,11 @@ def decode(path: str | Path) -> tuple[np.ndarray, np.ndarray, Fraction]:
     with av.open(str(path)) as container:
         stream = container.streams.video[0]
         frames = list(container.decode(stream))
-        return (np.stack([f.to_ndarray(format="gray").astype(float) for f in frames]),
-                np.array([f.pts * 1000.0 * float(stream.time_base) for f in frames]), stream.time_base)
+        return (
+            np.stack([f.to_ndarray(format="gray").astype(float) for f in frames]),
+            np.array([f.pts * 1000.0 * float(stream.time_base) for f in frames]),
+            stream.time_base,
+        )
 
 
 def row_profile(lit: np.ndarray, dark: np.ndarray, floor: float = 0.0, min_dn: float = 20.0) -> np.ndarray:

@@ -26,19 +26,63 @@ def paper_like():
     common = dict(fps=25.0, noise_std=1.5, drop_fraction=0.003, crf=23)
     cameras = (
         CameraSpec("p1", 384, 216, r0=10, r1=8, exposure_ms=10.0, **common),
-        CameraSpec("p2", 384, 216, r0=12, r1=6, exposure_ms=12.0, start_ms=24306.0, offset_ms=-23456.0,
-                   drift_ppm=-10.0, container="mkv", position_m=(-7.0, 15.0, 14.0),
-                   look_at_m=(18.0, 15.0), hfov_deg=75.0, **common),
-        CameraSpec("p3", 320, 180, r0=8, r1=6, exposure_ms=8.0, start_ms=39800.5, offset_ms=-41000.5,
-                   drift_ppm=7.0, quantize_ms=1.0, position_m=(66.0, 33.0, 16.0),
-                   look_at_m=(44.0, 16.0), hfov_deg=75.0, **common),
-        CameraSpec("p4", 320, 180, r0=6, r1=8, exposure_ms=16.0, start_ms=12400.0, offset_ms=-12000.0,
-                   drift_ppm=4.0, position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0),
-                   hfov_deg=70.0, **common),
+        CameraSpec(
+            "p2",
+            384,
+            216,
+            r0=12,
+            r1=6,
+            exposure_ms=12.0,
+            start_ms=24306.0,
+            offset_ms=-23456.0,
+            drift_ppm=-10.0,
+            container="mkv",
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "p3",
+            320,
+            180,
+            r0=8,
+            r1=6,
+            exposure_ms=8.0,
+            start_ms=39800.5,
+            offset_ms=-41000.5,
+            drift_ppm=7.0,
+            quantize_ms=1.0,
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "p4",
+            320,
+            180,
+            r0=6,
+            r1=8,
+            exposure_ms=16.0,
+            start_ms=12400.0,
+            offset_ms=-12000.0,
+            drift_ppm=4.0,
+            position_m=(30.0, 42.0, 17.0),
+            look_at_m=(30.0, 18.0),
+            hfov_deg=70.0,
+            **common,
+        ),
     )
-    return Scenario("paper-like", cameras, duration_ms=20_000.0,
-                    flashes=irregular_flashes(rng, 7, 800.0, 19_200.0, 1500.0), n_players=6,
-                    flicker_depth=0.02, seed=17)
+    return Scenario(
+        "paper-like",
+        cameras,
+        duration_ms=20_000.0,
+        flashes=irregular_flashes(rng, 7, 800.0, 19_200.0, 1500.0),
+        n_players=6,
+        flicker_depth=0.02,
+        seed=17,
+    )
 
 
 def mixed():
@@ -47,17 +91,52 @@ def mixed():
     rng = np.random.default_rng(5)
     cameras = (
         CameraSpec("m1", 320, 180, 25.0, r0=8, r1=6, exposure_ms=10.0, noise_std=1.5),
-        CameraSpec("m2", 320, 180, 30.0, r0=6, r1=10, exposure_ms=8.0, start_ms=61000.0,
-                   offset_ms=-60700.0, drift_ppm=40.0, container="mkv", flipped=True,
-                   miss_probability=0.15, noise_std=1.5, position_m=(-7.0, 15.0, 14.0),
-                   look_at_m=(18.0, 15.0), hfov_deg=75.0),
-        CameraSpec("m3", 256, 144, 50.0, r0=6, r1=4, exposure_ms=6.0, start_ms=5000.0,
-                   offset_ms=-5210.0, drift_ppm=-25.0, quantize_ms=1.0, miss_probability=0.15,
-                   noise_std=1.5, position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0),
-                   hfov_deg=75.0),
+        CameraSpec(
+            "m2",
+            320,
+            180,
+            30.0,
+            r0=6,
+            r1=10,
+            exposure_ms=8.0,
+            start_ms=61000.0,
+            offset_ms=-60700.0,
+            drift_ppm=40.0,
+            container="mkv",
+            flipped=True,
+            miss_probability=0.15,
+            noise_std=1.5,
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+        ),
+        CameraSpec(
+            "m3",
+            256,
+            144,
+            50.0,
+            r0=6,
+            r1=4,
+            exposure_ms=6.0,
+            start_ms=5000.0,
+            offset_ms=-5210.0,
+            drift_ppm=-25.0,
+            quantize_ms=1.0,
+            miss_probability=0.15,
+            noise_std=1.5,
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+        ),
     )
-    return Scenario("mixed", cameras, duration_ms=15_000.0,
-                    flashes=irregular_flashes(rng, 10, 800.0, 14_200.0, 900.0), n_players=6, seed=9)
+    return Scenario(
+        "mixed",
+        cameras,
+        duration_ms=15_000.0,
+        flashes=irregular_flashes(rng, 10, 800.0, 14_200.0, 900.0),
+        n_players=6,
+        seed=9,
+    )
 
 
 def mixed_reshuffled(seed):
@@ -65,13 +144,17 @@ def mixed_reshuffled(seed):
     direction lets one more event in under a ten times looser fit, which a search counting
     inliers took (a 9 ms sync error)."""
     scenario = mixed()
-    flashes = irregular_flashes(np.random.default_rng(1000 + seed), len(scenario.flashes), 800.0,
-                                scenario.duration_ms - 800.0, 900.0)
+    flashes = irregular_flashes(
+        np.random.default_rng(1000 + seed), len(scenario.flashes), 800.0, scenario.duration_ms - 800.0, 900.0
+    )
     return dataclasses.replace(scenario, name=f"mixed-{seed}", flashes=flashes, seed=50 + seed)
 
 
-@pytest.fixture(scope="module", params=[paper_like, mixed, lambda: mixed_reshuffled(1), lambda: mixed_reshuffled(3)],
-                ids=["paper-like", "mixed", "mixed-1", "mixed-3"])
+@pytest.fixture(
+    scope="module",
+    params=[paper_like, mixed, lambda: mixed_reshuffled(1), lambda: mixed_reshuffled(3)],
+    ids=["paper-like", "mixed", "mixed-1", "mixed-3"],
+)
 def solved(request, tmp_path_factory):
     scenario = request.param()
     folder = tmp_path_factory.mktemp(scenario.name)
@@ -98,6 +181,7 @@ def test_upside_down_camera_is_found(solved):
 
 def test_predicted_uncertainty_is_honest(solved):
     from flashsync.report import sync_uncertainty_ms
+
     _, _, model, _, truth = solved
     errors = sync_errors(model, truth).set_index("camera")
     for name, camera in model.cameras.items():

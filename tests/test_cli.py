@@ -1,6 +1,5 @@
 """The flashsync command end to end on rendered videos, and every bad input it must refuse."""
 
-import json
 import subprocess
 import sys
 
@@ -11,8 +10,7 @@ import pytest
 from flashsync.cli import main
 from flashsync.evaluate import sync_errors
 from flashsync.model_file import load_model
-from flashsync.simulation import (CameraSpec, FlashSpec, Scenario, load_ground_truth,
-                                  render_scenario)
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
 
 
 def run(capsys, *args):
@@ -35,10 +33,32 @@ def three_cameras(tmp_path_factory):
     """Three unseen cameras (mp4, mkv, mp4) at 25/30/50 fps that share exactly three flashes."""
     cameras = (
         CameraSpec("a", 320, 180, 25.0, r0=8, r1=6, start_ms=0.0, n_frames=75),
-        CameraSpec("b", 320, 180, 30.0, r0=6, r1=8, start_ms=5000.0, offset_ms=-5000.0 + 130.0,
-                   drift_ppm=-20.0, container="mkv", n_frames=90),
-        CameraSpec("c", 256, 144, 50.0, r0=10, r1=6, start_ms=90_000.0, offset_ms=-90_000.0 - 210.0,
-                   drift_ppm=30.0, exposure_ms=6.0, n_frames=150),
+        CameraSpec(
+            "b",
+            320,
+            180,
+            30.0,
+            r0=6,
+            r1=8,
+            start_ms=5000.0,
+            offset_ms=-5000.0 + 130.0,
+            drift_ppm=-20.0,
+            container="mkv",
+            n_frames=90,
+        ),
+        CameraSpec(
+            "c",
+            256,
+            144,
+            50.0,
+            r0=10,
+            r1=6,
+            start_ms=90_000.0,
+            offset_ms=-90_000.0 - 210.0,
+            drift_ppm=30.0,
+            exposure_ms=6.0,
+            n_frames=150,
+        ),
     )
     flashes = (FlashSpec(700.0, 0.5), FlashSpec(1460.0, 0.6), FlashSpec(2270.0, 0.45))
     folder = tmp_path_factory.mktemp("three")
@@ -66,31 +86,47 @@ def test_detect_writes_events_table(three_cameras, tmp_path, capsys):
 
 
 def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, capsys):
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
-                       "-o", tmp_path / "sync.json")
+    code, _, err = run(
+        capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "sync.json"
+    )
     assert code == 0, err
     detections = pd.read_csv(tiny_scenario / "detections.csv")
-    bad = pd.DataFrame({"camera": ["cam1", "cam2"], "frame": [-1, 10_000], "x": [1.0, 2.0],
-                        "y": [5.0, 6.0], "object": ["puck", "puck"]})
+    bad = pd.DataFrame(
+        {
+            "camera": ["cam1", "cam2"],
+            "frame": [-1, 10_000],
+            "x": [1.0, 2.0],
+            "y": [5.0, 6.0],
+            "object": ["puck", "puck"],
+        }
+    )
     table = pd.concat([detections, bad], ignore_index=True)
     table.to_csv(tmp_path / "in.csv", index=False)
-    code, _, err = run(capsys, "restamp", tmp_path / "in.csv", "--model", tmp_path / "sync.json",
-                       "-o", tmp_path / "out.csv")
+    code, _, err = run(
+        capsys, "restamp", tmp_path / "in.csv", "--model", tmp_path / "sync.json", "-o", tmp_path / "out.csv"
+    )
     assert code == 0, err
     out = pd.read_csv(tmp_path / "out.csv")
     assert len(out) == len(table)
     pd.testing.assert_frame_equal(out[table.columns], table)
     assert out["t_global_ms"].notna().sum() == len(detections)
     assert list(out["restamp_error"].tail(2)) == ["frame negative", "frame past the end of the video"]
-    code, _, _ = run(capsys, "restamp", tmp_path / "in.csv", "--model", tmp_path / "sync.json",
-                     "-o", tmp_path / "strict.csv", "--strict")
+    code, _, _ = run(
+        capsys,
+        "restamp",
+        tmp_path / "in.csv",
+        "--model",
+        tmp_path / "sync.json",
+        "-o",
+        tmp_path / "strict.csv",
+        "--strict",
+    )
     assert code == 1
 
 
 def test_help_of_every_command_has_an_example():
     for command in ("detect", "sync", "restamp", "validate", "simulate", "demo"):
-        result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"],
-                                capture_output=True, text=True)
+        result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"], capture_output=True, text=True)
         assert result.returncode == 0 and "example:" in result.stdout and "flashsync " + command in result.stdout
 
 
@@ -125,16 +161,19 @@ def test_duplicate_camera_names(tiny_scenario, tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def no_flash_videos(tmp_path_factory):
-    cameras = (CameraSpec("quiet1", 160, 90, 25.0, n_frames=25),
-               CameraSpec("quiet2", 160, 90, 30.0, n_frames=30, container="mkv"))
+    cameras = (
+        CameraSpec("quiet1", 160, 90, 25.0, n_frames=25),
+        CameraSpec("quiet2", 160, 90, 30.0, n_frames=30, container="mkv"),
+    )
     folder = tmp_path_factory.mktemp("quiet")
     render_scenario(Scenario("quiet", cameras, n_players=3, seed=4), folder)
     return folder
 
 
 def test_videos_with_no_flashes(no_flash_videos, tmp_path, capsys):
-    code, _, err = run(capsys, "sync", no_flash_videos / "quiet1.mp4", no_flash_videos / "quiet2.mkv",
-                       "-o", tmp_path / "sync.json")
+    code, _, err = run(
+        capsys, "sync", no_flash_videos / "quiet1.mp4", no_flash_videos / "quiet2.mkv", "-o", tmp_path / "sync.json"
+    )
     assert code == 1
     one_error_line(err, "quiet1.mp4: 0", "quiet2.mkv: 0", "flash events")
     assert not (tmp_path / "sync.json").exists()
@@ -151,6 +190,7 @@ def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, cap
     import av
 
     from flashsync.simulation.encode import write_video
+
     frames, pts = [], []
     with av.open(str(tiny_scenario / "cam2.mkv")) as container:
         time_base = container.streams.video[0].time_base
@@ -160,8 +200,7 @@ def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, cap
             frames.append(frame.to_ndarray(format="gray"))
             pts.append(frame.pts)
     write_video(tmp_path / "short.mkv", frames, pts, time_base)
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tmp_path / "short.mkv",
-                       "-o", tmp_path / "sync.json")
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tmp_path / "short.mkv", "-o", tmp_path / "sync.json")
     assert code == 1
     one_error_line(err, "share")
 
@@ -169,8 +208,9 @@ def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, cap
 def test_detections_without_required_columns(tiny_scenario, tmp_path, capsys):
     run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "sync.json")
     pd.DataFrame({"camera": ["cam1"], "frame_no": [1], "row": [3.0]}).to_csv(tmp_path / "d.csv", index=False)
-    code, _, err = run(capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json",
-                       "-o", tmp_path / "out.csv")
+    code, _, err = run(
+        capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json", "-o", tmp_path / "out.csv"
+    )
     assert code == 1
     one_error_line(err, "d.csv", "frame", "y")
     assert not (tmp_path / "out.csv").exists()
@@ -179,8 +219,9 @@ def test_detections_without_required_columns(tiny_scenario, tmp_path, capsys):
 def test_camera_missing_from_model(tiny_scenario, tmp_path, capsys):
     run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "sync.json")
     pd.DataFrame({"camera": ["cam1", "cam7"], "frame": [1, 1], "y": [3.0, 4.0]}).to_csv(tmp_path / "d.csv", index=False)
-    code, _, err = run(capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json",
-                       "-o", tmp_path / "out.csv")
+    code, _, err = run(
+        capsys, "restamp", tmp_path / "d.csv", "--model", tmp_path / "sync.json", "-o", tmp_path / "out.csv"
+    )
     assert code == 1
     error_lines = [line for line in err.splitlines() if "error:" in line]
     assert len(error_lines) == 1 and "not in" in error_lines[0] and "Traceback" not in err
@@ -196,8 +237,9 @@ def test_missing_model_file(tmp_path, capsys):
 
 
 def test_bad_option_values(tiny_scenario, capsys):
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
-                       "--row-time", "cam1=fast")
+    code, _, err = run(
+        capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "--row-time", "cam1=fast"
+    )
     assert code == 1
     one_error_line(err, "--row-time")
 
@@ -205,21 +247,39 @@ def test_bad_option_values(tiny_scenario, capsys):
 def test_timestamps_from_an_rtp_csv(tiny_scenario, tmp_path, capsys):
     """Frame times from a CSV of 90 kHz RTP stamps that wrap around replace the container's."""
     from flashsync.timestamps import video_timestamps
+
     stamps_ms = video_timestamps(tiny_scenario / "cam2.mkv")
     rtp = (2**32 - 45_000 + np.round((stamps_ms - stamps_ms[0]) * 90).astype(np.int64)) % 2**32
     pd.DataFrame({"rtp": rtp}).to_csv(tmp_path / "cam2.csv", index=False)
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
-                       "--timestamps", f"cam2={tmp_path / 'cam2.csv'}", "-o", tmp_path / "sync.json")
+    code, _, err = run(
+        capsys,
+        "sync",
+        tiny_scenario / "cam1.mp4",
+        tiny_scenario / "cam2.mkv",
+        "--timestamps",
+        f"cam2={tmp_path / 'cam2.csv'}",
+        "-o",
+        tmp_path / "sync.json",
+    )
     assert code == 0, err
     run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "-o", tmp_path / "own.json")
     from_csv = load_model(tmp_path / "sync.json").camera("cam2")
     from_container = load_model(tmp_path / "own.json").camera("cam2")
-    assert from_csv.frame_times_ms[0] == pytest.approx(0.0, abs=0.5)    # the CSV's clock starts at 0
-    np.testing.assert_allclose(from_csv.t_global_ms(np.arange(72), 90.0),
-                               from_container.t_global_ms(np.arange(72), 90.0), atol=0.05)
+    assert from_csv.frame_times_ms[0] == pytest.approx(0.0, abs=0.5)  # the CSV's clock starts at 0
+    np.testing.assert_allclose(
+        from_csv.t_global_ms(np.arange(72), 90.0), from_container.t_global_ms(np.arange(72), 90.0), atol=0.05
+    )
     pd.DataFrame({"t_ms": stamps_ms[:-3]}).to_csv(tmp_path / "short.csv", index=False)
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv",
-                       "--timestamps", f"cam2={tmp_path / 'short.csv'}", "-o", tmp_path / "bad.json")
+    code, _, err = run(
+        capsys,
+        "sync",
+        tiny_scenario / "cam1.mp4",
+        tiny_scenario / "cam2.mkv",
+        "--timestamps",
+        f"cam2={tmp_path / 'short.csv'}",
+        "-o",
+        tmp_path / "bad.json",
+    )
     assert code == 1
     one_error_line(err, "short.csv", "timestamps for the")
     code, _, err = run(capsys, "detect", tiny_scenario / "cam1.mp4", "--timestamps", "cam9=x.csv")

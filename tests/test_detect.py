@@ -6,7 +6,7 @@ import pytest
 from flashsync.detect import detect_video
 from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, Scenario, render_scenario
 
-FPS, HEIGHT, R0, R1 = 25.0, 180, 10, 40           # 230 rows per frame, 40 of them after the image
+FPS, HEIGHT, R0, R1 = 25.0, 180, 10, 40  # 230 rows per frame, 40 of them after the image
 ROW_MS = 1000.0 / FPS / (R0 + HEIGHT + R1)
 
 
@@ -16,12 +16,21 @@ def flash_at(frame: int, readout_row: float, strength: float = 0.5) -> FlashSpec
     return FlashSpec(world_ms=frame * 1000.0 / FPS + (R0 + readout_row) * ROW_MS, strength=strength)
 
 
-def render(tmp_path, name="cam", flashes=(), switches=(), n_frames=30, exposure_ms=8.0, crf=23,
-           **camera):
-    spec = CameraSpec(name, 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=exposure_ms, n_frames=n_frames,
-                      noise_std=1.0, crf=crf, **camera)
-    scenario = Scenario("test", (spec,), flashes=tuple(flashes), switches=tuple(switches),
-                        n_players=4, seed=3)
+def render(tmp_path, name="cam", flashes=(), switches=(), n_frames=30, exposure_ms=8.0, crf=23, **camera):
+    spec = CameraSpec(
+        name,
+        320,
+        HEIGHT,
+        FPS,
+        r0=R0,
+        r1=R1,
+        exposure_ms=exposure_ms,
+        n_frames=n_frames,
+        noise_std=1.0,
+        crf=crf,
+        **camera,
+    )
+    scenario = Scenario("test", (spec,), flashes=tuple(flashes), switches=tuple(switches), n_players=4, seed=3)
     truth = render_scenario(scenario, tmp_path)
     return tmp_path / f"{name}.{spec.container}", truth
 
@@ -35,10 +44,14 @@ def test_leading_edges_match_the_flash_instants(tmp_path, crf, rms_rows):
     """Sub-row edges (fitted ramps) within a fraction of a row of the truth, with and
     without H.264 compression; one flash straddles two frames."""
     rows = [40.3, 75.8, 110.5, 131.2, 60.7, 95.1, 150.4, HEIGHT - 8.6]
-    strengths = [0.3, 0.35, 0.4, 0.3, 0.35, 0.4, 0.3, 0.35]        # unsaturated
-    video, truth = render(tmp_path, flashes=[flash_at(4 + 6 * i, row, strength)
-                                             for i, (row, strength) in enumerate(zip(rows, strengths))],
-                          n_frames=55, exposure_ms=16.0, crf=crf)
+    strengths = [0.3, 0.35, 0.4, 0.3, 0.35, 0.4, 0.3, 0.35]  # unsaturated
+    video, truth = render(
+        tmp_path,
+        flashes=[flash_at(4 + 6 * i, row, strength) for i, (row, strength) in enumerate(zip(rows, strengths))],
+        n_frames=55,
+        exposure_ms=16.0,
+        crf=crf,
+    )
     events = leading(detect_video(video).events)
     assert len(events) == len(rows) and "split" in events["flags"].iloc[-1]
     edge_ms = truth.global_time_ms("cam", events["frame"].to_numpy(), events["row"].to_numpy())
@@ -111,10 +124,19 @@ def test_no_events_in_half_a_minute_without_flashes(tmp_path):
     """Players, puck, 3 % mains flicker, auto-exposure steps up and down, noise and H.264
     key frames (every 250 frames, where dark flat areas jump by a DN): no event at all.
     ``benchmarks/bench_false_events.py`` runs the same for 10 minutes."""
-    camera = CameraSpec("quiet", 320, HEIGHT, FPS, r0=R0, r1=R1, exposure_ms=10.0, noise_std=1.5,
-                        crf=26, gain_steps=((9_000.0, 1.15), (21_000.0, 1 / 1.15)))
-    scenario = Scenario("quiet", (camera,), duration_ms=30_000.0, flicker_depth=0.03,
-                        n_players=12, seed=21)
+    camera = CameraSpec(
+        "quiet",
+        320,
+        HEIGHT,
+        FPS,
+        r0=R0,
+        r1=R1,
+        exposure_ms=10.0,
+        noise_std=1.5,
+        crf=26,
+        gain_steps=((9_000.0, 1.15), (21_000.0, 1 / 1.15)),
+    )
+    scenario = Scenario("quiet", (camera,), duration_ms=30_000.0, flicker_depth=0.03, n_players=12, seed=21)
     render_scenario(scenario, tmp_path)
     detection = detect_video(tmp_path / "quiet.mp4")
     assert len(detection.frame_times_ms) == 750

@@ -36,8 +36,10 @@ def flashes(seed: int) -> tuple[FlashSpec, ...]:
     """Flashes at irregular instants (as fired by hand), 120 ms or more apart."""
     rng = np.random.default_rng(seed)
     instants = 300.0 + np.cumsum(120.0 + rng.exponential(150.0, 50))
-    return tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3))
-                 for t in instants[instants < DURATION_MS - 300.0])
+    return tuple(
+        FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3))
+        for t in instants[instants < DURATION_MS - 300.0]
+    )
 
 
 @pytest.fixture(scope="module")
@@ -45,12 +47,16 @@ def detections(tmp_path_factory) -> dict:
     """Every camera's detection (320x180), rendered and detected once; the upside-down
     camera also as ``"<name>+declared"``, detected with its readout direction given."""
     cameras = [CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0)]
-    cameras += [CameraSpec(CAMERA[case], 320, 180, 30.0, **(dict(exposure_ms=8.0, start_ms=3000.0,
-                                                                offset_ms=-2830.0) | settings))
-                for case, settings in HIDDEN.items()]
+    cameras += [
+        CameraSpec(
+            CAMERA[case], 320, 180, 30.0, **(dict(exposure_ms=8.0, start_ms=3000.0, offset_ms=-2830.0) | settings)
+        )
+        for case, settings in HIDDEN.items()
+    ]
     folder = tmp_path_factory.mktemp("hidden")
-    render_scenario(Scenario("hidden", tuple(cameras), duration_ms=DURATION_MS, flashes=flashes(1),
-                             n_players=0, seed=1), folder)
+    render_scenario(
+        Scenario("hidden", tuple(cameras), duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1), folder
+    )
     videos = [folder / f"{spec.name}.{spec.container}" for spec in cameras]
     found = {d.camera: d for d in detect_videos(videos)}
     flipped = CAMERA["flipped"]
@@ -76,7 +82,7 @@ def test_a_hidden_effect_is_named_first_and_the_gap_closes(detections, effect):
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
     d = diagnose(pair(detections, CAMERA["two"]))
     assert [s.effect for s in d.steps] == ["dropped_frames", "drift"], format_diagnosis(d)
-    assert d.steps[0].rms_before_ms > 20 * d.steps[1].rms_before_ms    # a frame period vs 0.5 ms
+    assert d.steps[0].rms_before_ms > 20 * d.steps[1].rms_before_ms  # a frame period vs 0.5 ms
     assert d.consistent and d.final_rms_ms < d.initial_rms_ms / 100
     assert d.model[1]["drift_ppm"] == pytest.approx(150.0, abs=15.0)
     assert d.model[1]["missing_frames"] == 1
@@ -101,8 +107,8 @@ def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(detections):
 def test_one_bad_edge_names_nothing(detections):
     ref, other = pair(detections, f"{CAMERA['flipped']}+declared")
     events = ref.events.copy()
-    bad = events.index[events["edge"] == "trailing"][1]      # an edge a weak fit bends to
-    events.loc[bad, "row"] -= 15.0                            # 15 rows = 3.3 ms off
+    bad = events.index[events["edge"] == "trailing"][1]  # an edge a weak fit bends to
+    events.loc[bad, "row"] -= 15.0  # 15 rows = 3.3 ms off
     d = diagnose([replace(ref, events=events), other])
     assert d.steps == [], format_diagnosis(d)
 
@@ -147,8 +153,9 @@ def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsy
     data = json.loads((tmp_path / "d.json").read_text())
     assert data["steps"] and len(data["edge_residuals"]["residual_ms"]) == len(data["steps"]) + 1
     rerun = Path(sys.executable).with_name("rerun")
-    printed = subprocess.run([str(rerun), "rrd", "print", "-v", str(tmp_path / "d.rrd")],
-                             capture_output=True, text=True, check=True).stdout
+    printed = subprocess.run(
+        [str(rerun), "rrd", "print", "-v", str(tmp_path / "d.rrd")], capture_output=True, text=True, check=True
+    ).stdout
     first = data["steps"][0]
     assert "/diagnose/0_plain/cam1/leading" in printed
     assert f"/diagnose/1_{first['effect']}_{first['camera']}/" in printed

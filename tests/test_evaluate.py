@@ -17,8 +17,9 @@ from flashsync.simulation.truth import camera_truth, ground_truth
 def truth():
     """The tiny preset's clocks, cam2 upside down, 40 frames each, nothing rendered."""
     scenario = preset("tiny")
-    scenario = dataclasses.replace(scenario, cameras=(scenario.cameras[0],
-                                                      dataclasses.replace(scenario.cameras[1], flipped=True)))
+    scenario = dataclasses.replace(
+        scenario, cameras=(scenario.cameras[0], dataclasses.replace(scenario.cameras[1], flipped=True))
+    )
     cameras = []
     for spec in scenario.cameras:
         times = spec.start_ms + np.arange(40) * spec.frame_period_ms
@@ -31,8 +32,15 @@ def clock(truth, name, beta_std_ms=0.0, **changes) -> CameraClock:
     c = truth.cameras[name]
     fields = dict(alpha=c.alpha, beta_ms=c.beta_ms, row_time_ms=c.row_time_ms, exposure_ms=c.exposure_ms)
     fields.update(changes)
-    return CameraClock(name, np.asarray(c.frame_times_ms), c.height, c.width, flipped=c.flipped,
-                       covariance=np.diag([0.0, beta_std_ms**2, 0.0]), **fields)
+    return CameraClock(
+        name,
+        np.asarray(c.frame_times_ms),
+        c.height,
+        c.width,
+        flipped=c.flipped,
+        covariance=np.diag([0.0, beta_std_ms**2, 0.0]),
+        **fields,
+    )
 
 
 def test_exact_model_has_no_error(truth):
@@ -45,8 +53,7 @@ def test_exact_model_has_no_error(truth):
 
 @pytest.mark.parametrize("shift_ms, z, within", [(0.05, 1.0, 1.0), (0.15, 3.0, 0.0)])
 def test_calibration_of_a_shifted_camera(truth, shift_ms, z, within):
-    cam2 = clock(truth, "cam2", beta_std_ms=0.05, beta_ms=truth.cameras["cam2"].beta_ms + shift_ms,
-                 exposure_ms=8.5)
+    cam2 = clock(truth, "cam2", beta_std_ms=0.05, beta_ms=truth.cameras["cam2"].beta_ms + shift_ms, exposure_ms=8.5)
     model = SyncModel("cam1", {"cam1": clock(truth, "cam1", beta_std_ms=0.05), "cam2": cam2})
     table = camera_accuracy(model, truth).set_index("camera")
     assert table.loc["cam2", "rms_ms"] == pytest.approx(shift_ms)

@@ -49,7 +49,7 @@ def test_drift_of_100_ppm_over_20_minutes(drift):
     rng = np.random.default_rng(7)
     tau = flashes(rng, n=30)
     a, truth_a = seen_by(rng, tau, 1.0, 0.0, 40.0)
-    b, truth_b = seen_by(rng, tau, 1 + drift, 300_000.0, 20.0)   # 5 minutes offset, 50 fps
+    b, truth_b = seen_by(rng, tau, 1 + drift, 300_000.0, 20.0)  # 5 minutes offset, 50 fps
     alignment = align_pair(a, b, TOLERANCE_MS)
     fraction, n = correct_fraction(alignment, truth_a, truth_b)
     assert fraction == 1.0 and n == len(tau)
@@ -57,7 +57,7 @@ def test_drift_of_100_ppm_over_20_minutes(drift):
 
 
 def test_periodic_flashes_are_ambiguous_not_guessed():
-    tau = np.arange(10) * 2000.0 + 500.0                     # a strobe: every shift fits
+    tau = np.arange(10) * 2000.0 + 500.0  # a strobe: every shift fits
     alignment = align_pair(tau, tau - 10_000.0, TOLERANCE_MS)
     assert alignment.ambiguous
 
@@ -79,6 +79,7 @@ def test_no_common_flashes():
 
 def test_flashes_grouped_across_cameras_that_share_none_with_the_reference():
     from flashsync.match import PairAlignment
+
     # camera a sees flashes 0-4, c sees 5-9, b sees all: a and c are tied through b
     ab = PairAlignment(1.0, 0.0, np.array([[i, i] for i in range(5)]), 0.0, False)
     bc = PairAlignment(1.0, 0.0, np.array([[5 + i, i] for i in range(5)]), 0.0, False)
@@ -90,7 +91,8 @@ def test_flashes_grouped_across_cameras_that_share_none_with_the_reference():
 
 def test_a_bad_pair_cannot_chain_two_events_of_one_camera():
     from flashsync.match import PairAlignment
+
     good = PairAlignment(1.0, 0.0, np.array([[0, 0], [1, 1]]), 0.0, False)
-    bad = PairAlignment(1.0, 0.0, np.array([[0, 1]]), 0.0, False)     # a0 with b1: conflicts
+    bad = PairAlignment(1.0, 0.0, np.array([[0, 1]]), 0.0, False)  # a0 with b1: conflicts
     groups = group_flashes({"a": 2, "b": 2}, {("a", "b"): good, ("b", "a"): bad})
     assert groups[("a", 0)] == groups[("b", 0)] != groups[("b", 1)]

@@ -9,17 +9,26 @@ from flashsync.model_file import load_model, save_model
 
 def camera(flipped=False):
     times = np.array([0.0, 40.0, 80.0, 160.0, 200.0])  # frame at 120 ms dropped
-    return CameraClock("cam2", times, height=100, width=160, alpha=1 + 20e-6, beta_ms=-1234.5,
-                       row_time_ms=0.37, flipped=flipped,
-                       covariance=np.diag([1e-12, 1e-4, 1e-8]), exposure_ms=10.0, video="cam2.mp4")
+    return CameraClock(
+        "cam2",
+        times,
+        height=100,
+        width=160,
+        alpha=1 + 20e-6,
+        beta_ms=-1234.5,
+        row_time_ms=0.37,
+        flipped=flipped,
+        covariance=np.diag([1e-12, 1e-4, 1e-8]),
+        exposure_ms=10.0,
+        video="cam2.mp4",
+    )
 
 
 def test_global_time_of_frame_and_row():
     cam = camera()
     expected = (1 + 20e-6) * 160.0 - 1234.5 + 25.5 * 0.37
     assert cam.t_global_ms(3, 25.5) == pytest.approx(expected, abs=1e-9)
-    np.testing.assert_allclose(cam.t_global_ms([0, 4], [0, 0]) - cam.t_global_ms([0, 4], [99, 99]),
-                               -99 * 0.37)
+    np.testing.assert_allclose(cam.t_global_ms([0, 4], [0, 0]) - cam.t_global_ms([0, 4], [99, 99]), -99 * 0.37)
 
 
 def test_flipped_camera_reads_bottom_up():
@@ -43,8 +52,8 @@ def test_locate_outside_visible_rows_is_nan():
     start = cam.t_global_ms(0, 0)
     frame, row = cam.locate(np.array([start - 1.0, cam.t_global_ms(0, 99) + 1.0, cam.t_global_ms(2, 99) + 10]))
     assert frame[0] == -1 and np.isnan(row[0])
-    assert frame[1] == 0 and np.isnan(row[1])     # vertical blanking after row 99
-    assert frame[2] == 2 and np.isnan(row[2])     # the dropped frame's slot
+    assert frame[1] == 0 and np.isnan(row[1])  # vertical blanking after row 99
+    assert frame[2] == 2 and np.isnan(row[2])  # the dropped frame's slot
 
 
 def test_uncertainty_grows_with_distance_from_known_rows():
@@ -54,11 +63,20 @@ def test_uncertainty_grows_with_distance_from_known_rows():
 
 
 def test_model_file_round_trip(tmp_path):
-    model = SyncModel("cam1", {"cam1": CameraClock("cam1", np.arange(5) * 33.4, 120, 160, row_time_ms=0.25),
-                               "cam2": camera(True)},
-                      pd.DataFrame({"flash": [0, 0], "camera": ["cam1", "cam2"], "frame": [1, 2],
-                                    "row": [10.5, 20.25], "residual_ms": [0.01, -0.01],
-                                    "inlier": [True, True]}))
+    model = SyncModel(
+        "cam1",
+        {"cam1": CameraClock("cam1", np.arange(5) * 33.4, 120, 160, row_time_ms=0.25), "cam2": camera(True)},
+        pd.DataFrame(
+            {
+                "flash": [0, 0],
+                "camera": ["cam1", "cam2"],
+                "frame": [1, 2],
+                "row": [10.5, 20.25],
+                "residual_ms": [0.01, -0.01],
+                "inlier": [True, True],
+            }
+        ),
+    )
     save_model(model, tmp_path / "sync.json")
     loaded = load_model(tmp_path / "sync.json")
     assert loaded.reference == "cam1" and list(loaded.cameras) == ["cam1", "cam2"]
@@ -76,12 +94,15 @@ def test_unknown_camera_is_a_clear_error():
         model.camera("cam9")
 
 
-@pytest.mark.parametrize("content, message", [
-    ("not json", "not a flashsync model file"),
-    ('{"format": "other"}', "not a flashsync model file"),
-    ('{"format": "flashsync.sync", "version": 99}', "version 99 is not supported"),
-    ('{"format": "flashsync.sync", "version": 1, "reference": "a", "cameras": [{}], "events": []}', "damaged"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("not json", "not a flashsync model file"),
+        ('{"format": "other"}', "not a flashsync model file"),
+        ('{"format": "flashsync.sync", "version": 99}', "version 99 is not supported"),
+        ('{"format": "flashsync.sync", "version": 1, "reference": "a", "cameras": [{}], "events": []}', "damaged"),
+    ],
+)
 def test_bad_model_files(tmp_path, content, message):
     path = tmp_path / "sync.json"
     path.write_text(content)

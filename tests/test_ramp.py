@@ -6,7 +6,7 @@ from scipy.stats import exponnorm
 
 from flashsync.ramp import _ramp, fit_pulse_edge
 
-SCALE, PLATEAU = 2.9, 0.35             # decay length (rows) and band level of the test clips
+SCALE, PLATEAU = 2.9, 0.35  # decay length (rows) and band level of the test clips
 
 
 @pytest.mark.parametrize("scale, blur", [(2.9, 0.5), (0.3, 2.0), (1.0, 0.01), (0.1, 3.0)])
@@ -43,7 +43,7 @@ def test_fit_finds_the_edge_before_the_blur(rising, blur):
     crossing = half_crossing(values, rising)
     fitted = fit_pulse_edge(values, crossing, SCALE * np.log(3.0), PLATEAU, rising)
     assert abs(fitted - edge) < 0.03
-    if blur >= 0.8:                        # the plain crossing is off by more than 0.1 row
+    if blur >= 0.8:  # the plain crossing is off by more than 0.1 row
         assert abs(crossing - edge) > 0.1
 
 
@@ -51,6 +51,6 @@ def test_a_zeroed_foot_row_does_not_pull_the_edge_late():
     """The first lit row's neighbour, read as exactly 0 (dead zone), is left out."""
     edge = 60.37
     values = blurred_band(edge, 0.0)
-    values[:60] = 0.0                      # row 59 saw 20 % of the light, reads 0
+    values[:60] = 0.0  # row 59 saw 20 % of the light, reads 0
     crossing = half_crossing(values, True)
     assert abs(fit_pulse_edge(values, crossing, SCALE * np.log(3.0), PLATEAU, True) - edge) < 0.05

@@ -10,8 +10,7 @@ import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter import (format_summary, read_detections, read_mot, restamp, restamp_file,
-                              write_detections)
+from tracking_adapter import format_summary, read_detections, read_mot, restamp, restamp_file, write_detections
 
 N_FRAMES = 50
 
@@ -19,11 +18,26 @@ N_FRAMES = 50
 @pytest.fixture
 def model():
     """cam1: reference, 100 rows; cam2: flipped, drifting, 80 rows, exposure 4 ms."""
-    cam1 = CameraClock("cam1", np.arange(N_FRAMES) * 40.0 + 3.0, height=100, width=160,
-                       row_time_ms=0.35, covariance=np.diag([0.0, 0.01, 1e-6]))
-    cam2 = CameraClock("cam2", np.arange(N_FRAMES) * 33.0 + 1000.0, height=80, width=120,
-                       alpha=1.0001, beta_ms=-950.5, row_time_ms=0.4, flipped=True,
-                       covariance=np.diag([1e-10, 0.04, 4e-6]), exposure_ms=4.0)
+    cam1 = CameraClock(
+        "cam1",
+        np.arange(N_FRAMES) * 40.0 + 3.0,
+        height=100,
+        width=160,
+        row_time_ms=0.35,
+        covariance=np.diag([0.0, 0.01, 1e-6]),
+    )
+    cam2 = CameraClock(
+        "cam2",
+        np.arange(N_FRAMES) * 33.0 + 1000.0,
+        height=80,
+        width=120,
+        alpha=1.0001,
+        beta_ms=-950.5,
+        row_time_ms=0.4,
+        flipped=True,
+        covariance=np.diag([1e-10, 0.04, 4e-6]),
+        exposure_ms=4.0,
+    )
     return SyncModel("cam1", {"cam1": cam1, "cam2": cam2})
 
 
@@ -35,11 +49,11 @@ def expected_time(camera, frame, y):
 
 
 CSV_TEXT = (
-    'camera,frame,x,y,object,note\n'
+    "camera,frame,x,y,object,note\n"
     'cam1,0,10.50,20.250,7,"quoted, with comma"\n'
-    'cam2,3,1e2,0,007,\n'
+    "cam2,3,1e2,0,007,\n"
     'cam1,12,  5 ,99.5,a,"say ""hi"""\n'
-    'cam2,49,0.000,79.0,8,last frame\n'
+    "cam2,49,0.000,79.0,8,last frame\n"
 )
 
 
@@ -66,7 +80,7 @@ def test_csv_to_csv_keeps_every_byte_and_adds_times(tmp_path, model):
         assert float(row[1]) == pytest.approx(expected_time(camera, frame, y), abs=1e-9)
         assert row[3] == ""
     assert float(rows[2][2]) == pytest.approx(expected_time("cam2", 3, 0.0) - 2.0, abs=1e-9)
-    assert rows[1][2] == ""                                # cam1 has no exposure
+    assert rows[1][2] == ""  # cam1 has no exposure
     assert (summary.rows, summary.stamped, summary.failed) == (4, 4, {})
 
 
@@ -89,29 +103,36 @@ def test_byte_order_mark_quoted_header_and_header_only(tmp_path, model):
     restamp_file(source, tmp_path / "out.csv", model)
     assert (tmp_path / "out.csv").read_text(encoding="utf-8") == (
         f'\ufeff"camera","frame","y",t_global_ms,t_center_ms,restamp_error\n'
-        f'"cam1","2","3",{expected_time("cam1", 2, 3.0)!r},,\n')
+        f'"cam1","2","3",{expected_time("cam1", 2, 3.0)!r},,\n'
+    )
     source = write(tmp_path / "empty.csv", "camera,frame,y\n")
     assert restamp_file(source, tmp_path / "out.csv", model).rows == 0
-    assert (tmp_path / "out.csv").read_text() == (
-        "camera,frame,y,t_global_ms,t_center_ms,restamp_error\n")
+    assert (tmp_path / "out.csv").read_text() == ("camera,frame,y,t_global_ms,t_center_ms,restamp_error\n")
 
 
 def test_dataframe_contract(model):
-    detections = pd.DataFrame({
-        "object": pd.Categorical(["a", "b", "a"]),
-        "y": [10.0, 20.5, 79.0],
-        "camera": ["cam1", "cam2", "cam2"],
-        "frame": np.array([1, 2, 3], dtype=np.int32),
-        "flag": [True, False, True],
-    }, index=[10, 5, 7])
+    detections = pd.DataFrame(
+        {
+            "object": pd.Categorical(["a", "b", "a"]),
+            "y": [10.0, 20.5, 79.0],
+            "camera": ["cam1", "cam2", "cam2"],
+            "frame": np.array([1, 2, 3], dtype=np.int32),
+            "flag": [True, False, True],
+        },
+        index=[10, 5, 7],
+    )
     before = detections.copy()
     stamped = restamp(detections, model, with_std=True)
-    pd.testing.assert_frame_equal(detections, before)                  # input untouched
+    pd.testing.assert_frame_equal(detections, before)  # input untouched
     pd.testing.assert_frame_equal(stamped[list(detections.columns)], detections)
-    assert list(stamped.columns) == [*detections.columns, "t_global_ms", "t_global_std_ms",
-                                     "t_center_ms", "restamp_error"]
-    expected = [expected_time(c, f, y) for c, f, y in zip(stamped.camera, stamped.frame,
-                                                          stamped.y)]
+    assert list(stamped.columns) == [
+        *detections.columns,
+        "t_global_ms",
+        "t_global_std_ms",
+        "t_center_ms",
+        "restamp_error",
+    ]
+    expected = [expected_time(c, f, y) for c, f, y in zip(stamped.camera, stamped.frame, stamped.y)]
     np.testing.assert_allclose(stamped.t_global_ms, expected, atol=1e-9)
     std_cam1 = np.sqrt(0.01 + 1e-6 * 10.0**2)
     assert stamped.t_global_std_ms.iloc[0] == pytest.approx(std_cam1)
@@ -148,8 +169,7 @@ def test_bad_row_is_kept_with_a_reason(tmp_path, model, case, route):
     camera, frame, y, reason = BAD_ROWS[case]
     text = f"camera,frame,y,id\ncam1,1,2.5,a\n{camera},{frame},{y},b\ncam2,4,7,c\n"
     if route == "dataframe":
-        out = restamp(pd.read_csv(io.StringIO(text), dtype=str,
-                                  keep_default_na=False), model)
+        out = restamp(pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False), model)
     else:
         source = write(tmp_path / "in.csv", text)
         if route == "parquet->csv":
@@ -158,8 +178,7 @@ def test_bad_row_is_kept_with_a_reason(tmp_path, model, case, route):
         target = tmp_path / ("out.parquet" if route == "csv->parquet" else "out.csv")
         summary = restamp_file(source, target, model)
         assert summary.failed == {reason: 1} and summary.rows == 3
-        out = (pd.read_parquet(target) if target.suffix == ".parquet"
-               else pd.read_csv(target, dtype={"id": str}))
+        out = pd.read_parquet(target) if target.suffix == ".parquet" else pd.read_csv(target, dtype={"id": str})
     assert list(out["id"]) == ["a", "b", "c"]
     assert pd.isna(out.t_global_ms.iloc[1]) and out.restamp_error.iloc[1] == reason
     assert out.t_global_ms.iloc[0] == pytest.approx(expected_time("cam1", 1, 2.5))
@@ -170,8 +189,7 @@ def test_bad_row_is_kept_with_a_reason(tmp_path, model, case, route):
 def test_numeric_text_with_spaces_is_parsed(tmp_path, model):
     source = write(tmp_path / "in.csv", "camera,frame,y\ncam1, 4 ,1e1\n")
     restamp_file(source, tmp_path / "out.csv", model)
-    assert (tmp_path / "out.csv").read_text().splitlines()[1] == (
-        f"cam1, 4 ,1e1,{expected_time('cam1', 4, 10.0)!r},,")
+    assert (tmp_path / "out.csv").read_text().splitlines()[1] == (f"cam1, 4 ,1e1,{expected_time('cam1', 4, 10.0)!r},,")
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
@@ -209,25 +227,26 @@ def test_malformed_row_in_a_late_block_leaves_no_output(tmp_path, model):
 
 
 def test_parquet_in_and_out_keeps_types(tmp_path, model):
-    table = pa.table({
-        "camera": pa.array(["cam2", "cam1", "cam1"]).dictionary_encode(),
-        "frame": pa.array([0, 5, 60], pa.int16()),
-        "y": pa.array([1.5, None, 3.0], pa.float32()),
-        "score": pa.array([0.25, 0.5, 0.75]),
-        "when": pa.array([1, 2, 3], pa.timestamp("ms")),
-    })
+    table = pa.table(
+        {
+            "camera": pa.array(["cam2", "cam1", "cam1"]).dictionary_encode(),
+            "frame": pa.array([0, 5, 60], pa.int16()),
+            "y": pa.array([1.5, None, 3.0], pa.float32()),
+            "score": pa.array([0.25, 0.5, 0.75]),
+            "when": pa.array([1, 2, 3], pa.timestamp("ms")),
+        }
+    )
     pq.write_table(table, tmp_path / "in.parquet")
     summary = restamp_file(tmp_path / "in.parquet", tmp_path / "out.parquet", model)
     out = pq.read_table(tmp_path / "out.parquet")
     assert out.select(table.column_names).equals(table)
-    assert out.column_names[len(table.column_names):] == ["t_global_ms", "t_center_ms",
-                                                          "restamp_error"]
+    assert out.column_names[len(table.column_names) :] == ["t_global_ms", "t_center_ms", "restamp_error"]
     assert out.column("t_global_ms")[0].as_py() == pytest.approx(expected_time("cam2", 0, 1.5))
-    assert out.column("restamp_error").to_pylist() == [
-        None, "y missing", "frame past the end of the video"]
+    assert out.column("restamp_error").to_pylist() == [None, "y missing", "frame past the end of the video"]
     assert format_summary(summary) == (
         f"{tmp_path / 'in.parquet'} -> {tmp_path / 'out.parquet'}: 3 rows, 1 stamped, "
-        "2 not stamped (1 frame past the end of the video, 1 y missing)")
+        "2 not stamped (1 frame past the end of the video, 1 y missing)"
+    )
 
 
 def test_read_restamp_write_round_trip(tmp_path, model):
@@ -252,13 +271,23 @@ MOT_ROWS = "1,3,10,20,4,6,0.9,-1,-1,-1\n2,3,12,21,4,6,0.8,-1,-1,-1\n51,4,0,0,2,2
 MOT_HEADER = "frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z\n"
 
 
-@pytest.mark.parametrize("header, extra", [("", ["mot_8", "mot_9", "mot_10"]),
-                                           (MOT_HEADER, ["mot_x", "mot_y", "z"])])
+@pytest.mark.parametrize("header, extra", [("", ["mot_8", "mot_9", "mot_10"]), (MOT_HEADER, ["mot_x", "mot_y", "z"])])
 def test_mot_input(tmp_path, model, header, extra):
     source = write(tmp_path / "cam2.txt", header + MOT_ROWS)
     detections = read_mot(source)
-    assert list(detections.columns) == ["camera", "frame", "object", "x", "y", "bb_left",
-                                        "bb_top", "bb_width", "bb_height", "conf", *extra]
+    assert list(detections.columns) == [
+        "camera",
+        "frame",
+        "object",
+        "x",
+        "y",
+        "bb_left",
+        "bb_top",
+        "bb_width",
+        "bb_height",
+        "conf",
+        *extra,
+    ]
     assert list(detections.frame) == [0, 1, 50]
     np.testing.assert_allclose(detections.y, [23.0, 24.0, 1.0])
     np.testing.assert_allclose(detections.x, [12.0, 14.0, 1.0])
@@ -266,8 +295,7 @@ def test_mot_input(tmp_path, model, header, extra):
     out = pd.read_csv(tmp_path / "out.csv")
     assert list(out.camera) == ["cam2"] * 3
     assert list(out.bb_left) == [10, 12, 0]
-    assert list(out.columns) == [*detections.columns, "t_global_ms", "t_center_ms",
-                                 "restamp_error"]
+    assert list(out.columns) == [*detections.columns, "t_global_ms", "t_center_ms", "restamp_error"]
     assert out.t_global_ms.iloc[0] == pytest.approx(expected_time("cam2", 0, 23.0))
     assert out.restamp_error.iloc[2] == "frame past the end of the video"
 

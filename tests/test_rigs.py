@@ -58,15 +58,19 @@ def test_a_small_random_rig_renders(tmp_path):
 def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
     rigs = {name: recipe(name, seed=1, duration_ms=10_000.0) for name in RECIPES}
     four = rigs["four-ms-drops"].cameras
-    assert [(c.width, c.height, c.fps, c.container) for c in four] == [
-        (960, 540, 25.0, "mkv")] * 2 + [(640, 360, 25.0, "mkv")] * 2
+    assert [(c.width, c.height, c.fps, c.container) for c in four] == [(960, 540, 25.0, "mkv")] * 2 + [
+        (640, 360, 25.0, "mkv")
+    ] * 2
     assert all(c.drop_fraction > 0 for c in four) and [c.exposure_ms for c in four[:2]] == [6.0, 6.0]
     assert [c.fps for c in rigs["three-rates-flipped"].cameras] == [25.0, 30.0, 50.0]
     assert [c.flipped for c in rigs["twin-flipped"].cameras] == [False, True]
     assert [c.drop_fraction for c in rigs["twin-drops"].cameras] == [0.0, 0.05]
     hd = rigs["hd"].cameras
-    assert [(c.width, c.height, c.fps) for c in hd] == [(1920, 1080, NTSC_30), (1280, 720, NTSC_30),
-                                                        (1280, 720, NTSC_60)]
+    assert [(c.width, c.height, c.fps) for c in hd] == [
+        (1920, 1080, NTSC_30),
+        (1280, 720, NTSC_30),
+        (1280, 720, NTSC_60),
+    ]
     twelve = rigs["twelve"].cameras
     assert len(twelve) == 12 and all((c.width, c.height, c.miss_probability) == (320, 180, 0.3) for c in twelve)
     assert rigs["rolling-flicker"].cameras[0].exposure_ms == 0.5 and rigs["rolling-flicker"].flicker_depth == 0.03

@@ -8,8 +8,8 @@ from fractions import Fraction
 
 import av
 import numpy as np
-from av.video.frame import PictureType
 import pytest
+from av.video.frame import PictureType
 from decoded import decode, half_rise, row_profile
 
 from flashsync.frame_clock import fit_frame_clock
@@ -33,9 +33,11 @@ def flash_on_row(spec: CameraSpec, frame: int, readout_row: float, **pulse) -> F
     return FlashSpec(world_ms=float(spec.world_ms(t)), **pulse)
 
 
-PULSES = {"led": dict(strength=0.3, decay_ms=0.0, hold_ms=1.0),
-          "xenon": dict(strength=0.3, decay_ms=0.6, rise_ms=0.05),
-          "cosine": dict(strength=0.3, decay_ms=0.3, rise_ms=0.8, rise="cosine")}
+PULSES = {
+    "led": dict(strength=0.3, decay_ms=0.0, hold_ms=1.0),
+    "xenon": dict(strength=0.3, decay_ms=0.6, rise_ms=0.05),
+    "cosine": dict(strength=0.3, decay_ms=0.3, rise_ms=0.8, rise="cosine"),
+}
 
 
 def intensity(x: np.ndarray, flash: FlashSpec) -> np.ndarray:
@@ -70,7 +72,8 @@ def test_pulse_shapes_integrate_exactly_and_the_half_rise_follows_the_shape(tmp_
         assert np.nanmax(np.abs(profile - expected)) < 0.01, shape
         edge = half_rise(profile, expected.max())
         assert truth.global_time_ms("c", j, edge) == pytest.approx(
-            truth.flashes[k]["half_rise_global_ms"], abs=0.05 * 1), shape
+            truth.flashes[k]["half_rise_global_ms"], abs=0.05 * 1
+        ), shape
     # The half-light instant is the shape's, not the exponential's d ln 2.
     assert half_light_ms(flashes[0]) == pytest.approx(0.5)
     assert half_light_ms(flashes[1]) == pytest.approx(0.05 + 0.6 * np.log(2 * 0.6 / 0.625))
@@ -88,7 +91,8 @@ def test_tone_curve_black_level_clipping_and_vignetting(tmp_path, tone):
     lin, toned_frames, clip, vig = (decode(tmp_path / f"{name}.mp4")[0] for name in ("lin", "toned", "clip", "vig"))
     # A known linear level maps to black + (255 - black) tone(level / white).
     assert sensor_response(np.array([50.0], np.float32), toned)[0] == pytest.approx(
-        16 + 239 * (1.055 * 0.25 ** (1 / 2.4) - 0.055 if tone == "srgb" else 0.25 ** (1 / 2.2)), abs=1e-3)
+        16 + 239 * (1.055 * 0.25 ** (1 / 2.4) - 0.055 if tone == "srgb" else 0.25 ** (1 / 2.2)), abs=1e-3
+    )
     dark = lin[0]
     unclipped = (dark > 30) & (dark < 190)
     expected = 16 + 239 * tone_curve(dark / 200.0, tone)
@@ -166,8 +170,15 @@ def flicker_profile(frame: np.ndarray, view, scene, t_frame_ms: float) -> np.nda
 def test_rolling_rectified_flicker_is_exact_per_row(tmp_path):
     fast = camera("fast", fps=30.0, exposure_ms=0.5, n_frames=3, noise_std=2.0)
     slow = camera("slow", fps=25.0, exposure_ms=0.5, n_frames=3, noise_std=2.0)
-    scenario = Scenario("flicker", (fast, slow), flicker_depth=0.05, flicker_hz=100.0, flicker_phase=0.4,
-                        flicker_waveform="rectified", n_players=0)
+    scenario = Scenario(
+        "flicker",
+        (fast, slow),
+        flicker_depth=0.05,
+        flicker_hz=100.0,
+        flicker_phase=0.4,
+        flicker_waveform="rectified",
+        n_players=0,
+    )
     render_scenario(scenario, tmp_path)
     scene = make_scene(0, n_players=0)
     lighting = Lighting(flicker_depth=0.05, flicker_hz=100.0, flicker_phase=0.4, flicker_waveform="rectified")
@@ -193,14 +204,26 @@ def test_many_large_dark_and_bright_movers():
     assert min(grey) < 40 and max(grey) > 200
     spec = camera(exposure_ms=8.0)
     view = camera_view(scene, spec)
-    covered = np.abs(render_frame(view, scene, 0.0, Lighting()).astype(float)
-                     - render_frame(view, scene, 0.0, Lighting(), objects=False)) > 10
+    covered = (
+        np.abs(
+            render_frame(view, scene, 0.0, Lighting()).astype(float)
+            - render_frame(view, scene, 0.0, Lighting(), objects=False)
+        )
+        > 10
+    )
     assert covered.mean() > 0.05
 
 
 def test_stamp_rate_change_and_recording_gap(tmp_path):
-    spec = camera(exposure_ms=8.0, n_frames=40, start_ms=500.0, stamp_rate_changes=((20, 1.5),),
-                  frame_gaps=((5, 3),), width=128, height=72)
+    spec = camera(
+        exposure_ms=8.0,
+        n_frames=40,
+        start_ms=500.0,
+        stamp_rate_changes=((20, 1.5),),
+        frame_gaps=((5, 3),),
+        width=128,
+        height=72,
+    )
     truth = render_scenario(Scenario("stamps", (spec,), n_players=0), tmp_path)
     _, stamps, _ = decode(tmp_path / "c.mp4")
     kept = [f for f in range(40) if f not in (5, 6, 7)]
@@ -217,8 +240,15 @@ def test_slowly_changing_drift_of_a_camera_fifteen_minutes_in(tmp_path):
     ref = camera("ref", exposure_ms=4.0, n_frames=2, drift_ppm=-5.0)
     start, drift, rate = 900_000.0, 20.0, 0.05
     offset = 1000.0 - (1 + drift * 1e-6) * start - 0.5 * rate * 1e-9 * start**2
-    late = camera("late", exposure_ms=8.0, n_frames=3, start_ms=start, offset_ms=offset, drift_ppm=drift,
-                  drift_rate_ppm_per_s=rate)
+    late = camera(
+        "late",
+        exposure_ms=8.0,
+        n_frames=3,
+        start_ms=start,
+        offset_ms=offset,
+        drift_ppm=drift,
+        drift_rate_ppm_per_s=rate,
+    )
     flash = flash_on_row(late, 1, 50.2, strength=0.3, decay_ms=0.4)
     truth = render_scenario(Scenario("late", (ref, late), flashes=(flash,), n_players=0), tmp_path)
     frames, _, _ = decode(tmp_path / "late.mp4")

@@ -10,17 +10,43 @@ import pytest
 from decoded import decode, half_rise, row_profile
 
 from flashsync.errors import FlashsyncError
-from flashsync.simulation import (CameraSpec, FlashSpec, LightSwitch, load_ground_truth, load_scenario, preset,
-                                  render_scenario)
+from flashsync.simulation import (
+    CameraSpec,
+    FlashSpec,
+    LightSwitch,
+    load_ground_truth,
+    load_scenario,
+    preset,
+    render_scenario,
+)
 from flashsync.simulation.encode import write_video
-from flashsync.simulation.render import (Lighting, ambient_light, camera_view, frame_gain, kept_frames, puck_track,
-                                         render_frame)
+from flashsync.simulation.render import (
+    Lighting,
+    ambient_light,
+    camera_view,
+    frame_gain,
+    kept_frames,
+    puck_track,
+    render_frame,
+)
 from flashsync.simulation.scenario import scenario_from_dict
 from flashsync.simulation.scene import apply_homography, make_scene
 
 # A camera with a non-trivial clock: 50 ppm fast, camera time 7 s ahead of the world.
-CAM = CameraSpec("c", 320, 180, 25.0, r0=8, r1=4, exposure_ms=10.0, start_ms=7000.0, offset_ms=-5000.0,
-                 drift_ppm=50.0, flash_gain=0.8, noise_std=0.0)
+CAM = CameraSpec(
+    "c",
+    320,
+    180,
+    25.0,
+    r0=8,
+    r1=4,
+    exposure_ms=10.0,
+    start_ms=7000.0,
+    offset_ms=-5000.0,
+    drift_ppm=50.0,
+    flash_gain=0.8,
+    noise_std=0.0,
+)
 T_FRAME = 7200.0  # camera time of the frame under test, ms
 Q_TAU = 60.3  # readout row whose exposure ends when the flash fires
 
@@ -60,7 +86,8 @@ def test_flash_band_half_rise_is_at_the_analytic_row(empty_scene):
     assert half_rise(profile, plateau) == pytest.approx(expected, abs=0.1)
     # The band ends when the exposure start passes the flash: exposure_ms later.
     assert half_rise(plateau - profile[70:], plateau) + 70 == pytest.approx(
-        expected + CAM.exposure_ms / CAM.row_time_ms, abs=0.1)
+        expected + CAM.exposure_ms / CAM.row_time_ms, abs=0.1
+    )
 
 
 def test_flipped_camera_band_is_mirrored(empty_scene):
@@ -134,7 +161,12 @@ def test_dropped_frames_are_missing_and_mp4_keeps_90khz_stamps(rendered):
     true = sc.cameras[0].start_ms + np.array(cam.frame_index) * sc.cameras[0].frame_period_ms
     assert np.allclose(cam.frame_times_ms, true, atol=1e-9, rtol=0)
     assert sorted(p.name for p in out.iterdir()) == [
-        "cam1.mp4", "cam2.mkv", "detections.csv", "homographies.json", "truth.json"]
+        "cam1.mp4",
+        "cam2.mkv",
+        "detections.csv",
+        "homographies.json",
+        "truth.json",
+    ]
     assert np.allclose(stamps, np.round(true * 90) / 90, atol=1e-9, rtol=0)
     assert np.allclose(stamps, cam.stamps_ms, atol=1e-9, rtol=0)
     gaps = np.round(np.diff(stamps) / sc.cameras[0].frame_period_ms)
@@ -171,8 +203,9 @@ def test_reference_global_time_is_frame_time_plus_rows(rendered):
     assert np.array_equal(again.global_time_ms("cam2", frames, rows), truth.global_time_ms("cam2", frames, rows))
     # A drifting drift: the global time follows the quadratic clock, not the affine model.
     rate = 2.0  # ppm/s
-    drifting = dataclasses.replace(truth, cameras=dict(
-        truth.cameras, cam2=dataclasses.replace(c2, drift_rate_ppm_per_s=rate)))
+    drifting = dataclasses.replace(
+        truth, cameras=dict(truth.cameras, cam2=dataclasses.replace(c2, drift_rate_ppm_per_s=rate))
+    )
     t = np.array(c2.frame_times_ms)[frames] + (c2.r0 + rows) * c2.sensor_row_ms
     extra = 0.5 * rate * 1e-9 * t**2 / (1 + truth.cameras["cam1"].drift_ppm * 1e-6)
     assert np.allclose(drifting.global_time_ms("cam2", frames, rows), model + extra, atol=1e-6, rtol=0)

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
+from synthetic import observe
 
 from flashsync.errors import FlashsyncError
 from flashsync.solve import Events, solve_clocks
-from synthetic import observe
 
 CAMERAS = [  # alpha, beta_ms, row_time_ms, fps, height
     (1.0, 0.0, 0.0370, 25.0, 1000),
@@ -87,6 +87,7 @@ def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.
     """Two cameras over ``hours``; camera 1's rate changes linearly (temperature). Returns
     the events, camera 1's frame times and its true global frame starts."""
     from flashsync.solve import Events
+
     span = hours * 3_600_000.0
     tau = np.sort(rng.uniform(1_000.0, span - 1_000.0, n_flashes))
     camera, flash, t_frame, q = [], [], [], []
@@ -94,7 +95,12 @@ def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.
     for index, (fps, row_time, k) in enumerate([(25.0, 0.037, 0.0), (30.0, 0.031, rate_change_ppm_per_hour)]):
         frames = np.arange(-1_000.0, span + 1_000.0, 1000.0 / fps)
         # drift 10 ppm, plus k ppm per hour of change: d(rate)/dt = k * 1e-6 / 3.6e6 per ms
-        starts = frames + (10e-6 if index else 0.0) * frames + 0.5 * k * 1e-6 / 3.6e6 * frames**2 + (-500.0 if index else 0.0)
+        starts = (
+            frames
+            + (10e-6 if index else 0.0) * frames
+            + 0.5 * k * 1e-6 / 3.6e6 * frames**2
+            + (-500.0 if index else 0.0)
+        )
         frame = np.searchsorted(starts, tau, side="right") - 1
         rows = (tau - starts[frame]) / row_time
         seen = rows <= 999
@@ -110,6 +116,7 @@ def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.
 def test_changing_clock_rate_gets_a_richer_drift_model():
     from flashsync.model import CameraClock
     from flashsync.solve import solve_with_drift_model
+
     events, (frames, true_starts) = drifting_observations(np.random.default_rng(8), 2.0)
     affine = solve_clocks(events, n_cameras=2)
     chosen = solve_with_drift_model(events, n_cameras=2)
@@ -117,8 +124,17 @@ def test_changing_clock_rate_gets_a_richer_drift_model():
     errors = {}
     for name, solution in (("affine", affine), ("chosen", chosen)):
         s = solution.cameras[1]
-        clock = CameraClock("c", frames, 1000, 1000, s.alpha, s.beta_ms, s.row_time_ms,
-                            drift_knots_ms=s.knots_ms, drift_warp_ms=s.warp_ms)
+        clock = CameraClock(
+            "c",
+            frames,
+            1000,
+            1000,
+            s.alpha,
+            s.beta_ms,
+            s.row_time_ms,
+            drift_knots_ms=s.knots_ms,
+            drift_warp_ms=s.warp_ms,
+        )
         inside = (frames > events.t_frame_ms.min()) & (frames < events.t_frame_ms.max())
         errors[name] = np.max(np.abs(clock.frame_start_ms(frames[inside]) - true_starts[inside]))
     assert errors["affine"] > 1.0 and errors["chosen"] < errors["affine"] / 20, errors
@@ -126,5 +142,6 @@ def test_changing_clock_rate_gets_a_richer_drift_model():
 
 def test_steady_clock_stays_affine():
     from flashsync.solve import solve_with_drift_model
+
     events, _ = drifting_observations(np.random.default_rng(9), 0.0)
     assert solve_with_drift_model(events, n_cameras=2).cameras[1].warp_ms.size == 0

@@ -29,7 +29,7 @@ def test_b_frames_come_back_in_presentation_order(tmp_path):
 
 def test_rtp_wraparound_is_unwrapped():
     start = 2**32 - 3 * 3600
-    stamps = (start + np.arange(8) * 3600) % 2**32     # wraps after the third frame
+    stamps = (start + np.arange(8) * 3600) % 2**32  # wraps after the third frame
     assert stamps[3] < stamps[2]
     np.testing.assert_allclose(rtp_timestamps(stamps), np.arange(8) * 40.0)
 
@@ -50,11 +50,14 @@ def test_csv_timestamps_in_ms(tmp_path):
     np.testing.assert_allclose(csv_timestamps(path), [0.0, 33.4, 66.7])
 
 
-@pytest.mark.parametrize("content, message", [
-    ("frame,when\n0,1\n", "no timestamp column"),
-    ("t_ms\n0\nabc\n5\n", "1 frames have no timestamp"),
-    ("t_ms\n0\n40\n40\n", "not increasing at frame 2"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("frame,when\n0,1\n", "no timestamp column"),
+        ("t_ms\n0\nabc\n5\n", "1 frames have no timestamp"),
+        ("t_ms\n0\n40\n40\n", "not increasing at frame 2"),
+    ],
+)
 def test_bad_timestamp_csv(tmp_path, content, message):
     path = tmp_path / "t.csv"
     path.write_text(content)

@@ -13,7 +13,7 @@ from tracking_adapter.formats import load_homographies, read_detections
 from tracking_adapter.validate import format_report, image_to_plane, validate
 
 SPEED_MPS = 36.0
-PX_M = 0.01                                              # plane metres per image px
+PX_M = 0.01  # plane metres per image px
 
 
 def straight_track(model, row_by_camera, n_frames=60):
@@ -41,10 +41,10 @@ def straight_track(model, row_by_camera, n_frames=60):
 @pytest.fixture
 def two_cameras():
     clocks = {
-        "a": CameraClock("a", np.arange(60) * 40.0, height=100, width=100000,
-                         row_time_ms=0.35),
-        "b": CameraClock("b", np.arange(60) * 33.3 + 5000.0, height=100, width=100000,
-                         alpha=1.002, beta_ms=-4990.0, row_time_ms=0.3),
+        "a": CameraClock("a", np.arange(60) * 40.0, height=100, width=100000, row_time_ms=0.35),
+        "b": CameraClock(
+            "b", np.arange(60) * 33.3 + 5000.0, height=100, width=100000, alpha=1.002, beta_ms=-4990.0, row_time_ms=0.3
+        ),
     }
     return SyncModel("a", clocks)
 
@@ -68,10 +68,9 @@ def test_exact_model_gives_zero_and_the_baselines_their_known_errors(two_cameras
 def test_gap_limit_and_skip_reasons(two_cameras):
     detections, homographies = straight_track(two_cameras, {"a": 50.0, "b": 50.0})
     detections = detections[(detections.camera == "b") | (detections.frame % 4 == 0)]
-    default = validate(detections, two_cameras, homographies)       # 2.5 x 40 ms < 160 ms
+    default = validate(detections, two_cameras, homographies)  # 2.5 x 40 ms < 160 ms
     a_to_b, b_to_a = (pair.stats["subframe"] for pair in default.pairs)
-    assert (a_to_b.triples, a_to_b.median_m, a_to_b.skipped) == (
-        0, None, {"A's gap over the limit": 60})
+    assert (a_to_b.triples, a_to_b.median_m, a_to_b.skipped) == (0, None, {"A's gap over the limit": 60})
     # a's 15 detections, 0 ... 56: the first is before b's first, 52 and 56 after b's last
     assert (b_to_a.triples, b_to_a.skipped) == (12, {"outside A's track": 3})
     wide = validate(detections, two_cameras, homographies, max_gap_ms=170.0)
@@ -81,12 +80,17 @@ def test_gap_limit_and_skip_reasons(two_cameras):
 
 def test_objects_are_interpolated_with_their_own_track(two_cameras):
     one, homographies = straight_track(two_cameras, {"a": 30.0, "b": 70.0})
-    other = one.assign(x=one.x + 5000.0)                            # 50 m further along
+    other = one.assign(x=one.x + 5000.0)  # 50 m further along
     detections = pd.concat([one.assign(object=1), other.assign(object=2)], ignore_index=True)
     report = validate(detections.sample(frac=1.0, random_state=0), two_cameras, homographies)
     assert all(p.stats["subframe"].max_m < 1e-9 for p in report.pairs)
-    assert validate(detections.rename(columns={"object": "id"}), two_cameras,
-                    homographies).pairs[0].stats["subframe"].max_m < 1e-9
+    assert (
+        validate(detections.rename(columns={"object": "id"}), two_cameras, homographies)
+        .pairs[0]
+        .stats["subframe"]
+        .max_m
+        < 1e-9
+    )
 
 
 def test_unusable_detections_are_counted(two_cameras):
@@ -95,16 +99,17 @@ def test_unusable_detections_are_counted(two_cameras):
     detections.loc[0, "x"] = "n/a"
     detections.loc[1, "frame"] = 999
     report = validate(detections, two_cameras, {"a": homographies["a"]})
-    assert report.not_used == {"frame past the end of the video": 1,
-                               "x missing or not a number": 1,
-                               "camera without homography": 60}
+    assert report.not_used == {
+        "frame past the end of the video": 1,
+        "x missing or not a number": 1,
+        "camera without homography": 60,
+    }
     assert report.pairs == []
 
 
 def test_image_to_plane():
     homography = np.array([[2.0, 0, 1], [0, 3, 0], [0, 0, 0.5]])
-    np.testing.assert_allclose(image_to_plane(np.array([1.0, 0]), np.array([1.0, 2]),
-                                              homography), [[6, 6], [2, 12]])
+    np.testing.assert_allclose(image_to_plane(np.array([1.0, 0]), np.array([1.0, 2]), homography), [[6, 6], [2, 12]])
 
 
 @pytest.fixture(scope="module")
@@ -117,31 +122,45 @@ def tiny(tmp_path_factory):
 
 def true_model(truth, frame_times="frame_times_ms"):
     """The ground-truth sync model (true frame times unless told otherwise)."""
-    return SyncModel(truth.reference, {
-        name: CameraClock(name, np.asarray(getattr(camera, frame_times)), camera.height,
-                          camera.width, camera.alpha, camera.beta_ms, camera.row_time_ms,
-                          camera.flipped, exposure_ms=camera.exposure_ms)
-        for name, camera in truth.cameras.items()})
+    return SyncModel(
+        truth.reference,
+        {
+            name: CameraClock(
+                name,
+                np.asarray(getattr(camera, frame_times)),
+                camera.height,
+                camera.width,
+                camera.alpha,
+                camera.beta_ms,
+                camera.row_time_ms,
+                camera.flipped,
+                exposure_ms=camera.exposure_ms,
+            )
+            for name, camera in truth.cameras.items()
+        },
+    )
 
 
 def test_simulated_puck_with_the_true_model(tiny):
     truth = load_ground_truth(tiny)
     model = true_model(truth)
     detections = read_detections(tiny / "detections.csv")
-    for name in truth.cameras:                                 # the model is the truth
+    for name in truth.cameras:  # the model is the truth
         mine = detections[detections.camera == name]
         np.testing.assert_allclose(
             model.camera(name).t_global_ms(mine.frame, mine.y),
-            truth.global_time_ms(name, mine.frame.to_numpy(), mine.y.to_numpy()), atol=1e-4)
+            truth.global_time_ms(name, mine.frame.to_numpy(), mine.y.to_numpy()),
+            atol=1e-4,
+        )
     report = validate(detections, model, load_homographies(tiny / "homographies.json"))
     assert report.instant == "t_center_ms"
     assert len(report.pairs) == 2
     for pair in report.pairs:
         subframe, frame = pair.stats["subframe"], pair.stats["frame"]
         assert subframe.triples > 30
-        assert subframe.median_m < 0.002                      # detections rounded to 1e-3 px
+        assert subframe.median_m < 0.002  # detections rounded to 1e-3 px
         assert 5 * subframe.p95_m < frame.median_m
-        assert 0.1 < frame.p95_m < 0.8                        # half a readout at 36 m/s
+        assert 0.1 < frame.p95_m < 0.8  # half a readout at 36 m/s
     json.dumps(report.to_dict())
 
 
@@ -150,8 +169,7 @@ def test_simulated_timing_error_shows_as_speed_times_error(tiny):
     model = true_model(truth)
     cam2 = model.camera("cam2")
     model.cameras["cam2"] = replace(cam2, beta_ms=cam2.beta_ms + 2.0)
-    report = validate(read_detections(tiny / "detections.csv"), model,
-                      load_homographies(tiny / "homographies.json"))
+    report = validate(read_detections(tiny / "detections.csv"), model, load_homographies(tiny / "homographies.json"))
     for pair in report.pairs:
         assert pair.stats["subframe"].median_m == pytest.approx(SPEED_MPS * 0.002, rel=0.15)
 
@@ -159,12 +177,10 @@ def test_simulated_timing_error_shows_as_speed_times_error(tiny):
 def test_report_text(tiny):
     truth = load_ground_truth(tiny)
     detections = read_detections(tiny / "detections.csv")
-    report = validate(detections, true_model(truth, "stamps_ms"),
-                      load_homographies(tiny / "homographies.json"))
+    report = validate(detections, true_model(truth, "stamps_ms"), load_homographies(tiny / "homographies.json"))
     text = format_report(report)
     for pair in report.pairs:
-        line = next(line for line in text.splitlines()
-                    if line.startswith(f"{pair.interpolated} -> {pair.observed} "))
+        line = next(line for line in text.splitlines() if line.startswith(f"{pair.interpolated} -> {pair.observed} "))
         numbers = line.split()[3:]
         assert int(numbers[0]) == pair.stats["subframe"].triples
         assert float(numbers[1]) == pytest.approx(pair.stats["subframe"].median_m, abs=5e-4)

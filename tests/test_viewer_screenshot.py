@@ -19,19 +19,25 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-
 from test_viz import RERUN, free_port, quiet_rerun, tiny  # noqa: F401 (shared fixtures)
 
 CHROMIUM = Path("/usr/bin/chromium")
-CHROMIUM_FLAGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-                  "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync", "--no-first-run"]
+CHROMIUM_FLAGS = [
+    "--no-sandbox",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 VIEWPORT = {"width": 1024, "height": 640}
 SETTLE_S, TIMEOUT_S = 10.0, 150.0
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("playwright") is None or not CHROMIUM.exists(),
-    reason="needs the playwright package and Debian's /usr/bin/chromium")
+    reason="needs the playwright package and Debian's /usr/bin/chromium",
+)
 
 
 def busy_fraction(png: bytes) -> float:
@@ -47,9 +53,21 @@ def served(tiny):  # noqa: F811 (the imported fixture)
     """``rerun --serve-web`` on the recording; yields the viewer's address, then stops it."""
     web_port, grpc_port = free_port(), free_port()
     server = subprocess.Popen(
-        [str(RERUN), "--serve-web", "--bind", "127.0.0.1", "--web-viewer-port", str(web_port),
-         "--port", str(grpc_port), str(tiny["rrd"])],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        [
+            str(RERUN),
+            "--serve-web",
+            "--bind",
+            "127.0.0.1",
+            "--web-viewer-port",
+            str(web_port),
+            "--port",
+            str(grpc_port),
+            str(tiny["rrd"]),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
     try:
         address = f"http://127.0.0.1:{web_port}/"
         deadline = time.monotonic() + 60
@@ -63,7 +81,7 @@ def served(tiny):  # noqa: F811 (the imported fixture)
         source = urllib.parse.quote(f"rerun+http://127.0.0.1:{grpc_port}/proxy", safe="")
         yield f"{address}?url={source}"
     finally:
-        os.killpg(server.pid, signal.SIGTERM)    # the `rerun` script and the viewer binary
+        os.killpg(server.pid, signal.SIGTERM)  # the `rerun` script and the viewer binary
         server.wait(timeout=30)
 
 
@@ -74,13 +92,12 @@ def test_web_viewer_renders_the_recording(served, tmp_path):
         browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_FLAGS)
         try:
             page = browser.new_page(viewport=VIEWPORT)
-            page.set_default_timeout(120_000)   # software rendering on a busy machine is slow
+            page.set_default_timeout(120_000)  # software rendering on a busy machine is slow
             page.goto(served, wait_until="load")
             page.wait_for_selector("canvas")
-            time.sleep(SETTLE_S)       # the viewer's wasm, then the data and the videos
+            time.sleep(SETTLE_S)  # the viewer's wasm, then the data and the videos
             started = time.monotonic()
-            while busy_fraction(png := page.screenshot()) < 0.2 \
-                    and time.monotonic() - started < TIMEOUT_S:
+            while busy_fraction(png := page.screenshot()) < 0.2 and time.monotonic() - started < TIMEOUT_S:
                 time.sleep(3)
             (tmp_path / "viewer.png").write_bytes(png)
             canvas = page.locator("canvas").first.bounding_box()

@@ -56,17 +56,32 @@ def tiny(tiny_scenario, tmp_path_factory, quiet_rerun):
     puck = restamped[restamped["restamp_error"].isna()].iloc[:3]
     homographies = load_homographies(tiny_scenario / "homographies.json")
     plane_b = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(), homographies["cam2"])
-    validation = pd.DataFrame({"camera_a": "cam1", "camera_b": "cam2", "object": "puck",
-                               "t_global_ms": puck["t_global_ms"].to_numpy(),
-                               "x_b": plane_b[:, 0], "y_b": plane_b[:, 1],
-                               "x_a": plane_b[:, 0] + 0.1, "y_a": plane_b[:, 1] - 0.2,
-                               "error_m": np.hypot(0.1, 0.2)})
+    validation = pd.DataFrame(
+        {
+            "camera_a": "cam1",
+            "camera_b": "cam2",
+            "object": "puck",
+            "t_global_ms": puck["t_global_ms"].to_numpy(),
+            "x_b": plane_b[:, 0],
+            "y_b": plane_b[:, 1],
+            "x_a": plane_b[:, 0] + 0.1,
+            "y_a": plane_b[:, 1] - 0.2,
+            "error_m": np.hypot(0.1, 0.2),
+        }
+    )
     events = all_events(detections)
-    spurious = events.iloc[[0]].assign(camera="cam1", event=events["event"].max() + 1, frame=10,
-                                       row=50.25)          # an event no other camera saw
+    spurious = events.iloc[[0]].assign(
+        camera="cam1", event=events["event"].max() + 1, frame=10, row=50.25
+    )  # an event no other camera saw
     events = pd.concat([events, spurious], ignore_index=True)
-    data = dict(model=model, videos=videos, events=events, detections=restamped,
-                homographies=homographies, validation=validation)
+    data = dict(
+        model=model,
+        videos=videos,
+        events=events,
+        detections=restamped,
+        homographies=homographies,
+        validation=validation,
+    )
     directory = tmp_path_factory.mktemp("viz")
     save_model(model, directory / "sync.json")
     viz.save_recording(directory / "tiny.rrd", **data)
@@ -94,8 +109,9 @@ def recording(tiny):
 
 
 def test_recording_verifies_and_has_a_blueprint(tiny):
-    verify = subprocess.run([str(RERUN), "rrd", "verify", str(tiny["rrd"])],
-                            capture_output=True, text=True, timeout=120)
+    verify = subprocess.run(
+        [str(RERUN), "rrd", "verify", str(tiny["rrd"])], capture_output=True, text=True, timeout=120
+    )
     assert verify.returncode == 0, verify.stderr
     reader = rerun.chunk.RrdReader(tiny["rrd"])
     assert [store.application_id for store in reader.recordings()] == [viz.APPLICATION_ID]
@@ -104,20 +120,34 @@ def test_recording_verifies_and_has_a_blueprint(tiny):
 
 def test_entity_paths(recording):
     temporal, static = recording
-    expected = {"/events/cam1/matched", "/events/cam2/matched", "/events/log",
-                "/residuals/cam1/matched", "/residuals/cam2/matched",
-                "/residuals/cam2/sigma_plus", "/residuals/cam2/sigma_minus",
-                "/cameras/cam1/video", "/cameras/cam2/video",
-                "/cameras/cam1/flash_rows", "/cameras/cam2/flash_rows",
-                "/cameras/cam1/detections", "/cameras/cam2/detections",
-                "/plane/cam1/puck", "/plane/cam2/puck",
-                "/plane/validation/cam1_vs_cam2/puck/error",
-                "/plane/validation/cam1_vs_cam2/puck/interpolated",
-                "/validation/cam1_vs_cam2/puck"}
+    expected = {
+        "/events/cam1/matched",
+        "/events/cam2/matched",
+        "/events/log",
+        "/residuals/cam1/matched",
+        "/residuals/cam2/matched",
+        "/residuals/cam2/sigma_plus",
+        "/residuals/cam2/sigma_minus",
+        "/cameras/cam1/video",
+        "/cameras/cam2/video",
+        "/cameras/cam1/flash_rows",
+        "/cameras/cam2/flash_rows",
+        "/cameras/cam1/detections",
+        "/cameras/cam2/detections",
+        "/plane/cam1/puck",
+        "/plane/cam2/puck",
+        "/plane/validation/cam1_vs_cam2/puck/error",
+        "/plane/validation/cam1_vs_cam2/puck/interpolated",
+        "/validation/cam1_vs_cam2/puck",
+    }
     assert expected <= set(temporal)
     assert {"/cameras/cam1/video", "/cameras/cam2/video", "/plane/rink", "/plane"} <= set(static)
-    timelines = {column for table in temporal.values() for column in table
-                 if column in ("global_time", "frame_cam1", "frame_cam2", "log_time", "log_tick")}
+    timelines = {
+        column
+        for table in temporal.values()
+        for column in table
+        if column in ("global_time", "frame_cam1", "frame_cam2", "log_time", "log_tick")
+    }
     assert timelines == {"global_time", "frame_cam1", "frame_cam2"}
 
 
@@ -154,10 +184,10 @@ def test_residuals_are_the_models(tiny, recording, name):
     events = tiny["model"].events
     mine = events[(events["camera"] == name) & events["inlier"]].sort_values("t_global_ms")
     logged = temporal[f"/residuals/{name}/matched"].sort_values("global_time")
-    np.testing.assert_allclose(np.concatenate(logged["Scalars:scalars"].to_numpy()),
-                               mine["residual_ms"], rtol=0, atol=1e-12)
-    np.testing.assert_array_equal(nanos(logged["global_time"]),
-                                  np.round(mine["t_global_ms"].to_numpy() * 1e6))
+    np.testing.assert_allclose(
+        np.concatenate(logged["Scalars:scalars"].to_numpy()), mine["residual_ms"], rtol=0, atol=1e-12
+    )
+    np.testing.assert_array_equal(nanos(logged["global_time"]), np.round(mine["t_global_ms"].to_numpy() * 1e6))
     camera = tiny["model"].cameras[name]
     if not np.any(camera.covariance):
         assert f"/residuals/{name}/sigma_plus" not in temporal
@@ -165,8 +195,7 @@ def test_residuals_are_the_models(tiny, recording, name):
     band = temporal[f"/residuals/{name}/sigma_plus"].sort_values("global_time")
     sigma = np.concatenate(band["Scalars:scalars"].to_numpy())
     assert 0 < len(sigma) <= camera.n_frames
-    assert sigma.max() == pytest.approx(camera.t_global_std_ms(np.arange(camera.n_frames),
-                                                               camera.height // 2).max())
+    assert sigma.max() == pytest.approx(camera.t_global_std_ms(np.arange(camera.n_frames), camera.height // 2).max())
 
 
 def test_event_raster_has_every_detected_edge_in_its_lane(tiny, recording):
@@ -182,7 +211,7 @@ def test_event_raster_has_every_detected_edge_in_its_lane(tiny, recording):
                 continue
             assert len(logged) == len(expected)
             assert {float(v[0]) for v in logged["Scalars:scalars"]} == {float(lane)}
-    assert "/events/cam1/unmatched" in temporal           # the made-up event
+    assert "/events/cam1/unmatched" in temporal  # the made-up event
     model_events = tiny["model"].events
     matched_events = model_events[model_events["inlier"]].groupby("camera").size()
     in_table = table[table["status"] == "matched"].groupby("camera")["event"].nunique()
@@ -199,8 +228,7 @@ def test_flash_log_links_the_cameras_of_each_flash(tiny, recording):
     assert len(texts) == events["flash"].nunique() + n_unmatched
     for flash, group in events.groupby("flash"):
         line = next(t for t in texts if t.startswith(f"flash {flash}:"))
-        assert all(f"{name} frame {frame}" in line
-                   for name, frame in zip(group["camera"], group["frame"]))
+        assert all(f"{name} frame {frame}" in line for name, frame in zip(group["camera"], group["frame"]))
 
 
 def test_flash_rows_drawn_on_their_frames_only(tiny, recording):
@@ -211,7 +239,7 @@ def test_flash_rows_drawn_on_their_frames_only(tiny, recording):
     for frame, strips in zip(rows["frame_cam1"], rows["LineStrips2D:strips"]):
         expected = np.sort(edges.loc[edges["frame"] == frame, "row"].to_numpy() + 0.5)
         ys = np.sort([strip[0][1] for strip in strips])
-        np.testing.assert_allclose(ys, expected, rtol=0, atol=1e-4)   # float32 in Rerun
+        np.testing.assert_allclose(ys, expected, rtol=0, atol=1e-4)  # float32 in Rerun
         for strip in strips:
             assert [point[0] for point in strip] == [0.0, camera.width]
     cleared = rows[[len(s) == 0 for s in rows["LineStrips2D:strips"]]]["frame_cam1"]
@@ -233,14 +261,15 @@ def test_detections_drawn_on_their_frames_at_pixel_centres(tiny, recording):
 def test_plane_observations_are_projected_detections(tiny, recording):
     temporal, _ = recording
     detections = tiny["detections"]
-    puck = detections[(detections["camera"] == "cam2") & (detections["object"] == "puck")
-                      & detections["restamp_error"].isna()]
+    puck = detections[
+        (detections["camera"] == "cam2") & (detections["object"] == "puck") & detections["restamp_error"].isna()
+    ]
     logged = temporal["/plane/cam2/puck"].sort_values("frame_cam2")
     positions = np.stack([p[0] for p in logged["Points3D:positions"]])
-    expected = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(),
-                              tiny["homographies"]["cam2"])
-    np.testing.assert_allclose(positions[:, :2], expected[np.argsort(puck["frame"].to_numpy(),
-                                                                      kind="stable")], atol=1e-4)
+    expected = image_to_plane(puck["x"].to_numpy(), puck["y"].to_numpy(), tiny["homographies"]["cam2"])
+    np.testing.assert_allclose(
+        positions[:, :2], expected[np.argsort(puck["frame"].to_numpy(), kind="stable")], atol=1e-4
+    )
     assert np.all(positions[:, 2] == 0)
     instants = puck.get("t_center_ms", puck["t_global_ms"]).to_numpy()
     np.testing.assert_array_equal(nanos(logged["global_time"]), np.round(np.sort(instants) * 1e6))
@@ -257,8 +286,7 @@ def test_each_camera_keeps_its_colour(recording):
         in_plane = colors(f"/plane/{name}/puck", "Points3D:colors")
         series = {int(c[0]) for c in static[f"/events/{name}/matched"]["SeriesPoints:colors"]}
         assert len(on_frames) == 1 and on_frames == in_plane == series
-    assert colors("/plane/cam1/puck", "Points3D:colors") != colors("/plane/cam2/puck",
-                                                                   "Points3D:colors")
+    assert colors("/plane/cam1/puck", "Points3D:colors") != colors("/plane/cam2/puck", "Points3D:colors")
 
 
 def test_validation_arrows_point_from_b_to_interpolated_a(tiny, recording):
@@ -285,8 +313,7 @@ def test_model_alone_with_a_rejected_event(tiny, tmp_path):
     residual = temporal[f"/residuals/{rejected.camera}/rejected"]["Scalars:scalars"]
     assert residual[0][0] == pytest.approx(rejected.residual_ms, abs=1e-12)
     log = temporal["/events/log"]
-    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"])
-              if level[0] == "WARN"]
+    warned = [text[0] for text, level in zip(log["TextLog:text"], log["TextLog:level"]) if level[0] == "WARN"]
     assert len(warned) == 1 and warned[0].startswith(f"flash {rejected.flash}:")
     assert "REJECTED" in warned[0]
     assert "/residuals/cam1/sigma_plus" not in temporal
@@ -302,8 +329,9 @@ def test_mkv_is_remuxed_packet_for_packet(tiny, tmp_path):
     def packets(path):
         with av.open(str(path)) as container:
             stream = container.streams.video[0]
-            return [(bytes(p), round(float(p.pts * stream.time_base) * 1000, 3))
-                    for p in container.demux(stream) if p.size]
+            return [
+                (bytes(p), round(float(p.pts * stream.time_base) * 1000, 3)) for p in container.demux(stream) if p.size
+            ]
 
     assert packets(remuxed) == packets(source)
     mp4 = tiny["videos"][0]
@@ -348,14 +376,21 @@ def free_port() -> int:
 
 def test_serve_hosts_the_web_viewer_until_ctrl_c(tiny):
     web_port, grpc_port = free_port(), free_port()
-    script = ("import viz; from flashsync.model_file import load_model; "
-              f"viz.serve(load_model({str(tiny['directory'] / 'sync.json')!r}), "
-              f"web_port={web_port}, grpc_port={grpc_port})")
-    server = subprocess.Popen([sys.executable, "-c", script], cwd=Path(__file__).parents[1],
-                              stderr=subprocess.PIPE, text=True, start_new_session=True)
+    script = (
+        "import viz; from flashsync.model_file import load_model; "
+        f"viz.serve(load_model({str(tiny['directory'] / 'sync.json')!r}), "
+        f"web_port={web_port}, grpc_port={grpc_port})"
+    )
+    server = subprocess.Popen(
+        [sys.executable, "-c", script],
+        cwd=Path(__file__).parents[1],
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         line, deadline = "", time.monotonic() + 120
-        while "serving the Rerun web viewer" not in line:     # printed once all is logged
+        while "serving the Rerun web viewer" not in line:  # printed once all is logged
             assert server.poll() is None and time.monotonic() < deadline, "serve did not start"
             if select.select([server.stderr], [], [], 1.0)[0]:
                 line = server.stderr.readline()

@@ -10,13 +10,20 @@ Examples
 >>> print(format_report(report))                                                # doctest: +SKIP
 """
 
-from tracking_adapter.formats import (load_homographies, read_detections, read_mot,
-                                      write_detections)
+from tracking_adapter.formats import load_homographies, read_detections, read_mot, write_detections
 from tracking_adapter.restamp import RestampSummary, format_summary, restamp, restamp_file
 from tracking_adapter.validate import ValidationReport, format_report, validate
 
 __all__ = [
-    "RestampSummary", "ValidationReport", "format_report", "format_summary",
-    "load_homographies", "read_detections", "read_mot", "restamp", "restamp_file", "validate",
+    "RestampSummary",
+    "ValidationReport",
+    "format_report",
+    "format_summary",
+    "load_homographies",
+    "read_detections",
+    "read_mot",
+    "restamp",
+    "restamp_file",
+    "validate",
     "write_detections",
 ]

@@ -41,15 +41,14 @@ def detections_format(path: str | Path, input_format: str | None = None) -> str:
     """
     if input_format is not None:
         if input_format not in set(_EXTENSIONS.values()):
-            raise FlashsyncError(f"{path}: unknown detections format {input_format!r}; "
-                                 "use csv, parquet or mot")
+            raise FlashsyncError(f"{path}: unknown detections format {input_format!r}; use csv, parquet or mot")
         return input_format
     try:
         return _EXTENSIONS[Path(path).suffix.lower()]
     except KeyError:
         raise FlashsyncError(
-            f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet "
-            "or .txt (MOTChallenge)") from None
+            f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet or .txt (MOTChallenge)"
+        ) from None
 
 
 def require_columns(columns: Iterable[str], required: Iterable[str], source: str | Path) -> None:
@@ -58,18 +57,19 @@ def require_columns(columns: Iterable[str], required: Iterable[str], source: str
     columns = list(columns)
     duplicates = sorted({str(name) for name in columns if columns.count(name) > 1})
     if duplicates:
-        raise FlashsyncError(f"{source}: duplicate column names {', '.join(duplicates)}; "
-                             "rename them so that every column name is unique")
+        raise FlashsyncError(
+            f"{source}: duplicate column names {', '.join(duplicates)}; rename them so that every column name is unique"
+        )
     missing = [name for name in required if name not in columns]
     if missing:
         raise FlashsyncError(
             f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
             f"(it has {', '.join(map(str, columns)) or 'no columns'}); detections need "
-            f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file")
+            f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file"
+        )
 
 
-def read_detections(path: str | Path, *, camera: str | None = None,
-                    input_format: str | None = None) -> pd.DataFrame:
+def read_detections(path: str | Path, *, camera: str | None = None, input_format: str | None = None) -> pd.DataFrame:
     """Read a detections file into a DataFrame (column types inferred).
 
     Parameters
@@ -100,16 +100,16 @@ def read_detections(path: str | Path, *, camera: str | None = None,
             return pd.read_parquet(path)
         return pd.read_csv(path)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
-                             "check the file") from None
+        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
 
 
 def write_detections(table: pd.DataFrame, path: str | Path) -> None:
     """Write ``table`` to ``path`` (CSV or Parquet by extension) atomically, without index."""
     kind = detections_format(path)
     if kind == "mot":
-        raise FlashsyncError(f"{path}: detections are written as .csv or .parquet, not .txt; "
-                             "change the output extension")
+        raise FlashsyncError(
+            f"{path}: detections are written as .csv or .parquet, not .txt; change the output extension"
+        )
     write_table(table, path)
 
 
@@ -145,29 +145,35 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     try:
         table = pd.read_csv(path, header=0 if has_header else None, skipinitialspace=True)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(f"{path}: cannot read it as a MOTChallenge file "
-                             f"({first_line(error)}); check the file") from None
+        raise FlashsyncError(
+            f"{path}: cannot read it as a MOTChallenge file ({first_line(error)}); check the file"
+        ) from None
     if not has_header:
         if table.shape[1] < len(MOT_COLUMNS) - 1:
             raise FlashsyncError(
                 f"{path}: {table.shape[1]} columns, a MOTChallenge file has at least 6 "
-                f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format")
-        table.columns = [MOT_COLUMNS[i] if i < len(MOT_COLUMNS) else f"mot_{i + 1}"
-                         for i in range(table.shape[1])]
+                f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format"
+            )
+        table.columns = [MOT_COLUMNS[i] if i < len(MOT_COLUMNS) else f"mot_{i + 1}" for i in range(table.shape[1])]
     table.columns = [str(name).strip() for name in table.columns]
     require_mot = MOT_COLUMNS[:6]
     missing = [name for name in require_mot if name not in table.columns]
     if missing:
-        raise FlashsyncError(f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
-                             f"columns {', '.join(MOT_COLUMNS)} or remove the header line")
+        raise FlashsyncError(
+            f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
+            f"columns {', '.join(MOT_COLUMNS)} or remove the header line"
+        )
     numbers = {name: pd.to_numeric(table[name], errors="coerce") for name in require_mot}
-    new = pd.DataFrame({
-        "camera": camera if camera is not None else path.stem,
-        "frame": numbers["frame"] - 1,
-        "object": table["id"],
-        "x": numbers["bb_left"] + numbers["bb_width"] / 2,
-        "y": numbers["bb_top"] + numbers["bb_height"] / 2,
-    }, index=table.index)
+    new = pd.DataFrame(
+        {
+            "camera": camera if camera is not None else path.stem,
+            "frame": numbers["frame"] - 1,
+            "object": table["id"],
+            "x": numbers["bb_left"] + numbers["bb_width"] / 2,
+            "y": numbers["bb_top"] + numbers["bb_height"] / 2,
+        },
+        index=table.index,
+    )
     rest = table.drop(columns=["frame", "id"])
     rest.columns = [f"mot_{name}" if name in new.columns else name for name in rest.columns]
     return pd.concat([new, rest], axis=1)
@@ -201,16 +207,17 @@ def read_csv_header(path: str | Path) -> CsvHeader:
     with open(path, "rb") as file:
         line = file.readline()
     if not line.strip():
-        raise FlashsyncError(f"{path}: empty file or empty first line; a detections CSV starts "
-                             "with a header line such as camera,frame,x,y")
+        raise FlashsyncError(
+            f"{path}: empty file or empty first line; a detections CSV starts "
+            "with a header line such as camera,frame,x,y"
+        )
     eol = b"\r\n" if line.endswith(b"\r\n") else b"\n"
-    raw = line[:-len(eol)] if line.endswith(eol) else line
-    text = raw[len(_UTF8_BOM):] if raw.startswith(_UTF8_BOM) else raw
+    raw = line[: -len(eol)] if line.endswith(eol) else line
+    text = raw[len(_UTF8_BOM) :] if raw.startswith(_UTF8_BOM) else raw
     try:
         names = next(csv.reader([text.decode("utf-8")]))
     except UnicodeDecodeError:
-        raise FlashsyncError(f"{path}: the header line is not UTF-8 text; save the file as "
-                             "UTF-8 CSV") from None
+        raise FlashsyncError(f"{path}: the header line is not UTF-8 text; save the file as UTF-8 CSV") from None
     return CsvHeader(names=names, raw=raw, eol=eol, size=len(line))
 
 
@@ -244,21 +251,23 @@ def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
     try:
         document = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise FlashsyncError(f"{path}: not a JSON file ({first_line(error)}); give "
-                             "{\"camera\": [[...], [...], [...]]} with 3x3 matrices") from None
+        raise FlashsyncError(
+            f'{path}: not a JSON file ({first_line(error)}); give {{"camera": [[...], [...], [...]]}} with 3x3 matrices'
+        ) from None
     if not isinstance(document, dict) or not document:
-        raise FlashsyncError(f"{path}: expected a JSON object {{camera: 3x3 matrix}}; "
-                             "write one 3x3 image->plane homography per camera")
+        raise FlashsyncError(
+            f"{path}: expected a JSON object {{camera: 3x3 matrix}}; write one 3x3 image->plane homography per camera"
+        )
     homographies = {}
     for name, matrix in document.items():
         try:
             matrix = np.asarray(matrix, dtype=np.float64)
         except (TypeError, ValueError):
             matrix = np.empty(0)
-        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) \
-                or abs(np.linalg.det(matrix)) < 1e-300:
-            raise FlashsyncError(f"{path}: the homography of camera {name!r} is not an "
-                                 "invertible 3x3 matrix of numbers; fix that entry")
+        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-300:
+            raise FlashsyncError(
+                f"{path}: the homography of camera {name!r} is not an invertible 3x3 matrix of numbers; fix that entry"
+            )
         homographies[str(name)] = matrix
     return homographies
 

@@ -35,9 +35,15 @@ import pyarrow.parquet as pq
 from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
 from flashsync.model import SyncModel
-from tracking_adapter.formats import (REQUIRED_COLUMNS, detections_format, first_line,
-                                      iter_csv_blocks, read_csv_header, read_mot,
-                                      require_columns)
+from tracking_adapter.formats import (
+    REQUIRED_COLUMNS,
+    detections_format,
+    first_line,
+    iter_csv_blocks,
+    read_csv_header,
+    read_mot,
+    require_columns,
+)
 
 #: Why a row was not stamped, in the order the checks run (the first failing one is reported).
 REASONS = (
@@ -80,9 +86,14 @@ class RestampSummary:
     failed: dict[str, int] = field(default_factory=dict)
 
 
-def restamp(detections: pd.DataFrame, model: SyncModel, *,
-            exposure_ms: Mapping[str, float] | None = None, with_std: bool = False,
-            source: str = "detections") -> pd.DataFrame:
+def restamp(
+    detections: pd.DataFrame,
+    model: SyncModel,
+    *,
+    exposure_ms: Mapping[str, float] | None = None,
+    with_std: bool = False,
+    source: str = "detections",
+) -> pd.DataFrame:
     """Add global times to a detections table.
 
     Parameters
@@ -115,18 +126,24 @@ def restamp(detections: pd.DataFrame, model: SyncModel, *,
     require_columns(names, REQUIRED_COLUMNS, source)
     _check_free(names, source)
     exposures = _exposures(model, exposure_ms)
-    columns, reasons = _stamp([_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS],
-                              model, exposures, with_std)
-    columns["restamp_error"] = pd.array(np.array([None, *REASONS], dtype=object)[reasons],
-                                        dtype="str")
-    return detections.assign(**{name: pd.Series(values, index=detections.index)
-                                for name, values in columns.items()})
+    columns, reasons = _stamp(
+        [_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS], model, exposures, with_std
+    )
+    columns["restamp_error"] = pd.array(np.array([None, *REASONS], dtype=object)[reasons], dtype="str")
+    return detections.assign(**{name: pd.Series(values, index=detections.index) for name, values in columns.items()})
 
 
-def restamp_file(in_path: str | Path, out_path: str | Path, model: SyncModel, *,
-                 camera: str | None = None, input_format: str | None = None,
-                 exposure_ms: Mapping[str, float] | None = None, with_std: bool = False,
-                 block_bytes: int = 1 << 24) -> RestampSummary:
+def restamp_file(
+    in_path: str | Path,
+    out_path: str | Path,
+    model: SyncModel,
+    *,
+    camera: str | None = None,
+    input_format: str | None = None,
+    exposure_ms: Mapping[str, float] | None = None,
+    with_std: bool = False,
+    block_bytes: int = 1 << 24,
+) -> RestampSummary:
     """Re-stamp a detections file into another, streaming, with bounded memory.
 
     CSV to CSV copies every input line byte for byte and appends the new values, so
@@ -162,36 +179,44 @@ def restamp_file(in_path: str | Path, out_path: str | Path, model: SyncModel, *,
     kind = detections_format(in_path, input_format)
     out_kind = detections_format(out_path)
     if camera is not None and kind != "mot":
-        raise FlashsyncError(f"{in_path}: a camera name is only given for MOTChallenge files; "
-                             "the detections' camera column names the cameras")
+        raise FlashsyncError(
+            f"{in_path}: a camera name is only given for MOTChallenge files; "
+            "the detections' camera column names the cameras"
+        )
     if out_kind == "mot":
-        raise FlashsyncError(f"{out_path}: re-stamped detections are written as .csv or "
-                             ".parquet; change the output extension")
+        raise FlashsyncError(
+            f"{out_path}: re-stamped detections are written as .csv or .parquet; change the output extension"
+        )
     exposures = _exposures(model, exposure_ms)
     summary = RestampSummary(source=str(in_path), output=str(out_path))
     if kind == "csv" and out_kind == "csv":
-        _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std,
-                          block_bytes, summary)
+        _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std, block_bytes, summary)
     else:
-        _restamp_batches(Path(in_path), kind, camera, Path(out_path), out_kind, model,
-                         exposures, with_std, block_bytes, summary)
+        _restamp_batches(
+            Path(in_path), kind, camera, Path(out_path), out_kind, model, exposures, with_std, block_bytes, summary
+        )
     return summary
 
 
 def format_summary(summary: RestampSummary) -> str:
     """One line for the terminal, e.g. ``detections.csv -> out.csv: 1000 rows, 998 stamped,
     2 not stamped (2 unknown camera)``."""
-    text = (f"{summary.source} -> {summary.output}: {summary.rows} rows, "
-            f"{summary.stamped} stamped")
+    text = f"{summary.source} -> {summary.output}: {summary.rows} rows, {summary.stamped} stamped"
     if summary.failed:
         reasons = ", ".join(f"{count} {reason}" for reason, count in summary.failed.items())
         text += f", {summary.rows - summary.stamped} not stamped ({reasons})"
     return text
 
 
-def _restamp_csv_text(in_path: Path, out_path: Path, model: SyncModel,
-                      exposures: dict[str, float | None], with_std: bool, block_bytes: int,
-                      summary: RestampSummary) -> None:
+def _restamp_csv_text(
+    in_path: Path,
+    out_path: Path,
+    model: SyncModel,
+    exposures: dict[str, float | None],
+    with_std: bool,
+    block_bytes: int,
+    summary: RestampSummary,
+) -> None:
     header = read_csv_header(in_path)
     require_columns(header.names, REQUIRED_COLUMNS, in_path)
     _check_free(header.names, in_path)
@@ -199,11 +224,13 @@ def _restamp_csv_text(in_path: Path, out_path: Path, model: SyncModel,
         read_options=pacsv.ReadOptions(column_names=header.names),
         parse_options=pacsv.ParseOptions(newlines_in_values=False),
         convert_options=pacsv.ConvertOptions(
-            include_columns=list(REQUIRED_COLUMNS), strings_can_be_null=True,
-            column_types={name: pa.string() for name in REQUIRED_COLUMNS}))
+            include_columns=list(REQUIRED_COLUMNS),
+            strings_can_be_null=True,
+            column_types={name: pa.string() for name in REQUIRED_COLUMNS},
+        ),
+    )
     names = _new_columns(exposures, with_std)
-    with open(in_path, "rb") as source, atomic_output(out_path) as temporary, \
-            open(temporary, "wb") as output:
+    with open(in_path, "rb") as source, atomic_output(out_path) as temporary, open(temporary, "wb") as output:
         source.seek(header.size)
         output.write(header.raw + b"," + ",".join(names).encode())
         for block in iter_csv_blocks(source, block_bytes, header.eol):
@@ -212,20 +239,19 @@ def _restamp_csv_text(in_path: Path, out_path: Path, model: SyncModel,
                 table = pacsv.read_csv(pa.BufferReader(block), **options)
             except pa.ArrowInvalid as error:
                 raise FlashsyncError(
-                    f"{in_path}: {first_line(error)}; every row needs the header's "
-                    f"{len(header.names)} columns") from None
+                    f"{in_path}: {first_line(error)}; every row needs the header's {len(header.names)} columns"
+                ) from None
             if table.num_rows != len(lines):
-                raise FlashsyncError(f"{in_path}: a quoted value spans several lines; "
-                                     "remove the line breaks inside values")
-            columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS],
-                                      model, exposures, with_std)
+                raise FlashsyncError(
+                    f"{in_path}: a quoted value spans several lines; remove the line breaks inside values"
+                )
+            columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std)
             _count(reasons, summary)
-            texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string())
-                     for name in names[:-1]]
+            texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string()) for name in names[:-1]]
             texts.append(_reason_texts(reasons))
             joined = pc.binary_join_element_wise(
-                lines, *(text.cast(pa.binary()) for text in texts), b",",
-                null_handling="replace", null_replacement=b"")
+                lines, *(text.cast(pa.binary()) for text in texts), b",", null_handling="replace", null_replacement=b""
+            )
             end = np.frombuffer(joined.buffers()[1], dtype=np.int32)[len(joined)]
             output.write(memoryview(joined.buffers()[2])[:end])
         output.write(header.eol)
@@ -237,43 +263,54 @@ def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
     ends = np.flatnonzero(data == ord("\n"))
     carriage = data[ends - 1] == ord("\r")
     if not np.all(carriage == (eol == b"\r\n")):
-        raise FlashsyncError(f"{path}: mixed line endings (\\n and \\r\\n); convert the file "
-                             "to one kind, e.g. with dos2unix")
+        raise FlashsyncError(
+            f"{path}: mixed line endings (\\n and \\r\\n); convert the file to one kind, e.g. with dos2unix"
+        )
     offsets = np.concatenate([[0], ends + 1]).astype(np.int32)
-    buffer = pa.py_buffer(eol + block[:-len(eol)])
+    buffer = pa.py_buffer(eol + block[: -len(eol)])
     lines = pa.Array.from_buffers(pa.binary(), len(ends), [None, pa.py_buffer(offsets), buffer])
     filled = np.diff(offsets) > len(eol)
     return lines if filled.all() else lines.filter(pa.array(filled))
 
 
-def _restamp_batches(in_path: Path, kind: str, camera: str | None, out_path: Path,
-                     out_kind: str, model: SyncModel, exposures: dict[str, float | None],
-                     with_std: bool, block_bytes: int, summary: RestampSummary) -> None:
+def _restamp_batches(
+    in_path: Path,
+    kind: str,
+    camera: str | None,
+    out_path: Path,
+    out_kind: str,
+    model: SyncModel,
+    exposures: dict[str, float | None],
+    with_std: bool,
+    block_bytes: int,
+    summary: RestampSummary,
+) -> None:
     schema, batches = _read_batches(in_path, kind, camera, block_bytes)
     require_columns(schema.names, REQUIRED_COLUMNS, in_path)
     _check_free(schema.names, in_path)
     names = _new_columns(exposures, with_std)
     for name in names:
-        schema = schema.append(pa.field(name, pa.string() if name == "restamp_error"
-                                        else pa.float64()))
+        schema = schema.append(pa.field(name, pa.string() if name == "restamp_error" else pa.float64()))
     with atomic_output(out_path) as temporary:
-        writer = (pq.ParquetWriter(temporary, schema) if out_kind == "parquet"
-                  else pacsv.CSVWriter(temporary, schema))
+        writer = pq.ParquetWriter(temporary, schema) if out_kind == "parquet" else pacsv.CSVWriter(temporary, schema)
         with writer:
             try:
                 for batch in batches:
-                    columns, reasons = _stamp([batch.column(name) for name in REQUIRED_COLUMNS],
-                                              model, exposures, with_std)
+                    columns, reasons = _stamp(
+                        [batch.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std
+                    )
                     _count(reasons, summary)
                     new = [pa.array(columns[name], from_pandas=True) for name in names[:-1]]
-                    writer.write_batch(pa.RecordBatch.from_arrays(
-                        [*batch.columns, *new, _reason_texts(reasons)], schema=schema))
+                    writer.write_batch(
+                        pa.RecordBatch.from_arrays([*batch.columns, *new, _reason_texts(reasons)], schema=schema)
+                    )
             except pa.ArrowInvalid as error:
                 raise FlashsyncError(f"{in_path}: {first_line(error)}; fix the file") from None
 
 
-def _read_batches(path: Path, kind: str, camera: str | None,
-                  block_bytes: int) -> tuple[pa.Schema, Iterator[pa.RecordBatch]]:
+def _read_batches(
+    path: Path, kind: str, camera: str | None, block_bytes: int
+) -> tuple[pa.Schema, Iterator[pa.RecordBatch]]:
     """The schema of a detections file and an iterator over its record batches."""
     try:
         if kind == "parquet":
@@ -283,17 +320,19 @@ def _read_batches(path: Path, kind: str, camera: str | None,
             table = pa.Table.from_pandas(read_mot(path, camera), preserve_index=False)
             return table.schema, iter(table.to_batches(max_chunksize=_BATCH_ROWS))
         header = read_csv_header(path)
-        reader = pacsv.open_csv(path, read_options=pacsv.ReadOptions(block_size=block_bytes),
-                                convert_options=pacsv.ConvertOptions(
-                                    column_types={name: pa.string() for name in header.names}))
+        reader = pacsv.open_csv(
+            path,
+            read_options=pacsv.ReadOptions(block_size=block_bytes),
+            convert_options=pacsv.ConvertOptions(column_types={name: pa.string() for name in header.names}),
+        )
         return reader.schema, reader
     except (OSError, pa.ArrowException) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); "
-                             "check the file") from None
+        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
 
 
-def _stamp(arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None],
-           with_std: bool) -> tuple[dict[str, np.ndarray], np.ndarray]:
+def _stamp(
+    arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None], with_std: bool
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays.
 
     Returns
@@ -308,7 +347,7 @@ def _stamp(arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float 
     frame, frame_text = _to_float(arrays[1])
     y, y_text = _to_float(arrays[2])
     clocks = [model.cameras.get(name) for name in names]
-    codes = np.where(codes < 0, len(clocks), codes)             # missing camera -> last entry
+    codes = np.where(codes < 0, len(clocks), codes)  # missing camera -> last entry
     known = np.array([clock is not None for clock in clocks] + [True])
     n_frames = np.array([clock.n_frames if clock else 0 for clock in clocks] + [0])
     height = np.array([clock.height if clock else 0 for clock in clocks] + [0])
@@ -359,8 +398,7 @@ def _to_float(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, np.ndarray
     array = _plain(array)
     kind = array.type
     if pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind):
-        return (array.cast(pa.float64()).to_numpy(zero_copy_only=False),
-                np.zeros(len(array), dtype=bool))
+        return (array.cast(pa.float64()).to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool))
     try:
         values = pc.cast(array, pa.float64())
         return values.to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool)
@@ -384,7 +422,7 @@ def _plain(array: pa.Array | pa.ChunkedArray) -> pa.Array:
 def _series_to_arrow(series: pd.Series) -> pa.Array:
     try:
         return pa.array(series, from_pandas=True)
-    except (pa.ArrowInvalid, pa.ArrowTypeError):                  # mixed Python objects
+    except (pa.ArrowInvalid, pa.ArrowTypeError):  # mixed Python objects
         return pa.array(series.astype("str"), from_pandas=True)
 
 
@@ -401,18 +439,18 @@ def _count(reasons: np.ndarray, summary: RestampSummary) -> None:
             summary.failed[reason] = summary.failed.get(reason, 0) + int(count)
 
 
-def _exposures(model: SyncModel,
-               exposure_ms: Mapping[str, float] | None) -> dict[str, float | None]:
+def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dict[str, float | None]:
     """Each model camera's exposure, ms (None if unknown); the caller's values first."""
     given = dict(exposure_ms or {})
     unknown = [name for name in given if name not in model.cameras]
     if unknown:
-        raise FlashsyncError(f"exposure given for camera {', '.join(unknown)}, which the model "
-                             f"does not have (it has {', '.join(model.cameras)}); fix the name")
+        raise FlashsyncError(
+            f"exposure given for camera {', '.join(unknown)}, which the model "
+            f"does not have (it has {', '.join(model.cameras)}); fix the name"
+        )
     for name, value in given.items():
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
-            raise FlashsyncError(f"exposure of camera {name} is {value!r}; give a time >= 0 "
-                                 "in ms")
+            raise FlashsyncError(f"exposure of camera {name} is {value!r}; give a time >= 0 in ms")
     return {name: given.get(name, clock.exposure_ms) for name, clock in model.cameras.items()}
 
 
@@ -429,5 +467,6 @@ def _new_columns(exposures: dict[str, float | None], with_std: bool) -> list[str
 def _check_free(columns: list, source: str | Path) -> None:
     taken = [name for name in NEW_COLUMNS if name in columns]
     if taken:
-        raise FlashsyncError(f"{source}: already has column {', '.join(taken)}; restamp the "
-                             "original detections or drop those columns")
+        raise FlashsyncError(
+            f"{source}: already has column {', '.join(taken)}; restamp the original detections or drop those columns"
+        )

@@ -25,7 +25,6 @@ known, else end of exposure (``t_global_ms``).
 from __future__ import annotations
 
 import json
-
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 
@@ -43,8 +42,7 @@ TIME_MODELS = {
     "no_drift": "no drift (alpha = 1)",
 }
 DEFAULT_GAP_FRAMES = 2.5
-TRIPLE_COLUMNS = ["camera_a", "camera_b", "object", "t_global_ms", "x_b", "y_b", "x_a", "y_a",
-                  "error_m"]
+TRIPLE_COLUMNS = ["camera_a", "camera_b", "object", "t_global_ms", "x_b", "y_b", "x_a", "y_a", "error_m"]
 OBJECT_COLUMNS = ("object", "id")
 
 
@@ -120,9 +118,12 @@ class ValidationReport:
     def to_dict(self) -> dict:
         """Plain dicts, lists, numbers and strings, for ``json.dumps``; ``triples`` as a list
         of records."""
-        return {"pairs": [asdict(pair) for pair in self.pairs], "instant": self.instant,
-                "not_used": self.not_used,
-                "triples": json.loads(self.triples.to_json(orient="records"))}
+        return {
+            "pairs": [asdict(pair) for pair in self.pairs],
+            "instant": self.instant,
+            "not_used": self.not_used,
+            "triples": json.loads(self.triples.to_json(orient="records")),
+        }
 
 
 def image_to_plane(x: np.ndarray, y: np.ndarray, homography: np.ndarray) -> np.ndarray:
@@ -144,10 +145,15 @@ def image_to_plane(x: np.ndarray, y: np.ndarray, homography: np.ndarray) -> np.n
     return (points[:2] / points[2]).T
 
 
-def validate(detections: pd.DataFrame, model: SyncModel,
-             homographies: Mapping[str, np.ndarray], *, max_gap_ms: float | None = None,
-             exposure_ms: Mapping[str, float] | None = None,
-             source: str = "detections") -> ValidationReport:
+def validate(
+    detections: pd.DataFrame,
+    model: SyncModel,
+    homographies: Mapping[str, np.ndarray],
+    *,
+    max_gap_ms: float | None = None,
+    exposure_ms: Mapping[str, float] | None = None,
+    source: str = "detections",
+) -> ValidationReport:
     """Cross-camera interpolation errors of fast objects, per ordered camera pair.
 
     Parameters
@@ -179,28 +185,31 @@ def validate(detections: pd.DataFrame, model: SyncModel,
     >>> print(format_report(report))                                  # doctest: +SKIP
     """
     require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
-    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms,
-                      source=source)
+    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms, source=source)
     not_used = stamped["restamp_error"].value_counts().to_dict()
     usable = stamped["restamp_error"].isna().to_numpy().copy()
     id_column = next((name for name in OBJECT_COLUMNS if name in detections.columns), None)
-    objects = (pd.factorize(detections[id_column])[0] if id_column
-               else np.zeros(len(detections), dtype=np.int64))
+    objects = pd.factorize(detections[id_column])[0] if id_column else np.zeros(len(detections), dtype=np.int64)
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
     cameras = stamped["camera"].astype("str").to_numpy(dtype=object)
-    for reason, bad in (("x missing or not a number", np.isnan(x)),
-                        ("object id missing", objects < 0),
-                        ("camera without homography", ~np.isin(cameras, list(homographies)))):
+    for reason, bad in (
+        ("x missing or not a number", np.isnan(x)),
+        ("object id missing", objects < 0),
+        ("camera without homography", ~np.isin(cameras, list(homographies))),
+    ):
         _add(not_used, reason, int(np.count_nonzero(usable & bad)))
         usable &= ~bad
 
-    instant = ("t_center_ms" if "t_center_ms" in stamped
-               and not stamped.loc[usable, "t_center_ms"].isna().any() else "t_global_ms")
+    instant = (
+        "t_center_ms"
+        if "t_center_ms" in stamped and not stamped.loc[usable, "t_center_ms"].isna().any()
+        else "t_global_ms"
+    )
     rows = np.flatnonzero(usable)
     names, objects, x = cameras[rows], objects[rows], x[rows]
     frames = pd.to_numeric(stamped["frame"].iloc[rows]).to_numpy().astype(np.int64)
     y = pd.to_numeric(stamped["y"].iloc[rows]).to_numpy(dtype=np.float64)
-    shift = (stamped["t_global_ms"] - stamped[instant]).to_numpy()[rows]    # exposure / 2 or 0
+    shift = (stamped["t_global_ms"] - stamped[instant]).to_numpy()[rows]  # exposure / 2 or 0
     used = [name for name in model.cameras if name in set(names)]
     plane = np.empty((len(rows), 2))
     times = {time_model: np.empty(len(rows)) for time_model in TIME_MODELS}
@@ -208,11 +217,10 @@ def validate(detections: pd.DataFrame, model: SyncModel,
         mine = names == name
         plane[mine] = image_to_plane(x[mine], y[mine], np.asarray(homographies[name]))
         for time_model in TIME_MODELS:
-            times[time_model][mine] = (_times(model.camera(name), time_model, frames[mine],
-                                              y[mine]) - shift[mine])
+            times[time_model][mine] = _times(model.camera(name), time_model, frames[mine], y[mine]) - shift[mine]
 
     report = ValidationReport(pairs=[], instant=instant, not_used=not_used)
-    object_names = (pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"]))
+    object_names = pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"])
     triples = []
     for a in used:
         gap = max_gap_ms if max_gap_ms is not None else _default_gap_ms(model.camera(a))
@@ -221,17 +229,29 @@ def validate(detections: pd.DataFrame, model: SyncModel,
             if a == b:
                 continue
             in_b = names == b
-            results = {time_model: _pair_stats(objects[in_a], values[in_a], plane[in_a],
-                                               objects[in_b], values[in_b], plane[in_b], gap)
-                       for time_model, values in times.items()}
-            report.pairs.append(PairValidation(a, b, float(gap),
-                                               {name: result[0] for name, result in results.items()}))
+            results = {
+                time_model: _pair_stats(
+                    objects[in_a], values[in_a], plane[in_a], objects[in_b], values[in_b], plane[in_b], gap
+                )
+                for time_model, values in times.items()
+            }
+            report.pairs.append(PairValidation(a, b, float(gap), {name: result[0] for name, result in results.items()}))
             found = results["subframe"][1]
-            triples.append(pd.DataFrame({
-                "camera_a": a, "camera_b": b, "object": object_names[found[:, 0].astype(np.int64)],
-                "t_global_ms": found[:, 1], "x_b": found[:, 2], "y_b": found[:, 3],
-                "x_a": found[:, 4], "y_a": found[:, 5],
-                "error_m": np.hypot(found[:, 4] - found[:, 2], found[:, 5] - found[:, 3])}))
+            triples.append(
+                pd.DataFrame(
+                    {
+                        "camera_a": a,
+                        "camera_b": b,
+                        "object": object_names[found[:, 0].astype(np.int64)],
+                        "t_global_ms": found[:, 1],
+                        "x_b": found[:, 2],
+                        "y_b": found[:, 3],
+                        "x_a": found[:, 4],
+                        "y_a": found[:, 5],
+                        "error_m": np.hypot(found[:, 4] - found[:, 2], found[:, 5] - found[:, 3]),
+                    }
+                )
+            )
     if triples:
         report.triples = pd.concat(triples, ignore_index=True)
     return report
@@ -239,29 +259,34 @@ def validate(detections: pd.DataFrame, model: SyncModel,
 
 def format_report(report: ValidationReport) -> str:
     """A text table: one line per camera pair, median / p95 / max error (m) per time model."""
-    header = f"{'A -> B':<24}{'triples':>8}" + "".join(
-        f"  {title:^26}" for title in TIME_MODELS.values())
-    units = f"{'':<24}{'':>8}" + "  {:>8}{:>9}{:>9}".format("median", "p95", "max") * len(
-        TIME_MODELS)
-    lines = [f"interpolation error on the plane, m (instant: {report.instant}; "
-             "A's track interpolated at B's detections)", header, units]
+    header = f"{'A -> B':<24}{'triples':>8}" + "".join(f"  {title:^26}" for title in TIME_MODELS.values())
+    units = f"{'':<24}{'':>8}" + "  {:>8}{:>9}{:>9}".format("median", "p95", "max") * len(TIME_MODELS)
+    lines = [
+        f"interpolation error on the plane, m (instant: {report.instant}; A's track interpolated at B's detections)",
+        header,
+        units,
+    ]
     for pair in report.pairs:
         name = f"{pair.interpolated} -> {pair.observed}"
         line = f"{name:<24}{pair.stats['subframe'].triples:>8}"
         for time_model in TIME_MODELS:
             stats = pair.stats[time_model]
-            line += "  " + "".join(f"{_number(value):>{width}}" for value, width in
-                                   ((stats.median_m, 8), (stats.p95_m, 9), (stats.max_m, 9)))
+            line += "  " + "".join(
+                f"{_number(value):>{width}}"
+                for value, width in ((stats.median_m, 8), (stats.p95_m, 9), (stats.max_m, 9))
+            )
         lines.append(line)
     for pair in report.pairs:
         skipped = pair.stats["subframe"].skipped
         if skipped:
-            lines.append(f"skipped {pair.interpolated} -> {pair.observed} (gap limit "
-                         f"{pair.max_gap_ms:.1f} ms): "
-                         + ", ".join(f"{count} {reason}" for reason, count in skipped.items()))
+            lines.append(
+                f"skipped {pair.interpolated} -> {pair.observed} (gap limit "
+                f"{pair.max_gap_ms:.1f} ms): " + ", ".join(f"{count} {reason}" for reason, count in skipped.items())
+            )
     if report.not_used:
-        lines.append("detections not used: " + ", ".join(
-            f"{count} {reason}" for reason, count in report.not_used.items()))
+        lines.append(
+            "detections not used: " + ", ".join(f"{count} {reason}" for reason, count in report.not_used.items())
+        )
     return "\n".join(lines)
 
 
@@ -275,9 +300,15 @@ def _times(clock: CameraClock, time_model: str, frames: np.ndarray, y: np.ndarra
     return clock.t_global_ms(frames, y)
 
 
-def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
-                object_b: np.ndarray, t_b: np.ndarray, plane_b: np.ndarray,
-                max_gap_ms: float) -> tuple[ErrorStats, np.ndarray]:
+def _pair_stats(
+    object_a: np.ndarray,
+    t_a: np.ndarray,
+    plane_a: np.ndarray,
+    object_b: np.ndarray,
+    t_b: np.ndarray,
+    plane_b: np.ndarray,
+    max_gap_ms: float,
+) -> tuple[ErrorStats, np.ndarray]:
     """Interpolate A's track (times ms, plane m) at B's detections and measure the distance.
 
     Returns the statistics and the triples, shape (n, 6): object code, B's instant (ms),
@@ -307,15 +338,17 @@ def _pair_stats(object_a: np.ndarray, t_a: np.ndarray, plane_a: np.ndarray,
     found = np.concatenate(found) if found else np.empty((0, 6))
     if not len(errors):
         return ErrorStats(0, None, None, None, skipped), found
-    return ErrorStats(len(errors), float(np.median(errors)), float(np.percentile(errors, 95)),
-                      float(errors.max()), skipped), found
+    return ErrorStats(
+        len(errors), float(np.median(errors)), float(np.percentile(errors, 95)), float(errors.max()), skipped
+    ), found
 
 
 def _default_gap_ms(clock: CameraClock) -> float:
     """``DEFAULT_GAP_FRAMES`` frame periods of a camera, ms (reference clock)."""
     if clock.n_frames < 2:
-        raise FlashsyncError(f"camera {clock.name} has {clock.n_frames} frame in the model; "
-                             "give --max-gap-ms or sync a longer video")
+        raise FlashsyncError(
+            f"camera {clock.name} has {clock.n_frames} frame in the model; give --max-gap-ms or sync a longer video"
+        )
     return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
 
 

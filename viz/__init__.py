@@ -16,8 +16,29 @@ Examples
 
 from viz.blueprint import sync_blueprint
 from viz.diagnosis import log_diagnosis, save_diagnosis
-from viz.recording import (APPLICATION_ID, GRPC_PORT, RINK_M, WEB_PORT, log_sync, save_recording,
-                           serve, spawn, viewer_url)
+from viz.recording import (
+    APPLICATION_ID,
+    GRPC_PORT,
+    RINK_M,
+    WEB_PORT,
+    log_sync,
+    save_recording,
+    serve,
+    spawn,
+    viewer_url,
+)
 
-__all__ = ["APPLICATION_ID", "GRPC_PORT", "RINK_M", "WEB_PORT", "log_diagnosis", "log_sync",
-           "save_diagnosis", "save_recording", "serve", "spawn", "sync_blueprint", "viewer_url"]
+__all__ = [
+    "APPLICATION_ID",
+    "GRPC_PORT",
+    "RINK_M",
+    "WEB_PORT",
+    "log_diagnosis",
+    "log_sync",
+    "save_diagnosis",
+    "save_recording",
+    "serve",
+    "spawn",
+    "sync_blueprint",
+    "viewer_url",
+]

@@ -23,9 +23,14 @@ TRAIL_S = 1.0
 VIDEO_COLUMNS = 4
 
 
-def sync_blueprint(model: SyncModel, *, video_cameras: Collection[str] = (),
-                   plane: bool = False, errors: bool = False,
-                   rink_m: tuple[float, float] | None = None) -> rrb.Blueprint:
+def sync_blueprint(
+    model: SyncModel,
+    *,
+    video_cameras: Collection[str] = (),
+    plane: bool = False,
+    errors: bool = False,
+    rink_m: tuple[float, float] | None = None,
+) -> rrb.Blueprint:
     """The default layout of a flashsync recording.
 
     Parameters
@@ -47,33 +52,52 @@ def sync_blueprint(model: SyncModel, *, video_cameras: Collection[str] = (),
         eye = None
         if rink_m is not None:
             length, width = rink_m
-            eye = rrb.EyeControls3D(position=(length / 2, -0.8 * width, 0.8 * length),
-                                    look_target=(length / 2, width / 2, 0.0), eye_up=(0, 0, 1))
-        trail = rrb.VisibleTimeRange(GLOBAL_TIMELINE,
-                                     start=rrb.TimeRangeBoundary.cursor_relative(seconds=-TRAIL_S),
-                                     end=rrb.TimeRangeBoundary.cursor_relative())
-        bottom.append(rrb.Spatial3DView(origin=trajectories.PLANE, name="plane (m)",
-                                        time_ranges=trail, eye_controls=eye))
+            eye = rrb.EyeControls3D(
+                position=(length / 2, -0.8 * width, 0.8 * length),
+                look_target=(length / 2, width / 2, 0.0),
+                eye_up=(0, 0, 1),
+            )
+        trail = rrb.VisibleTimeRange(
+            GLOBAL_TIMELINE,
+            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-TRAIL_S),
+            end=rrb.TimeRangeBoundary.cursor_relative(),
+        )
+        bottom.append(
+            rrb.Spatial3DView(origin=trajectories.PLANE, name="plane (m)", time_ranges=trail, eye_controls=eye)
+        )
     lanes = len(model.cameras)
     series = [
-        rrb.TimeSeriesView(origin=events.ROOT, name="events (lane = camera)",
-                           axis_y=rrb.ScalarAxis(range=(-0.5, lanes - 0.5), zoom_lock=True)),
-        rrb.TimeSeriesView(origin=residuals.ROOT, name="residuals (ms)",
-                           plot_legend=rrb.PlotLegend(visible=False)),
+        rrb.TimeSeriesView(
+            origin=events.ROOT,
+            name="events (lane = camera)",
+            axis_y=rrb.ScalarAxis(range=(-0.5, lanes - 0.5), zoom_lock=True),
+        ),
+        rrb.TimeSeriesView(origin=residuals.ROOT, name="residuals (ms)", plot_legend=rrb.PlotLegend(visible=False)),
     ]
     if errors:
         series.append(rrb.TimeSeriesView(origin=validation.ROOT, name="validation error (m)"))
     bottom.append(rrb.Vertical(*series))
     columns = rrb.TextLogColumns(
         timeline_columns=[rrb.encodings.TimelineColumn(GLOBAL_TIMELINE)],
-        text_log_columns=[rrb.encodings.TextLogColumn(kind) for kind in ("LogLevel", "Body")])
-    bottom.append(rrb.TextLogView(origin=events.LOG_ENTITY, name="flash log", columns=columns,
-                                  rows=rrb.TextLogRows(filter_by_log_level=["INFO", "WARN"])))
+        text_log_columns=[rrb.encodings.TextLogColumn(kind) for kind in ("LogLevel", "Body")],
+    )
+    bottom.append(
+        rrb.TextLogView(
+            origin=events.LOG_ENTITY,
+            name="flash log",
+            columns=columns,
+            rows=rrb.TextLogRows(filter_by_log_level=["INFO", "WARN"]),
+        )
+    )
     rows: list[rrb.View | rrb.Container] = []
     videos = [name for name in model.cameras if name in video_cameras]
     if videos:
-        rows.append(rrb.Grid(*[rrb.Spatial2DView(origin=camera_entity(name), name=name)
-                               for name in videos], grid_columns=min(len(videos), VIDEO_COLUMNS)))
+        rows.append(
+            rrb.Grid(
+                *[rrb.Spatial2DView(origin=camera_entity(name), name=name) for name in videos],
+                grid_columns=min(len(videos), VIDEO_COLUMNS),
+            )
+        )
     rows.append(rrb.Horizontal(*bottom))
     return rrb.Blueprint(
         rrb.Vertical(*rows),

@@ -35,8 +35,9 @@ def log_diagnosis(diagnosis: Diagnosis, recording: rr.RecordingStream | None = N
     flash = np.asarray(data["flash"], dtype=np.int64)
     trailing = np.asarray(data["trailing"], dtype=bool)
     colors = camera_colors(diagnosis.cameras)
-    titles = ["plain"] + [("out_" if step.removed else "") + step.effect + "_" + step.camera
-                          for step in diagnosis.steps]
+    titles = ["plain"] + [
+        ("out_" if step.removed else "") + step.effect + "_" + step.camera for step in diagnosis.steps
+    ]
     for k, (title, residual) in enumerate(zip(titles, data["residual_ms"])):
         residual = np.asarray(residual, dtype=np.float64)
         for name in diagnosis.cameras:
@@ -45,8 +46,10 @@ def log_diagnosis(diagnosis: Diagnosis, recording: rr.RecordingStream | None = N
                 if not mine.any():
                     continue
                 path = f"diagnose/{k}_{title}/{name}/{kind}"
-                recording.send_columns(path, indexes=[rr.TimeColumn("flash", sequence=flash[mine])],
-                                       columns=rr.Scalars.columns(scalars=residual[mine]))
-                recording.log(path, rr.SeriesPoints(colors=[colors[name]], markers="circle"),
-                              static=True)
+                recording.send_columns(
+                    path,
+                    indexes=[rr.TimeColumn("flash", sequence=flash[mine])],
+                    columns=rr.Scalars.columns(scalars=residual[mine]),
+                )
+                recording.log(path, rr.SeriesPoints(colors=[colors[name]], markers="circle"), static=True)
     return recording

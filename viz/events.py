@@ -56,7 +56,8 @@ def event_table(model: SyncModel, detected: pd.DataFrame | None = None) -> pd.Da
         table = matched.assign(edge=pd.NA, band=pd.NA)
     else:
         table = detected[["camera", "event", "frame", "row", "edge", "band"]].merge(
-            matched[["camera", "event", "flash", "inlier"]], on=["camera", "event"], how="left")
+            matched[["camera", "event", "flash", "inlier"]], on=["camera", "event"], how="left"
+        )
     known = table["inlier"].notna().to_numpy()
     inlier = table["inlier"].where(known, False).astype(bool).to_numpy()
     frames = table["frame"].to_numpy(dtype=np.int64)
@@ -65,8 +66,9 @@ def event_table(model: SyncModel, detected: pd.DataFrame | None = None) -> pd.Da
     for name, index in table.groupby("camera", sort=False).indices.items():
         t_global_ms[index] = model.camera(name).t_global_ms(frames[index], rows[index])
     status = np.where(known, np.where(inlier, "matched", "rejected"), "unmatched")
-    return table.assign(frame=frames, flash=table["flash"].astype("Int64"), status=status,
-                        t_global_ms=t_global_ms)[_COLUMNS]
+    return table.assign(frame=frames, flash=table["flash"].astype("Int64"), status=status, t_global_ms=t_global_ms)[
+        _COLUMNS
+    ]
 
 
 def log_events(recording: rr.RecordingStream, model: SyncModel, events: pd.DataFrame) -> None:
@@ -87,29 +89,42 @@ def log_events(recording: rr.RecordingStream, model: SyncModel, events: pd.DataF
             if rows.empty:
                 continue
             color, marker = status_style(status, colors[name])
-            log_series(recording, raster_entity(name, status),
-                       rr.SeriesPoints(colors=color, markers=marker, names=f"{name} {status}",
-                                       marker_sizes=4.0),
-                       rows["t_global_ms"].to_numpy(), np.full(len(rows), float(lane)),
-                       rr.TimeColumn(frame_timeline(name), sequence=rows["frame"].to_numpy()))
-    matched = model.events.reindex(columns=["flash", "camera", "frame", "row", "t_global_ms",
-                                            "residual_ms", "inlier"])
+            log_series(
+                recording,
+                raster_entity(name, status),
+                rr.SeriesPoints(colors=color, markers=marker, names=f"{name} {status}", marker_sizes=4.0),
+                rows["t_global_ms"].to_numpy(),
+                np.full(len(rows), float(lane)),
+                rr.TimeColumn(frame_timeline(name), sequence=rows["frame"].to_numpy()),
+            )
+    matched = model.events.reindex(columns=["flash", "camera", "frame", "row", "t_global_ms", "residual_ms", "inlier"])
     lines = _flash_lines(matched) + _unmatched_lines(events[events["status"] == "unmatched"])
     if lines:
         lines.sort(key=lambda line: line[0])
         times, texts, levels = zip(*lines)
-        recording.send_columns(LOG_ENTITY, indexes=[global_time_column(np.array(times))],
-                               columns=rr.TextLog.columns(text=texts, level=levels))
+        recording.send_columns(
+            LOG_ENTITY,
+            indexes=[global_time_column(np.array(times))],
+            columns=rr.TextLog.columns(text=texts, level=levels),
+        )
 
 
 def _flash_lines(matched: pd.DataFrame) -> list[tuple[float, str, str]]:
     """(time, text, level) of each flash: its cameras' events and residuals."""
     lines = []
     for flash, group in matched.groupby("flash", sort=True):
-        parts = [f"{e.camera} frame {e.frame} row {e.row:.1f} residual {e.residual_ms:+.4f} ms"
-                 + ("" if e.inlier else " REJECTED") for e in group.itertuples()]
-        lines.append((group["t_global_ms"].min(), f"flash {flash}: " + "; ".join(parts),
-                      "INFO" if group["inlier"].all() else "WARN"))
+        parts = [
+            f"{e.camera} frame {e.frame} row {e.row:.1f} residual {e.residual_ms:+.4f} ms"
+            + ("" if e.inlier else " REJECTED")
+            for e in group.itertuples()
+        ]
+        lines.append(
+            (
+                group["t_global_ms"].min(),
+                f"flash {flash}: " + "; ".join(parts),
+                "INFO" if group["inlier"].all() else "WARN",
+            )
+        )
     return lines
 
 
@@ -117,9 +132,12 @@ def _unmatched_lines(unmatched: pd.DataFrame) -> list[tuple[float, str, str]]:
     """(time, text, level) of each unmatched event: its band and edges."""
     lines = []
     for (camera, event), group in unmatched.groupby(["camera", "event"], sort=False):
-        edges = ", ".join(f"{e.edge} edge frame {e.frame} row {e.row:.1f}"
-                          for e in group.itertuples())
-        lines.append((group["t_global_ms"].min(),
-                      f"{camera} event {event}: {group['band'].iloc[0]} band, {edges}; unmatched",
-                      "DEBUG"))
+        edges = ", ".join(f"{e.edge} edge frame {e.frame} row {e.row:.1f}" for e in group.itertuples())
+        lines.append(
+            (
+                group["t_global_ms"].min(),
+                f"{camera} event {event}: {group['band'].iloc[0]} band, {edges}; unmatched",
+                "DEBUG",
+            )
+        )
     return lines

@@ -8,8 +8,14 @@ Color = tuple[int, int, int]
 
 # Tableau 10 without red and grey, which mark rejected and unmatched events.
 _CAMERA_COLORS = [
-    (31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189), (140, 86, 75),
-    (227, 119, 194), (188, 189, 34), (23, 190, 207),
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (188, 189, 34),
+    (23, 190, 207),
 ]
 
 STATUS_COLORS: dict[str, Color] = {

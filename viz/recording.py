@@ -60,12 +60,17 @@ GRPC_PORT = 9876
 Videos = Mapping[str, str | Path] | Iterable[str | Path]
 
 
-def log_sync(model: SyncModel, *, videos: Videos | None = None,
-             events: pd.DataFrame | None = None, detections: pd.DataFrame | None = None,
-             validation: pd.DataFrame | None = None,
-             homographies: Mapping[str, np.ndarray] | None = None,
-             rink_m: tuple[float, float] | None = RINK_M,
-             recording: rr.RecordingStream | None = None) -> rr.RecordingStream:
+def log_sync(
+    model: SyncModel,
+    *,
+    videos: Videos | None = None,
+    events: pd.DataFrame | None = None,
+    detections: pd.DataFrame | None = None,
+    validation: pd.DataFrame | None = None,
+    homographies: Mapping[str, np.ndarray] | None = None,
+    rink_m: tuple[float, float] | None = RINK_M,
+    recording: rr.RecordingStream | None = None,
+) -> rr.RecordingStream:
     """Log a synchronisation and send its default blueprint.
 
     Parameters
@@ -113,9 +118,9 @@ def log_sync(model: SyncModel, *, videos: Videos | None = None,
         log_video(recording, camera, path)
         log_flash_rows(recording, camera, table[table["camera"] == name])
         if stamped_detections is not None:
-            log_frame_detections(recording, camera,
-                                 stamped_detections[stamped_detections["camera"] == name],
-                                 colors[name])
+            log_frame_detections(
+                recording, camera, stamped_detections[stamped_detections["camera"] == name], colors[name]
+            )
     plane = False
     if stamped_detections is not None and homographies:
         log_observations(recording, model, stamped_detections, homographies)
@@ -125,8 +130,9 @@ def log_sync(model: SyncModel, *, videos: Videos | None = None,
         plane = True
     if plane:
         log_plane(recording, rink_m)
-    recording.send_blueprint(sync_blueprint(model, video_cameras=named, plane=plane,
-                                            errors=validation is not None, rink_m=rink_m))
+    recording.send_blueprint(
+        sync_blueprint(model, video_cameras=named, plane=plane, errors=validation is not None, rink_m=rink_m)
+    )
     return recording
 
 
@@ -173,8 +179,9 @@ def viewer_url(web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT) -> str:
     return f"http://127.0.0.1:{web_port}/?url={urllib.parse.quote(source, safe='')}"
 
 
-def serve(model: SyncModel, *, web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT,
-          open_browser: bool = False, **data) -> None:
+def serve(
+    model: SyncModel, *, web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT, open_browser: bool = False, **data
+) -> None:
     """Serve the recording to web browsers until Ctrl-C.
 
     The web viewer is hosted over HTTP on ``web_port`` (default 9090) and streams the
@@ -198,8 +205,7 @@ def serve(model: SyncModel, *, web_port: int = WEB_PORT, grpc_port: int = GRPC_P
     rr.serve_web_viewer(web_port=web_port, open_browser=open_browser, connect_to=source)
     try:
         log_sync(model, recording=recording, **data)
-        print(f"serving the Rerun web viewer at {viewer_url(web_port, grpc_port)} "
-              "(Ctrl-C to stop)", file=sys.stderr)
+        print(f"serving the Rerun web viewer at {viewer_url(web_port, grpc_port)} (Ctrl-C to stop)", file=sys.stderr)
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:

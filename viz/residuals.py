@@ -48,10 +48,13 @@ def log_residuals(recording: rr.RecordingStream, model: SyncModel) -> None:
             if rows.empty:
                 continue
             color, marker = status_style(status, colors[name])
-            log_series(recording, residual_entity(name, status),
-                       rr.SeriesPoints(colors=color, markers=marker, marker_sizes=3.0,
-                                       names=f"{name} residual ({status})"),
-                       rows["t_global_ms"].to_numpy(), rows["residual_ms"].to_numpy())
+            log_series(
+                recording,
+                residual_entity(name, status),
+                rr.SeriesPoints(colors=color, markers=marker, marker_sizes=3.0, names=f"{name} residual ({status})"),
+                rows["t_global_ms"].to_numpy(),
+                rows["residual_ms"].to_numpy(),
+            )
         if np.any(camera.covariance):
             _log_band(recording, camera, colors[name])
 
@@ -62,7 +65,10 @@ def _log_band(recording: rr.RecordingStream, camera: CameraClock, color: Color) 
     sigma = camera.t_global_std_ms(frames, row)
     t_global_ms = camera.t_global_ms(frames, row)
     for series, sign in (("sigma_plus", 1.0), ("sigma_minus", -1.0)):
-        log_series(recording, residual_entity(camera.name, series),
-                   rr.SeriesLines(colors=color, widths=1.0,
-                                  names=f"{camera.name} {'+' if sign > 0 else '-'}1 sigma"),
-                   t_global_ms, sign * sigma)
+        log_series(
+            recording,
+            residual_entity(camera.name, series),
+            rr.SeriesLines(colors=color, widths=1.0, names=f"{camera.name} {'+' if sign > 0 else '-'}1 sigma"),
+            t_global_ms,
+            sign * sigma,
+        )

@@ -8,8 +8,14 @@ import rerun as rr
 from viz.timeline import global_time_column
 
 
-def log_series(recording: rr.RecordingStream, entity: str, style: rr.SeriesPoints | rr.SeriesLines,
-               t_global_ms: np.ndarray, values: np.ndarray, *indexes: rr.TimeColumn) -> None:
+def log_series(
+    recording: rr.RecordingStream,
+    entity: str,
+    style: rr.SeriesPoints | rr.SeriesLines,
+    t_global_ms: np.ndarray,
+    values: np.ndarray,
+    *indexes: rr.TimeColumn,
+) -> None:
     """Log one series: its style (static) and one scalar per instant.
 
     Parameters
@@ -27,5 +33,8 @@ def log_series(recording: rr.RecordingStream, entity: str, style: rr.SeriesPoint
         Further index columns of length n (e.g. a camera's frame timeline).
     """
     recording.log(entity, style, static=True)
-    recording.send_columns(entity, indexes=[global_time_column(t_global_ms), *indexes],
-                           columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)))
+    recording.send_columns(
+        entity,
+        indexes=[global_time_column(t_global_ms), *indexes],
+        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
+    )

@@ -60,12 +60,13 @@ def readout_start_ms(camera: CameraClock, frames: np.ndarray) -> np.ndarray:
 def frame_columns(camera: CameraClock, frames: np.ndarray) -> list[rr.TimeColumn]:
     """Index columns placing each of ``frames`` at its readout start and its frame index."""
     frames = np.asarray(frames, dtype=np.int64)
-    return [global_time_column(readout_start_ms(camera, frames)),
-            rr.TimeColumn(frame_timeline(camera.name), sequence=frames)]
+    return [
+        global_time_column(readout_start_ms(camera, frames)),
+        rr.TimeColumn(frame_timeline(camera.name), sequence=frames),
+    ]
 
 
-def frame_batches(camera: CameraClock, frames: np.ndarray
-                  ) -> tuple[list[rr.TimeColumn], np.ndarray, np.ndarray]:
+def frame_batches(camera: CameraClock, frames: np.ndarray) -> tuple[list[rr.TimeColumn], np.ndarray, np.ndarray]:
     """Group per-instance data into one batch per frame, shown on that frame only.
 
     Each frame that holds instances gets one row holding all of them; the next frame,

@@ -54,20 +54,26 @@ def stamped(detections: pd.DataFrame) -> pd.DataFrame:
     ``id``, as in :mod:`tracking_adapter.validate`), or one object for all rows without
     one; ``t_plane_ms`` is ``t_center_ms`` where finite, else ``t_global_ms``.
     """
-    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"),
-                    "restamped detections")
+    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"), "restamped detections")
     numbers = detections[["x", "y", "t_global_ms"]].apply(pd.to_numeric, errors="coerce")
     table = detections[np.isfinite(numbers).all(axis=1)]
     id_column = next((name for name in OBJECT_COLUMNS if name in table), None)
     objects = table[id_column] if id_column else _NO_OBJECT
-    center = (pd.to_numeric(table["t_center_ms"], errors="coerce") if "t_center_ms" in table
-              else pd.Series(np.nan, index=table.index))
-    return table.assign(object=objects, frame=table["frame"].astype(np.int64),
-                        t_plane_ms=center.where(np.isfinite(center), table["t_global_ms"]))
+    center = (
+        pd.to_numeric(table["t_center_ms"], errors="coerce")
+        if "t_center_ms" in table
+        else pd.Series(np.nan, index=table.index)
+    )
+    return table.assign(
+        object=objects,
+        frame=table["frame"].astype(np.int64),
+        t_plane_ms=center.where(np.isfinite(center), table["t_global_ms"]),
+    )
 
 
-def log_frame_detections(recording: rr.RecordingStream, camera: CameraClock,
-                         detections: pd.DataFrame, color: Color) -> None:
+def log_frame_detections(
+    recording: rr.RecordingStream, camera: CameraClock, detections: pd.DataFrame, color: Color
+) -> None:
     """Draw ``camera``'s detections on the frames that hold them, labelled by object.
 
     A detection ``(x, y)`` (px, pixel centres at integers) is drawn at ``(x, y) +``
@@ -87,15 +93,15 @@ def log_frame_detections(recording: rr.RecordingStream, camera: CameraClock,
     indexes, order, lengths = frame_batches(camera, detections["frame"].to_numpy())
     ordered = detections.iloc[order]
     positions = ordered[["x", "y"]].to_numpy(dtype=np.float64) + PIXEL_CENTRE
-    columns = rr.Points2D.columns(positions=positions,
-                                  colors=[color] * len(ordered),
-                                  labels=ordered["object"].astype(str).tolist())
-    recording.send_columns(detections_entity(camera.name), indexes=indexes,
-                           columns=columns.partition(lengths))
+    columns = rr.Points2D.columns(
+        positions=positions, colors=[color] * len(ordered), labels=ordered["object"].astype(str).tolist()
+    )
+    recording.send_columns(detections_entity(camera.name), indexes=indexes, columns=columns.partition(lengths))
 
 
-def log_observations(recording: rr.RecordingStream, model: SyncModel, detections: pd.DataFrame,
-                     homographies: Mapping[str, np.ndarray]) -> None:
+def log_observations(
+    recording: rr.RecordingStream, model: SyncModel, detections: pd.DataFrame, homographies: Mapping[str, np.ndarray]
+) -> None:
     """Log each camera's detections of each object in the plane, at ``t_plane_ms``.
 
     Parameters
@@ -112,16 +118,20 @@ def log_observations(recording: rr.RecordingStream, model: SyncModel, detections
     for (name, obj), track in detections.groupby(["camera", "object"], sort=False):
         if name not in homographies:
             continue
-        plane = image_to_plane(track["x"].to_numpy(dtype=np.float64),
-                               track["y"].to_numpy(dtype=np.float64),
-                               np.asarray(homographies[name]))
+        plane = image_to_plane(
+            track["x"].to_numpy(dtype=np.float64), track["y"].to_numpy(dtype=np.float64), np.asarray(homographies[name])
+        )
         points = np.column_stack([plane, np.zeros(len(plane))])
         recording.send_columns(
             observation_entity(name, obj),
-            indexes=[global_time_column(track["t_plane_ms"].to_numpy()),
-                     rr.TimeColumn(frame_timeline(name), sequence=track["frame"].to_numpy())],
-            columns=rr.Points3D.columns(positions=points, colors=[colors[name]] * len(points),
-                                        radii=[0.15] * len(points)))
+            indexes=[
+                global_time_column(track["t_plane_ms"].to_numpy()),
+                rr.TimeColumn(frame_timeline(name), sequence=track["frame"].to_numpy()),
+            ],
+            columns=rr.Points3D.columns(
+                positions=points, colors=[colors[name]] * len(points), radii=[0.15] * len(points)
+            ),
+        )
 
 
 def log_plane(recording: rr.RecordingStream, rink_m: tuple[float, float] | None) -> None:
@@ -136,13 +146,18 @@ def log_plane(recording: rr.RecordingStream, rink_m: tuple[float, float] | None)
     length, width = rink_m
     radius = min(RINK_CORNER_RADIUS_M, length / 2, width / 2)
     arc = np.linspace(0.0, np.pi / 2, 12)
-    corners = [((length - radius, width - radius), 0.0), ((radius, width - radius), np.pi / 2),
-               ((radius, radius), np.pi), ((length - radius, radius), 1.5 * np.pi)]
-    outline = np.concatenate([np.stack([cx + radius * np.cos(start + arc),
-                                        cy + radius * np.sin(start + arc)], axis=1)
-                              for (cx, cy), start in corners])
+    corners = [
+        ((length - radius, width - radius), 0.0),
+        ((radius, width - radius), np.pi / 2),
+        ((radius, radius), np.pi),
+        ((length - radius, radius), 1.5 * np.pi),
+    ]
+    outline = np.concatenate(
+        [
+            np.stack([cx + radius * np.cos(start + arc), cy + radius * np.sin(start + arc)], axis=1)
+            for (cx, cy), start in corners
+        ]
+    )
     outline = np.concatenate([outline, outline[:1]])
-    strips = [np.column_stack([outline, np.zeros(len(outline))]),
-              [[length / 2, 0.0, 0.0], [length / 2, width, 0.0]]]
-    recording.log(RINK_ENTITY, rr.LineStrips3D(strips, colors=(120, 160, 200), radii=0.05),
-                  static=True)
+    strips = [np.column_stack([outline, np.zeros(len(outline))]), [[length / 2, 0.0, 0.0], [length / 2, width, 0.0]]]
+    recording.log(RINK_ENTITY, rr.LineStrips3D(strips, colors=(120, 160, 200), radii=0.05), static=True)

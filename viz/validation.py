@@ -28,8 +28,7 @@ def pair_name(camera_a: str, camera_b: str) -> str:
     return entity_part(f"{camera_a}_vs_{camera_b}")
 
 
-def log_validation(recording: rr.RecordingStream, model: SyncModel,
-                   validation: pd.DataFrame) -> None:
+def log_validation(recording: rr.RecordingStream, model: SyncModel, validation: pd.DataFrame) -> None:
     """Log validation triples: interpolated points, error arrows and error series.
 
     Parameters
@@ -41,22 +40,32 @@ def log_validation(recording: rr.RecordingStream, model: SyncModel,
         m), ``x_a, y_a`` (A's position interpolated to ``t_global_ms``, m), ``error_m``.
     """
     colors = camera_colors(model.cameras)
-    for (camera_a, camera_b, obj), rows in validation.groupby(["camera_a", "camera_b", "object"],
-                                                               sort=False):
+    for (camera_a, camera_b, obj), rows in validation.groupby(["camera_a", "camera_b", "object"], sort=False):
         t_global_ms = rows["t_global_ms"].to_numpy(dtype=np.float64)
         zeros = np.zeros(len(rows))
         b = np.stack([rows["x_b"], rows["y_b"], zeros], axis=1).astype(np.float64)
         a = np.stack([rows["x_a"], rows["y_a"], zeros], axis=1).astype(np.float64)
         base = f"{PLANE}/{ROOT}/{pair_name(camera_a, camera_b)}/{entity_part(obj)}"
         index = [global_time_column(t_global_ms)]
-        recording.send_columns(f"{base}/interpolated", indexes=index,
-                               columns=rr.Points3D.columns(positions=a, radii=[0.1] * len(a),
-                                                           colors=[colors[camera_a]] * len(a)))
-        recording.send_columns(f"{base}/error", indexes=index,
-                               columns=rr.Arrows3D.columns(origins=b, vectors=a - b,
-                                                           colors=[ERROR_COLOR] * len(a),
-                                                           radii=[0.04] * len(a)))
-        log_series(recording, f"{ROOT}/{pair_name(camera_a, camera_b)}/{entity_part(obj)}",
-                   rr.SeriesPoints(colors=colors[camera_b], markers="Circle", marker_sizes=2.0,
-                                   names=f"{camera_a} vs {camera_b}, {obj}: error (m)"),
-                   t_global_ms, rows["error_m"].to_numpy(dtype=np.float64))
+        recording.send_columns(
+            f"{base}/interpolated",
+            indexes=index,
+            columns=rr.Points3D.columns(positions=a, radii=[0.1] * len(a), colors=[colors[camera_a]] * len(a)),
+        )
+        recording.send_columns(
+            f"{base}/error",
+            indexes=index,
+            columns=rr.Arrows3D.columns(origins=b, vectors=a - b, colors=[ERROR_COLOR] * len(a), radii=[0.04] * len(a)),
+        )
+        log_series(
+            recording,
+            f"{ROOT}/{pair_name(camera_a, camera_b)}/{entity_part(obj)}",
+            rr.SeriesPoints(
+                colors=colors[camera_b],
+                markers="Circle",
+                marker_sizes=2.0,
+                names=f"{camera_a} vs {camera_b}, {obj}: error (m)",
+            ),
+            t_global_ms,
+            rows["error_m"].to_numpy(dtype=np.float64),
+        )

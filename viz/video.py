@@ -48,8 +48,7 @@ def flash_rows_entity(camera: str) -> str:
     return f"{camera_entity(camera)}/flash_rows"
 
 
-def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path],
-                  model: SyncModel) -> dict[str, Path]:
+def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path], model: SyncModel) -> dict[str, Path]:
     """Name each video by its camera.
 
     Parameters
@@ -71,13 +70,17 @@ def camera_videos(videos: Mapping[str, str | Path] | Iterable[str | Path],
     names = [name for name, _ in named]
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:
-        raise FlashsyncError(f"two videos are named {', '.join(duplicates)}; camera names are "
-                             "file stems and must be unique: rename the files")
+        raise FlashsyncError(
+            f"two videos are named {', '.join(duplicates)}; camera names are "
+            "file stems and must be unique: rename the files"
+        )
     for name, path in named:
         if name not in model.cameras:
-            raise FlashsyncError(f"{path}: camera {name!r} is not in the model (it has "
-                                 f"{', '.join(model.cameras)}); give the videos the model was "
-                                 "made from")
+            raise FlashsyncError(
+                f"{path}: camera {name!r} is not in the model (it has "
+                f"{', '.join(model.cameras)}); give the videos the model was "
+                "made from"
+            )
     return dict(named)
 
 
@@ -104,7 +107,8 @@ def viewer_mp4(path: Path, workdir: Path) -> Path:
             raise FlashsyncError(
                 f"{path}: the Rerun viewer cannot play {codec} video (it plays "
                 f"{', '.join(VIEWER_CODECS)}); re-encode it, e.g. "
-                f"ffmpeg -i {path.name} -c:v libx264 {path.stem}.mp4")
+                f"ffmpeg -i {path.name} -c:v libx264 {path.stem}.mp4"
+            )
         if path.suffix.lower() == ".mp4" and "mp4" in container.format.name.split(","):
             return path
         target = workdir / f"{path.stem}.mp4"
@@ -137,15 +141,18 @@ def log_video(recording: rr.RecordingStream, camera: CameraClock, path: Path) ->
     if len(video_nanos) != camera.n_frames:
         raise FlashsyncError(
             f"{path}: {len(video_nanos)} frames, but the model has {camera.n_frames} for camera "
-            f"{camera.name!r}; give the video the model was made from")
+            f"{camera.name!r}; give the video the model was made from"
+        )
     entity = video_entity(camera.name)
     recording.log(entity, asset, static=True)
-    recording.send_columns(entity, indexes=frame_columns(camera, np.arange(camera.n_frames)),
-                           columns=rr.VideoFrameReference.columns_nanos(video_nanos))
+    recording.send_columns(
+        entity,
+        indexes=frame_columns(camera, np.arange(camera.n_frames)),
+        columns=rr.VideoFrameReference.columns_nanos(video_nanos),
+    )
 
 
-def log_flash_rows(recording: rr.RecordingStream, camera: CameraClock,
-                   events: pd.DataFrame) -> None:
+def log_flash_rows(recording: rr.RecordingStream, camera: CameraClock, events: pd.DataFrame) -> None:
     """Draw each event's edge row across the frame that holds it.
 
     A horizontal line through the centre of the edge row (``y = row +``
@@ -165,13 +172,14 @@ def log_flash_rows(recording: rr.RecordingStream, camera: CameraClock,
     indexes, order, lengths = frame_batches(camera, events["frame"].to_numpy())
     events = events.iloc[order]
     y = events["row"].to_numpy(dtype=np.float64) + PIXEL_CENTRE
-    strips = np.stack([np.stack([np.zeros_like(y), y], axis=1),
-                       np.stack([np.full_like(y, camera.width), y], axis=1)], axis=1)
-    names = ["unmatched" if status == "unmatched" else f"flash {flash}"
-             for flash, status in zip(events["flash"], events["status"])]
-    labels = [name if pd.isna(edge) else f"{name} {edge}"
-              for name, edge in zip(names, events["edge"])]
+    strips = np.stack(
+        [np.stack([np.zeros_like(y), y], axis=1), np.stack([np.full_like(y, camera.width), y], axis=1)], axis=1
+    )
+    names = [
+        "unmatched" if status == "unmatched" else f"flash {flash}"
+        for flash, status in zip(events["flash"], events["status"])
+    ]
+    labels = [name if pd.isna(edge) else f"{name} {edge}" for name, edge in zip(names, events["edge"])]
     colors = [STATUS_COLORS[status] for status in events["status"]]
     columns = rr.LineStrips2D.columns(strips=strips, colors=colors, labels=labels)
-    recording.send_columns(flash_rows_entity(camera.name), indexes=indexes,
-                           columns=columns.partition(lengths))
+    recording.send_columns(flash_rows_entity(camera.name), indexes=indexes, columns=columns.partition(lengths))

@@ -131,8 +131,10 @@ def _describe_drops(fit: Fit, camera: int) -> str:
 
 def _describe_frame_clock(fit: Fit, camera: int) -> str:
     clock = fit.clocks[camera]
-    return (f"frame period {clock.period_ms:.4f} ms (median step {clock.median_step_ms:.4f}), "
-            f"stamps scatter {fit.stamp_rms_ms[camera]:.3f} ms RMS about it")
+    return (
+        f"frame period {clock.period_ms:.4f} ms (median step {clock.median_step_ms:.4f}), "
+        f"stamps scatter {fit.stamp_rms_ms[camera]:.3f} ms RMS about it"
+    )
 
 
 def _describe_flip(fit: Fit, camera: int) -> str:
@@ -149,45 +151,82 @@ def _describe_drift(fit: Fit, camera: int) -> str:
 
 
 def _describe_drift_rate(fit: Fit, camera: int) -> str:
-    return (f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm at mid time, changing "
-            f"{2e9 * fit.coefficient(DRIFT_RATE, camera):.3f} ppm/s")
+    return (
+        f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm at mid time, changing "
+        f"{2e9 * fit.coefficient(DRIFT_RATE, camera):.3f} ppm/s"
+    )
 
 
 def _describe_exposure(fit: Fit, camera: int) -> str:
-    return (f"exposure {fit.exposure_ms(camera):.3f} ms vs {fit.exposure_ms(fit.reference):.3f} ms "
-            "on the reference")
+    return f"exposure {fit.exposure_ms(camera):.3f} ms vs {fit.exposure_ms(fit.reference):.3f} ms on the reference"
 
 
-CATALOGUE: dict[str, Effect] = {effect.name: effect for effect in (
-    Effect(DROPPED_FRAMES, "dropped frames",
-           "steps of whole frame periods at the frame gaps, in stamps and edges",
-           "frame slots counted from the stamp gaps (round(gap / median step)) instead of the "
-           "frame index", EVERY_CAMERA, _describe_drops),
-    Effect(FRAME_CLOCK, "timestamp quantisation / jitter",
-           "stamps scattered about a steady clock (a sawtooth locked to the stamp grid, or "
-           "jitter) and the period error that leaves in the median step",
-           "frame clock offset and period from a least-squares fit to all stamps instead of the "
-           "median step", EVERY_CAMERA, _describe_frame_clock),
-    Effect(FLIPPED, "flipped readout",
-           "band edges on the wrong side: a trend against the row of twice the time per row "
-           "and a gap between leading and trailing edges",
-           "readout rows reversed (q = height - 1 - row), leading and trailing edges swapped",
-           EVERY_CAMERA, _describe_flip),
-    Effect(ROW_TIME, "time per row",
-           "a trend of the residuals against the readout row",
-           "adds the camera's time per row minus the nominal frame period / height, ms per row",
-           EVERY_CAMERA, _describe_row_time, column=lambda f: -f.q),
-    Effect(DRIFT, "clock drift",
-           "a trend of the residuals against time",
-           "adds the camera's clock rate minus one (alpha - 1) about its mid time",
-           OTHER_CAMERAS, _describe_drift, column=lambda f: -f.t_ms),
-    Effect(DRIFT_RATE, "drift-rate change",
-           "a curvature of the residuals against time",
-           "adds half the rate of change of the drift (per ms), with the drift itself",
-           OTHER_CAMERAS, _describe_drift_rate, column=lambda f: -f.t_ms**2, implies=(DRIFT,)),
-    Effect(EXPOSURE, "exposure",
-           "a constant gap between a camera's trailing and leading edges' residuals: its "
-           "mid-exposure times are off the reference's",
-           "adds the camera's exposure minus the reference's (on its trailing edges), ms",
-           OTHER_CAMERAS, _describe_exposure, column=lambda f: f.trailing.astype(np.float64)),
-)}
+CATALOGUE: dict[str, Effect] = {
+    effect.name: effect
+    for effect in (
+        Effect(
+            DROPPED_FRAMES,
+            "dropped frames",
+            "steps of whole frame periods at the frame gaps, in stamps and edges",
+            "frame slots counted from the stamp gaps (round(gap / median step)) instead of the frame index",
+            EVERY_CAMERA,
+            _describe_drops,
+        ),
+        Effect(
+            FRAME_CLOCK,
+            "timestamp quantisation / jitter",
+            "stamps scattered about a steady clock (a sawtooth locked to the stamp grid, or "
+            "jitter) and the period error that leaves in the median step",
+            "frame clock offset and period from a least-squares fit to all stamps instead of the median step",
+            EVERY_CAMERA,
+            _describe_frame_clock,
+        ),
+        Effect(
+            FLIPPED,
+            "flipped readout",
+            "band edges on the wrong side: a trend against the row of twice the time per row "
+            "and a gap between leading and trailing edges",
+            "readout rows reversed (q = height - 1 - row), leading and trailing edges swapped",
+            EVERY_CAMERA,
+            _describe_flip,
+        ),
+        Effect(
+            ROW_TIME,
+            "time per row",
+            "a trend of the residuals against the readout row",
+            "adds the camera's time per row minus the nominal frame period / height, ms per row",
+            EVERY_CAMERA,
+            _describe_row_time,
+            column=lambda f: -f.q,
+        ),
+        Effect(
+            DRIFT,
+            "clock drift",
+            "a trend of the residuals against time",
+            "adds the camera's clock rate minus one (alpha - 1) about its mid time",
+            OTHER_CAMERAS,
+            _describe_drift,
+            column=lambda f: -f.t_ms,
+        ),
+        Effect(
+            DRIFT_RATE,
+            "drift-rate change",
+            "a curvature of the residuals against time",
+            "adds half the rate of change of the drift (per ms), with the drift itself",
+            OTHER_CAMERAS,
+            _describe_drift_rate,
+            column=lambda f: -(f.t_ms**2),
+            implies=(DRIFT,),
+        ),
+        Effect(
+            EXPOSURE,
+            "exposure",
+            "a constant gap between a camera's trailing and leading edges' residuals: its "
+            "mid-exposure times are off the reference's",
+            "adds the camera's exposure minus the reference's (on its trailing edges), ms",
+            OTHER_CAMERAS,
+            _describe_exposure,
+            column=lambda f: f.trailing.astype(np.float64),
+        ),
+    )
+}

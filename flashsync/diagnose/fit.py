@@ -20,8 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.diagnose.effects import (CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLIPPED, FRAME_CLOCK,
-                                        Features)
+from flashsync.diagnose.effects import CATALOGUE, DROPPED_FRAMES, EXPOSURE, FLIPPED, FRAME_CLOCK, Features
 from flashsync.diagnose.measure import Measurement, readout_rows
 
 #: Floor of a fitted residual scale, ms (exact stamps would otherwise have zero scale).
@@ -171,8 +170,10 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
-    clocks = [model_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
-              for c, camera in enumerate(cameras)]
+    clocks = [
+        model_clock(camera.stamps_ms, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
+        for c, camera in enumerate(cameras)
+    ]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, clock) in enumerate(zip(cameras, clocks)):
         mine = edges.camera == c
@@ -189,15 +190,26 @@ def fit_model(measurement: Measurement, terms: frozenset[Term]) -> Fit | None:
     parameters, residual, scale = solved
     stamp_residuals = [camera.stamps_ms - clock.times_ms for camera, clock in zip(cameras, clocks)]
     log_likelihood = -cauchy_nll(residual, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
-    n_parameters = design.shape[1] + 1 + 3 * len(cameras)      # + scales and frame clocks
+    n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
     n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
-    return Fit(measurement, terms, clocks, flipped, features, dict(zip(keys, parameters[:len(keys)].tolist())),
-               residual, stamp_residuals, scale, float(bic))
+    return Fit(
+        measurement,
+        terms,
+        clocks,
+        flipped,
+        features,
+        dict(zip(keys, parameters[: len(keys)].tolist())),
+        residual,
+        stamp_residuals,
+        scale,
+        float(bic),
+    )
 
 
-def _design(measurement: Measurement, terms: frozenset[Term],
-            features: Features) -> tuple[list[tuple[str, int]], np.ndarray]:
+def _design(
+    measurement: Measurement, terms: frozenset[Term], features: Features
+) -> tuple[list[tuple[str, int]], np.ndarray]:
     """Keys of the named columns and the design, shape (n_edges, n_columns): each other
     camera's shift, the shared exposure, the effects' columns, then one per flash."""
     keys, columns = [], []
@@ -217,8 +229,9 @@ def _design(measurement: Measurement, terms: frozenset[Term],
     return keys, np.column_stack(columns)
 
 
-def robust_fit(design: np.ndarray, observed: np.ndarray,
-               min_scale_ms: float = MIN_SCALE_MS) -> tuple[np.ndarray, np.ndarray, float] | None:
+def robust_fit(
+    design: np.ndarray, observed: np.ndarray, min_scale_ms: float = MIN_SCALE_MS
+) -> tuple[np.ndarray, np.ndarray, float] | None:
     """Cauchy IRLS fit of ``observed ≈ design @ parameters``, the scale refined along.
 
     Parameters

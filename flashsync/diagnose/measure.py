@@ -132,8 +132,9 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
-        raise FlashsyncError(f"diagnose needs videos of two or more cameras, got {len(names)}; "
-                             "give every camera's video")
+        raise FlashsyncError(
+            f"diagnose needs videos of two or more cameras, got {len(names)}; give every camera's video"
+        )
     reference = reference or names[0]
     if reference not in names:
         raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
@@ -141,28 +142,35 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     tolerance = max(float(np.median(np.diff(d.frame_times_ms))) for d in detections)
     alignments = {}
     for i, name_a in enumerate(names):
-        for name_b in names[i + 1:]:
-            alignment = align_pair(pulses[name_a]["time_ms"].to_numpy(), pulses[name_b]["time_ms"].to_numpy(),
-                                   tolerance)
-            if (alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS
-                    and not alignment.ambiguous):
+        for name_b in names[i + 1 :]:
+            alignment = align_pair(
+                pulses[name_a]["time_ms"].to_numpy(), pulses[name_b]["time_ms"].to_numpy(), tolerance
+            )
+            if alignment is not None and len(alignment.matches) >= MIN_SHARED_BANDS and not alignment.ambiguous:
                 alignments[(name_a, name_b)] = alignment
     flash_of = group_flashes({name: len(pulses[name]) for name in names}, alignments)
     kept = [d for d in detections if d.camera in _tied_to(reference, flash_of)]
     if len(kept) < 2:
-        raise FlashsyncError(f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
-                             "check that the videos overlap in time and saw the same flashes")
-    warnings = tuple(f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other "
-                     "cameras; left out" for d in detections if d not in kept)
-    cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height,
-                           d.flipped) for d in kept)
+        raise FlashsyncError(
+            f"no camera shares at least {MIN_SHARED_BANDS} flashes with {reference}; "
+            "check that the videos overlap in time and saw the same flashes"
+        )
+    warnings = tuple(
+        f"{d.video}: shares fewer than {MIN_SHARED_BANDS} flashes with the other cameras; left out"
+        for d in detections
+        if d not in kept
+    )
+    cameras = tuple(Camera(d.camera, np.asarray(d.frame_times_ms, dtype=np.float64), d.height, d.flipped) for d in kept)
     bands = [pulses[d.camera][pulses[d.camera]["clean"]] for d in kept]
     edges = _edges(bands, flash_of, cameras)
     if len(edges) == 0:
-        raise FlashsyncError("no flash band with both edges inside the image is seen by two cameras; "
-                             "record more flashes, away from the top and bottom of the image")
-    return Measurement(cameras, [c.name for c in cameras].index(reference), edges,
-                       _edge_noise_ms(cameras, bands), warnings)
+        raise FlashsyncError(
+            "no flash band with both edges inside the image is seen by two cameras; "
+            "record more flashes, away from the top and bottom of the image"
+        )
+    return Measurement(
+        cameras, [c.name for c in cameras].index(reference), edges, _edge_noise_ms(cameras, bands), warnings
+    )
 
 
 def readout_rows(row: np.ndarray, height: int, flipped: bool) -> np.ndarray:
@@ -205,8 +213,7 @@ def _tied_to(reference: str, flash_of: dict[tuple[str, int], int]) -> set[str]:
     return tied
 
 
-def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
-           cameras: tuple[Camera, ...]) -> Edges:
+def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int], cameras: tuple[Camera, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
     rows = []
     for index, (camera, camera_bands) in enumerate(zip(cameras, bands)):
@@ -215,14 +222,17 @@ def _edges(bands: list[pd.DataFrame], flash_of: dict[tuple[str, int], int],
             if flash is None:
                 continue
             for trailing, edge in ((False, "leading"), (True, "trailing")):
-                rows.append((index, flash, int(values[f"frame_{edge}"]), float(values[f"row_{edge}"]),
-                             trailing))
+                rows.append((index, flash, int(values[f"frame_{edge}"]), float(values[f"row_{edge}"]), trailing))
     table = pd.DataFrame(rows, columns=["camera", "flash", "frame", "row", "trailing"])
     cameras_seeing = table.groupby("flash")["camera"].transform("nunique")
     table = table[cameras_seeing >= 2]
-    return Edges(table["camera"].to_numpy(), pd.factorize(table["flash"], sort=True)[0],
-                 table["frame"].to_numpy(), table["row"].to_numpy(dtype=np.float64),
-                 table["trailing"].to_numpy(dtype=bool))
+    return Edges(
+        table["camera"].to_numpy(),
+        pd.factorize(table["flash"], sort=True)[0],
+        table["frame"].to_numpy(),
+        table["row"].to_numpy(dtype=np.float64),
+        table["trailing"].to_numpy(dtype=bool),
+    )
 
 
 def _edge_noise_ms(cameras: tuple[Camera, ...], bands: list[pd.DataFrame]) -> float:

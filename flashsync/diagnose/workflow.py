@@ -124,13 +124,16 @@ class Diagnosis:
     def verdict(self) -> str:
         """One line on the final residuals against the noise."""
         if not np.isfinite(self.expected_ms):
-            return (f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three "
-                    "bands of a kind per camera)")
+            return (
+                f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three bands of a kind per camera)"
+            )
         numbers = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
         if self.consistent:
             return f"residuals consistent with noise ({numbers})"
-        return (f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
-                "outside the catalogue remains, or the measurement cannot separate the ones it has")
+        return (
+            f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
+            "outside the catalogue remains, or the measurement cannot separate the ones it has"
+        )
 
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence, the verdict and the
@@ -138,10 +141,18 @@ class Diagnosis:
         data = asdict(self)
         for step, record in zip(self.steps, data["steps"]):
             record["evidence"] = step.evidence
-        catalogue = [{"effect": e.name, "title": e.title, "explains": e.explains, "changes": e.changes,
-                      "scope": e.scope, "implies": list(e.implies)} for e in CATALOGUE.values()]
-        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR,
-                    catalogue=catalogue)
+        catalogue = [
+            {
+                "effect": e.name,
+                "title": e.title,
+                "explains": e.explains,
+                "changes": e.changes,
+                "scope": e.scope,
+                "implies": list(e.implies),
+            }
+            for e in CATALOGUE.values()
+        ]
+        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR, catalogue=catalogue)
         return _finite(data)
 
 
@@ -172,7 +183,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     if plain is None:
         raise FlashsyncError(
             f"{measurement.n_flashes} flashes seen by several cameras cannot determine even the "
-            "plain model; record more flashes")
+            "plain model; record more flashes"
+        )
     current, steps, removed, fits = plain, [], set(), [plain]
     while (addition := _best_addition(measurement, current, removed)) is not None:
         terms, better = addition
@@ -188,19 +200,25 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     return _diagnosis(measurement, fits, steps)
 
 
-def _best_addition(measurement: Measurement, current: Fit,
-                   removed: set[Term]) -> tuple[tuple[Term, ...], Fit] | None:
+def _best_addition(measurement: Measurement, current: Fit, removed: set[Term]) -> tuple[tuple[Term, ...], Fit] | None:
     """The effect, else the pair of effects on one camera, whose model has the lowest BIC
     among those that lower it by more than :data:`THRESHOLD` and shrink the RMS."""
     singles = _candidates(measurement, current.terms | removed)
-    pairs = [(a, b) for a, b in combinations(singles, 2) if a.camera == b.camera
-             and b not in _with_implied(a) and a not in _with_implied(b)]
+    pairs = [
+        (a, b)
+        for a, b in combinations(singles, 2)
+        if a.camera == b.camera and b not in _with_implied(a) and a not in _with_implied(b)
+    ]
     for groups in ([(term,) for term in singles], pairs):
         best = None
         for group in groups:
             trial = fit_model(measurement, current.terms.union(*map(_with_implied, group)))
-            if (trial is not None and current.bic - trial.bic > THRESHOLD and trial.rms_ms < current.rms_ms
-                    and (best is None or trial.bic < best[1].bic)):
+            if (
+                trial is not None
+                and current.bic - trial.bic > THRESHOLD
+                and trial.rms_ms < current.rms_ms
+                and (best is None or trial.bic < best[1].bic)
+            ):
                 best = (group, trial)
         if best is not None:
             return best
@@ -212,10 +230,18 @@ def _step(terms: tuple[Term, ...], without: Fit, with_terms: Fit, removed: bool)
     effects = [CATALOGUE[term.effect] for term in terms]
     before, after = (with_terms, without) if removed else (without, with_terms)
     camera = terms[0].camera
-    return Step("+".join(e.name for e in effects), " + ".join(e.title for e in effects),
-                with_terms.measurement.cameras[camera].name, without.bic - with_terms.bic,
-                "; ".join(e.describe(with_terms, camera) for e in effects),
-                before.rms_ms, after.rms_ms, before.stamp_rms_ms[camera], after.stamp_rms_ms[camera], removed)
+    return Step(
+        "+".join(e.name for e in effects),
+        " + ".join(e.title for e in effects),
+        with_terms.measurement.cameras[camera].name,
+        without.bic - with_terms.bic,
+        "; ".join(e.describe(with_terms, camera) for e in effects),
+        before.rms_ms,
+        after.rms_ms,
+        before.stamp_rms_ms[camera],
+        after.stamp_rms_ms[camera],
+        removed,
+    )
 
 
 def _weakest(measurement: Measurement, current: Fit, newest: tuple[Term, ...]) -> tuple[Term, Fit] | None:
@@ -225,17 +251,23 @@ def _weakest(measurement: Measurement, current: Fit, newest: tuple[Term, ...]) -
     weakest = None
     for term in sorted(current.terms - implied - frozenset().union(*map(_with_implied, newest))):
         without = fit_model(measurement, current.terms - {term})
-        if (without is not None and without.bic - current.bic <= THRESHOLD
-                and (weakest is None or without.bic < weakest[1].bic)):
+        if (
+            without is not None
+            and without.bic - current.bic <= THRESHOLD
+            and (weakest is None or without.bic < weakest[1].bic)
+        ):
             weakest = (term, without)
     return weakest
 
 
 def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
     """Every effect on every camera it applies to, not yet in the model, catalogue order."""
-    return [Term(effect.name, c) for effect in CATALOGUE.values() for c in range(len(measurement.cameras))
-            if Term(effect.name, c) not in terms
-            and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)]
+    return [
+        Term(effect.name, c)
+        for effect in CATALOGUE.values()
+        for c in range(len(measurement.cameras))
+        if Term(effect.name, c) not in terms and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)
+    ]
 
 
 def _with_implied(term: Term) -> frozenset[Term]:
@@ -250,38 +282,51 @@ def _diagnosis(measurement: Measurement, fits: list[Fit], steps: list[Step]) -> 
     return Diagnosis(
         cameras=[c.name for c in measurement.cameras],
         reference=measurement.cameras[measurement.reference].name,
-        n_flashes=measurement.n_flashes, n_edges=n_edges, steps=steps,
-        initial_rms_ms=plain.rms_ms, final_rms_ms=final.rms_ms, expected_ms=float(expected),
+        n_flashes=measurement.n_flashes,
+        n_edges=n_edges,
+        steps=steps,
+        initial_rms_ms=plain.rms_ms,
+        final_rms_ms=final.rms_ms,
+        expected_ms=float(expected),
         consistent=bool(final.rms_ms <= NOISE_FACTOR * expected),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         edge_residuals=_edge_residuals(measurement, fits),
-        warnings=list(measurement.warnings))
+        warnings=list(measurement.warnings),
+    )
 
 
 def _edge_residuals(measurement: Measurement, fits: list[Fit]) -> dict:
     """Every edge's residual (ms) under the plain model and after each step, with its
     camera, flash and kind: what ``flashsync diagnose --rrd`` plots."""
     edges = measurement.edges
-    return {"camera": [measurement.cameras[c].name for c in edges.camera],
-            "flash": edges.flash.tolist(), "trailing": edges.trailing.tolist(),
-            "residual_ms": [fit.residual_ms.tolist() for fit in fits]}
+    return {
+        "camera": [measurement.cameras[c].name for c in edges.camera],
+        "flash": edges.flash.tolist(),
+        "trailing": edges.trailing.tolist(),
+        "residual_ms": [fit.residual_ms.tolist() for fit in fits],
+    }
 
 
 def _camera_models(fit: Fit) -> list[dict]:
     """The fitted model per camera, in plain numbers."""
     models = []
     for c, (camera, clock) in enumerate(zip(fit.measurement.cameras, fit.clocks)):
-        models.append({
-            "camera": camera.name, "reference": c == fit.reference,
-            "readout": "bottom-up" if fit.flipped[c] else "top-down",
-            "frame_period_ms": clock.period_ms, "missing_frames": clock.missing,
-            "drift_ppm": 1e6 * fit.coefficient(DRIFT, c),
-            "drift_rate_ppm_per_s": 2e9 * fit.coefficient(DRIFT_RATE, c),
-            "shift_ms": fit.coefficient("shift", c),
-            "row_time_ms": fit.nominal_row_time_ms(c) + fit.coefficient(ROW_TIME, c),
-            "exposure_ms": fit.exposure_ms(c),
-            "effects": sorted(t.effect for t in fit.terms if t.camera == c)})
+        models.append(
+            {
+                "camera": camera.name,
+                "reference": c == fit.reference,
+                "readout": "bottom-up" if fit.flipped[c] else "top-down",
+                "frame_period_ms": clock.period_ms,
+                "missing_frames": clock.missing,
+                "drift_ppm": 1e6 * fit.coefficient(DRIFT, c),
+                "drift_rate_ppm_per_s": 2e9 * fit.coefficient(DRIFT_RATE, c),
+                "shift_ms": fit.coefficient("shift", c),
+                "row_time_ms": fit.nominal_row_time_ms(c) + fit.coefficient(ROW_TIME, c),
+                "exposure_ms": fit.exposure_ms(c),
+                "effects": sorted(t.effect for t in fit.terms if t.camera == c),
+            }
+        )
     return models
 
 
@@ -301,15 +346,19 @@ def residual_structure(fit: Fit) -> list[dict]:
         mine = fit.features.camera == c
         residual, trailing = fit.residual_ms[mine], fit.features.trailing[mine]
         steps = np.diff(camera.stamps_ms)
-        structure.append({
-            "camera": camera.name, "edges": int(mine.sum()),
-            "rms_ms": float(np.sqrt(np.mean(residual**2))),
-            "time_slope_ppm": 1e6 * _slope(fit.features.t_ms[mine], residual),
-            "row_slope_us_per_row": 1e3 * _slope(fit.features.q[mine], residual),
-            "trailing_minus_leading_ms": float(np.mean(residual[trailing]) - np.mean(residual[~trailing])),
-            "median_step_ms": clock.median_step_ms,
-            "long_intervals": int(np.count_nonzero(steps > 1.5 * clock.median_step_ms)),
-            "stamp_rms_ms": fit.stamp_rms_ms[c]})
+        structure.append(
+            {
+                "camera": camera.name,
+                "edges": int(mine.sum()),
+                "rms_ms": float(np.sqrt(np.mean(residual**2))),
+                "time_slope_ppm": 1e6 * _slope(fit.features.t_ms[mine], residual),
+                "row_slope_us_per_row": 1e3 * _slope(fit.features.q[mine], residual),
+                "trailing_minus_leading_ms": float(np.mean(residual[trailing]) - np.mean(residual[~trailing])),
+                "median_step_ms": clock.median_step_ms,
+                "long_intervals": int(np.count_nonzero(steps > 1.5 * clock.median_step_ms)),
+                "stamp_rms_ms": fit.stamp_rms_ms[c],
+            }
+        )
     return structure
 
 

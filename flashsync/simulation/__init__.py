@@ -13,8 +13,7 @@ Examples
 """
 
 from flashsync.simulation.render import render_scenario
-from flashsync.simulation.scenario import (PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario,
-                                           load_scenario, preset)
+from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, load_scenario, preset
 from flashsync.simulation.truth import GroundTruth, load_ground_truth
 
 __all__ = [

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Iterable, Sequence
 
 import av
 import numpy as np
@@ -31,8 +31,9 @@ def stamp_clock_ms(camera: CameraSpec, t_true_ms: np.ndarray) -> np.ndarray:
     return stamp
 
 
-def container_stamps(camera: CameraSpec, t_true_ms: np.ndarray, rng: np.random.Generator
-                     ) -> tuple[np.ndarray, Fraction]:
+def container_stamps(
+    camera: CameraSpec, t_true_ms: np.ndarray, rng: np.random.Generator
+) -> tuple[np.ndarray, Fraction]:
     """Container timestamps a camera reports for its frames.
 
     The stamp is the true camera time (through `stamp_clock_ms`, which changes its rate
@@ -65,8 +66,9 @@ def container_stamps(camera: CameraSpec, t_true_ms: np.ndarray, rng: np.random.G
     return pts, time_base
 
 
-def x264_options(crf: int = 23, keyint: int | None = None, bframes: int | None = None,
-                 preset: str | None = None) -> dict[str, str]:
+def x264_options(
+    crf: int = 23, keyint: int | None = None, bframes: int | None = None, preset: str | None = None
+) -> dict[str, str]:
     """libx264 options for PyAV's ``stream.options``: x264's defaults where None."""
     options = {"crf": str(crf)}
     if preset is not None:
@@ -77,9 +79,17 @@ def x264_options(crf: int = 23, keyint: int | None = None, bframes: int | None =
     return options
 
 
-def write_video(path: str | Path, frames: Iterable[np.ndarray], pts: Sequence[int], time_base: Fraction,
-                crf: int = 23, fps: float | None = None, keyint: int | None = None,
-                bframes: int | None = None, preset: str | None = None) -> int:
+def write_video(
+    path: str | Path,
+    frames: Iterable[np.ndarray],
+    pts: Sequence[int],
+    time_base: Fraction,
+    crf: int = 23,
+    fps: float | None = None,
+    keyint: int | None = None,
+    bframes: int | None = None,
+    preset: str | None = None,
+) -> int:
     """Encode frames with libx264 (yuv420p) and explicit presentation stamps.
 
     Parameters

@@ -165,8 +165,10 @@ def ambient_light(start_w: np.ndarray, end_w: np.ndarray, lighting: Lighting) ->
     m, phase = lighting.flicker_depth, lighting.flicker_phase
 
     def integral(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return (y - x) + (m / omega) * (_waveform_integral(omega * y + phase, lighting.flicker_waveform)
-                                        - _waveform_integral(omega * x + phase, lighting.flicker_waveform))
+        return (y - x) + (m / omega) * (
+            _waveform_integral(omega * y + phase, lighting.flicker_waveform)
+            - _waveform_integral(omega * x + phase, lighting.flicker_waveform)
+        )
 
     switches = sorted(lighting.switches, key=lambda s: s.world_ms)
     edges = [-np.inf] + [s.world_ms for s in switches] + [np.inf]

@@ -17,9 +17,9 @@ from __future__ import annotations
 import csv
 import io
 import json
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -27,8 +27,16 @@ from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
 from flashsync.simulation.light import Lighting, ambient_light, flash_light
 from flashsync.simulation.scenario import CameraSpec, FlashSpec, Scenario, check_scenario
-from flashsync.simulation.scene import (Player, Puck, Scene, apply_homography, camera_background,
-                                        camera_homography, make_scene, rink_to_image)
+from flashsync.simulation.scene import (
+    Player,
+    Puck,
+    Scene,
+    apply_homography,
+    camera_background,
+    camera_homography,
+    make_scene,
+    rink_to_image,
+)
 from flashsync.simulation.sensor import sensor_response, shading
 from flashsync.simulation.truth import GroundTruth, camera_truth, ground_truth
 
@@ -72,8 +80,7 @@ def readout_index(camera: CameraSpec, rows: float | np.ndarray) -> np.ndarray:
     return camera.height - 1 - rows if camera.flipped else rows
 
 
-def exposure_end_ms(camera: CameraSpec, t_frame_ms: float | np.ndarray, rows: np.ndarray | None = None
-                    ) -> np.ndarray:
+def exposure_end_ms(camera: CameraSpec, t_frame_ms: float | np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
     """Camera time at which stored-image rows end their exposure.
 
     Parameters
@@ -126,8 +133,9 @@ def frame_gain(camera: CameraSpec, t_frame_ms: float) -> float:
     return float(np.prod([f for at, f in camera.gain_steps if at < w]))
 
 
-def _draw_object(refl: np.ndarray, view: CameraView, obj: Player | Puck, t_frame_ms: float,
-                 color: np.ndarray | np.float32) -> None:
+def _draw_object(
+    refl: np.ndarray, view: CameraView, obj: Player | Puck, t_frame_ms: float, color: np.ndarray | np.float32
+) -> None:
     """Composite a moving disc into `refl` in place, each row at its own exposure times."""
     cam = view.camera
     height, width = refl.shape[:2]
@@ -168,8 +176,14 @@ def _object_color(obj: Player | Puck, color: bool) -> np.ndarray | np.float32:
     return bgr if color else np.float32(bgr @ [0.114, 0.587, 0.299])
 
 
-def render_frame(view: CameraView, scene: Scene, t_frame_ms: float, lighting: Lighting,
-                 rng: np.random.Generator | None = None, objects: bool = True) -> np.ndarray:
+def render_frame(
+    view: CameraView,
+    scene: Scene,
+    t_frame_ms: float,
+    lighting: Lighting,
+    rng: np.random.Generator | None = None,
+    objects: bool = True,
+) -> np.ndarray:
     """Render one rolling-shutter frame.
 
     Parameters
@@ -238,8 +252,7 @@ def puck_track(view: CameraView, puck: Puck, t_frame_ms: np.ndarray) -> tuple[np
         xy = apply_homography(view.to_image, puck.position(cam.world_ms(mid)))
         row = np.clip(np.nan_to_num(xy[:, 1], nan=-1.0), -1.0, cam.height)
     with np.errstate(invalid="ignore"):
-        visible = ((xy[:, 0] >= 0) & (xy[:, 0] <= cam.width - 1)
-                   & (xy[:, 1] >= 0) & (xy[:, 1] <= cam.height - 1))
+        visible = (xy[:, 0] >= 0) & (xy[:, 0] <= cam.width - 1) & (xy[:, 1] >= 0) & (xy[:, 1] <= cam.height - 1)
     return xy, visible
 
 
@@ -275,7 +288,7 @@ def kept_frames(scenario: Scenario, index: int) -> np.ndarray:
     keep = np.ones(n, dtype=bool)
     keep[[f for f in cam.dropped_frames if 0 <= f < n]] = False
     for first, count in cam.frame_gaps:
-        keep[max(first, 0):max(first + count, 0)] = False
+        keep[max(first, 0) : max(first + count, 0)] = False
     keep[1:-1] &= camera_rng(scenario, index, 1).random(max(n - 2, 0)) >= cam.drop_fraction
     return np.flatnonzero(keep)
 
@@ -292,13 +305,17 @@ def camera_lighting(scenario: Scenario, index: int) -> Lighting:
     missed = missed_flashes(scenario, index)
     return Lighting(
         flashes=tuple(f for k, f in enumerate(scenario.flashes) if k not in missed),
-        switches=tuple(scenario.switches), flicker_depth=scenario.flicker_depth,
-        flicker_hz=scenario.flicker_hz, flicker_phase=scenario.flicker_phase,
-        flicker_waveform=scenario.flicker_waveform)
+        switches=tuple(scenario.switches),
+        flicker_depth=scenario.flicker_depth,
+        flicker_hz=scenario.flicker_hz,
+        flicker_phase=scenario.flicker_phase,
+        flicker_waveform=scenario.flicker_waveform,
+    )
 
 
-def _reporting(frames: Iterable[np.ndarray], name: str, total: int,
-               progress: Callable[[str, int, int], None] | None) -> Iterator[np.ndarray]:
+def _reporting(
+    frames: Iterable[np.ndarray], name: str, total: int, progress: Callable[[str, int, int], None] | None
+) -> Iterator[np.ndarray]:
     """Yield from `frames`, calling ``progress(name, done, total)`` after each."""
     for done, frame in enumerate(frames, start=1):
         yield frame
@@ -306,8 +323,9 @@ def _reporting(frames: Iterable[np.ndarray], name: str, total: int,
             progress(name, done, total)
 
 
-def render_scenario(scenario: Scenario, out_dir: str | Path,
-                    progress: Callable[[str, int, int], None] | None = None) -> GroundTruth:
+def render_scenario(
+    scenario: Scenario, out_dir: str | Path, progress: Callable[[str, int, int], None] | None = None
+) -> GroundTruth:
     """Render every camera of a scenario to video files, with ground truth.
 
     Writes ``<camera>.mp4`` or ``<camera>.mkv`` per camera, ``truth.json``,
@@ -346,15 +364,30 @@ def render_scenario(scenario: Scenario, out_dir: str | Path,
         pts, time_base = container_stamps(cam, t_true, camera_rng(scenario, i, 3))
         path = out / f"{cam.name}.{cam.container}"
         images = (render_frame(view, scene, t, lighting, rng) for t in t_true)
-        write_video(path, _reporting(images, cam.name, len(frames), progress), pts, time_base,
-                    crf=cam.crf, fps=cam.fps, keyint=cam.keyint, bframes=cam.bframes, preset=cam.x264_preset)
+        write_video(
+            path,
+            _reporting(images, cam.name, len(frames), progress),
+            pts,
+            time_base,
+            crf=cam.crf,
+            fps=cam.fps,
+            keyint=cam.keyint,
+            bframes=cam.bframes,
+            preset=cam.x264_preset,
+        )
         homographies[cam.name] = view.homography.tolist()
         xy, visible = puck_track(view, scene.puck, t_true)
-        detections += [(cam.name, j, round(float(x), 3), round(float(y), 3), "puck")
-                       for j, ((x, y), v) in enumerate(zip(xy, visible)) if v]
+        detections += [
+            (cam.name, j, round(float(x), 3), round(float(y), 3), "puck")
+            for j, ((x, y), v) in enumerate(zip(xy, visible))
+            if v
+        ]
         missed = missed_flashes(scenario, i)
-        seen = {k: np.flatnonzero(flash_frames(cam, t_true, fl)).tolist()
-                for k, fl in enumerate(scenario.flashes) if k not in missed}
+        seen = {
+            k: np.flatnonzero(flash_frames(cam, t_true, fl)).tolist()
+            for k, fl in enumerate(scenario.flashes)
+            if k not in missed
+        }
         stamps_ms = pts * 1000.0 * float(time_base)
         cameras.append(camera_truth(cam, path.name, frames, t_true, stamps_ms, seen, scenario.cameras[0]))
     truth = ground_truth(scenario, cameras)

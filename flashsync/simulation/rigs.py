@@ -53,7 +53,7 @@ from __future__ import annotations
 
 import dataclasses
 import zlib
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -78,13 +78,15 @@ def pulse(kind: str, world_ms: float, strength: float, rng: np.random.Generator)
     if kind == "led":
         return FlashSpec(world_ms, strength, decay_ms=0.0, hold_ms=rng.uniform(0.1, 2.0))
     if kind == "slow rise":
-        return FlashSpec(world_ms, strength, decay_ms=rng.uniform(0.2, 1.0), rise_ms=rng.uniform(0.1, 1.0),
-                         rise="cosine")
+        return FlashSpec(
+            world_ms, strength, decay_ms=rng.uniform(0.2, 1.0), rise_ms=rng.uniform(0.1, 1.0), rise="cosine"
+        )
     raise FlashsyncError(f"unknown pulse kind {kind!r}; choose one of {', '.join(PULSES)}")
 
 
-def flash_instants(rng: np.random.Generator, count: int, start_ms: float, stop_ms: float,
-                   min_gap_ms: float) -> np.ndarray:
+def flash_instants(
+    rng: np.random.Generator, count: int, start_ms: float, stop_ms: float, min_gap_ms: float
+) -> np.ndarray:
     """`count` irregular instants in [start_ms, stop_ms], at least `min_gap_ms` apart, ms."""
     count = max(1, min(count, 1 + int((stop_ms - start_ms) // min_gap_ms)))
     slack = max(stop_ms - start_ms - (count - 1) * min_gap_ms, 0.0)
@@ -97,9 +99,15 @@ def random_pose(rng: np.random.Generator, width: int, height: int) -> dict:
     for _ in range(100):
         look = (float(rng.uniform(8.0, 52.0)), float(rng.uniform(6.0, 24.0)))
         bearing, distance = rng.uniform(0.0, 2.0 * np.pi), rng.uniform(15.0, 35.0)
-        pose = dict(position_m=(look[0] + distance * np.cos(bearing), look[1] + distance * np.sin(bearing),
-                                float(rng.uniform(10.0, 18.0))),
-                    look_at_m=look, hfov_deg=float(rng.uniform(50.0, 80.0)))
+        pose = dict(
+            position_m=(
+                look[0] + distance * np.cos(bearing),
+                look[1] + distance * np.sin(bearing),
+                float(rng.uniform(10.0, 18.0)),
+            ),
+            look_at_m=look,
+            hfov_deg=float(rng.uniform(50.0, 80.0)),
+        )
         pose["position_m"] = tuple(float(v) for v in pose["position_m"])
         try:
             rink_to_image(CameraSpec("pose", width, height, 25.0, **pose))
@@ -123,14 +131,17 @@ def _stamps(kind: str, rng: np.random.Generator) -> dict:
 def _sensor(rng: np.random.Generator) -> dict:
     """Sensor response and encoder fields, drawn as in `random_rig`."""
     return dict(
-        flash_gain=float(rng.uniform(0.7, 1.3)), noise_std=float(rng.uniform(0.5, 2.5)),
+        flash_gain=float(rng.uniform(0.7, 1.3)),
+        noise_std=float(rng.uniform(0.5, 2.5)),
         tone=str(rng.choice(["linear", "srgb", "gamma"])),
         black_level=0.0 if rng.random() < 0.5 else float(rng.uniform(4.0, 16.0)),
         white_level=float(rng.uniform(200.0, 450.0)),
         vignetting=0.0 if rng.random() < 0.5 else float(rng.uniform(0.1, 0.5)),
         crf=int(rng.integers(18, 31)),
-        keyint=[None, 60, 600][rng.integers(3)], bframes=[None, 0, 2][rng.integers(3)],
-        x264_preset=[None, "veryfast", "fast"][rng.integers(3)])
+        keyint=[None, 60, 600][rng.integers(3)],
+        bframes=[None, 0, 2][rng.integers(3)],
+        x264_preset=[None, "veryfast", "fast"][rng.integers(3)],
+    )
 
 
 def _clock(rng: np.random.Generator, duration_ms: float, reference: bool) -> dict:
@@ -147,8 +158,9 @@ def _hidden_rows(rng: np.random.Generator, height: int) -> dict:
     return dict(r0=int(round(height * rng.uniform(0.01, 0.06))), r1=int(round(height * rng.uniform(0.005, 0.04))))
 
 
-def random_camera(rng: np.random.Generator, name: str, duration_ms: float, max_height: int = 1080,
-                  reference: bool = False) -> CameraSpec:
+def random_camera(
+    rng: np.random.Generator, name: str, duration_ms: float, max_height: int = 1080, reference: bool = False
+) -> CameraSpec:
     """One camera drawn as in `random_rig`."""
     sizes = [s for s in SIZES if s[1] <= max_height]
     if not sizes:
@@ -157,15 +169,25 @@ def random_camera(rng: np.random.Generator, name: str, duration_ms: float, max_h
     fps = RATES[rng.integers(len(RATES))]
     exposure = min(float(np.exp(rng.uniform(np.log(0.5), np.log(16.0)))), 0.95 * 1000.0 / fps)
     return CameraSpec(
-        name, width, height, fps, exposure_ms=round(exposure, 3), flipped=bool(rng.random() < 0.2),
+        name,
+        width,
+        height,
+        fps,
+        exposure_ms=round(exposure, 3),
+        flipped=bool(rng.random() < 0.2),
         drop_fraction=0.0 if rng.random() < 0.6 else float(rng.uniform(0.002, 0.03)),
         miss_probability=float(rng.uniform(0.0, 0.3)),
-        **_hidden_rows(rng, height), **_clock(rng, duration_ms, reference),
-        **_stamps(STAMPS[rng.integers(len(STAMPS))], rng), **_sensor(rng), **random_pose(rng, width, height))
+        **_hidden_rows(rng, height),
+        **_clock(rng, duration_ms, reference),
+        **_stamps(STAMPS[rng.integers(len(STAMPS))], rng),
+        **_sensor(rng),
+        **random_pose(rng, width, height),
+    )
 
 
-def random_rig(seed: int, max_height: int = 1080, duration_ms: float = 20_000.0,
-               cameras: tuple[int, int] = (2, 12)) -> Scenario:
+def random_rig(
+    seed: int, max_height: int = 1080, duration_ms: float = 20_000.0, cameras: tuple[int, int] = (2, 12)
+) -> Scenario:
     """A random rig of the second world (distributions in the module docstring).
 
     Parameters
@@ -199,34 +221,61 @@ def random_rig(seed: int, max_height: int = 1080, duration_ms: float = 20_000.0,
     flicker = rng.random() < 0.5
     large = rng.random() < 0.25
     scenario = Scenario(
-        f"rig-{seed}", specs, duration_ms=duration_ms, flashes=flashes,
+        f"rig-{seed}",
+        specs,
+        duration_ms=duration_ms,
+        flashes=flashes,
         flicker_depth=float(np.exp(rng.uniform(np.log(0.005), np.log(0.10)))) if flicker else 0.0,
-        flicker_hz=float(rng.choice([100.0, 120.0])), flicker_phase=float(rng.uniform(0.0, 2.0 * np.pi)),
-        flicker_waveform=str(rng.choice(["sine", "rectified"])), n_players=int(rng.integers(4, 31)),
-        player_radius_m=(0.8, 2.5) if large else (0.4, 0.55), puck_speed_mps=float(rng.uniform(20.0, 45.0)),
-        color=bool(rng.random() < 0.25), seed=int(seed))
+        flicker_hz=float(rng.choice([100.0, 120.0])),
+        flicker_phase=float(rng.uniform(0.0, 2.0 * np.pi)),
+        flicker_waveform=str(rng.choice(["sine", "rectified"])),
+        n_players=int(rng.integers(4, 31)),
+        player_radius_m=(0.8, 2.5) if large else (0.4, 0.55),
+        puck_speed_mps=float(rng.uniform(20.0, 45.0)),
+        color=bool(rng.random() < 0.25),
+        seed=int(seed),
+    )
     check_scenario(scenario, f"random rig {seed}")
     return scenario
 
 
-def _recipe_camera(rng: np.random.Generator, name: str, width: int, height: int, fps: float,
-                   exposure_ms: float, duration_ms: float, reference: bool = False, **fields) -> CameraSpec:
+def _recipe_camera(
+    rng: np.random.Generator,
+    name: str,
+    width: int,
+    height: int,
+    fps: float,
+    exposure_ms: float,
+    duration_ms: float,
+    reference: bool = False,
+    **fields,
+) -> CameraSpec:
     """A camera of a recipe: the given geometry, rate and exposure; second-world sensor and
     encoder (tone sRGB or gamma, crf 18-30), a random pose and clock; `fields` override."""
     sensor = _sensor(rng)
     sensor["tone"] = str(rng.choice(["srgb", "gamma"]))
-    spec = CameraSpec(name, width, height, fps, exposure_ms=exposure_ms, **_hidden_rows(rng, height),
-                      **_clock(rng, duration_ms, reference), **sensor, **random_pose(rng, width, height))
+    spec = CameraSpec(
+        name,
+        width,
+        height,
+        fps,
+        exposure_ms=exposure_ms,
+        **_hidden_rows(rng, height),
+        **_clock(rng, duration_ms, reference),
+        **sensor,
+        **random_pose(rng, width, height),
+    )
     return dataclasses.replace(spec, **{"drift_rate_ppm_per_s": 0.0, **fields})
 
 
-def _recipe(name: str, seed: int, duration_ms: float, cameras: list[tuple], flashes: int = 12,
-            **scene) -> Scenario:
+def _recipe(name: str, seed: int, duration_ms: float, cameras: list[tuple], flashes: int = 12, **scene) -> Scenario:
     """A scenario of a recipe: cameras as ``(name, width, height, fps, exposure_ms,
     fields)``, xenon or LED flashes at irregular instants, the scene fields given."""
     rng = np.random.default_rng([seed, zlib.crc32(name.encode())])
-    specs = tuple(_recipe_camera(rng, cam, w, h, fps, exp, duration_ms, reference=i == 0, **fields)
-                  for i, (cam, w, h, fps, exp, fields) in enumerate(cameras))
+    specs = tuple(
+        _recipe_camera(rng, cam, w, h, fps, exp, duration_ms, reference=i == 0, **fields)
+        for i, (cam, w, h, fps, exp, fields) in enumerate(cameras)
+    )
     kind = ("xenon", "led")[rng.integers(2)]
     instants = flash_instants(rng, flashes, 0.08 * duration_ms, 0.92 * duration_ms, 400.0) if flashes else []
     pulses = tuple(pulse(kind, round(float(t), 3), round(float(rng.uniform(0.3, 0.7)), 3), rng) for t in instants)
@@ -238,45 +287,73 @@ def _recipe(name: str, seed: int, duration_ms: float, cameras: list[tuple], flas
 
 def _four_ms_drops(seed: int, duration_ms: float) -> Scenario:
     ms = dict(container="mkv")
-    return _recipe("four-ms-drops", seed, duration_ms, [
-        ("cam1", 960, 540, 25.0, 6.0, dict(ms, drop_fraction=0.01)),
-        ("cam2", 960, 540, 25.0, 6.0, dict(ms, drop_fraction=0.02)),
-        ("cam3", 640, 360, 25.0, 4.0, dict(ms, drop_fraction=0.01)),
-        ("cam4", 640, 360, 25.0, 3.0, dict(ms, drop_fraction=0.02))])
+    return _recipe(
+        "four-ms-drops",
+        seed,
+        duration_ms,
+        [
+            ("cam1", 960, 540, 25.0, 6.0, dict(ms, drop_fraction=0.01)),
+            ("cam2", 960, 540, 25.0, 6.0, dict(ms, drop_fraction=0.02)),
+            ("cam3", 640, 360, 25.0, 4.0, dict(ms, drop_fraction=0.01)),
+            ("cam4", 640, 360, 25.0, 3.0, dict(ms, drop_fraction=0.02)),
+        ],
+    )
 
 
 def _three_rates_flipped(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("three-rates-flipped", seed, duration_ms, [
-        ("cam1", 640, 360, 25.0, 5.0, {}),
-        ("cam2", 640, 360, 30.0, 4.0, dict(flipped=True)),
-        ("cam3", 640, 360, 50.0, 3.0, {})])
+    return _recipe(
+        "three-rates-flipped",
+        seed,
+        duration_ms,
+        [
+            ("cam1", 640, 360, 25.0, 5.0, {}),
+            ("cam2", 640, 360, 30.0, 4.0, dict(flipped=True)),
+            ("cam3", 640, 360, 50.0, 3.0, {}),
+        ],
+    )
 
 
 def _twin_flipped(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("twin-flipped", seed, duration_ms, [
-        ("cam1", 640, 360, 25.0, 4.0, {}),
-        ("cam2", 640, 360, 25.0, 4.0, dict(flipped=True))])
+    return _recipe(
+        "twin-flipped",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 25.0, 4.0, {}), ("cam2", 640, 360, 25.0, 4.0, dict(flipped=True))],
+    )
 
 
 def _twin_drops(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("twin-drops", seed, duration_ms, [
-        ("cam1", 640, 360, 25.0, 4.0, {}),
-        ("cam2", 640, 360, 25.0, 4.0, dict(drop_fraction=0.05))])
+    return _recipe(
+        "twin-drops",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 25.0, 4.0, {}), ("cam2", 640, 360, 25.0, 4.0, dict(drop_fraction=0.05))],
+    )
 
 
 def _hd(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("hd", seed, duration_ms, [
-        ("cam1", 1920, 1080, NTSC_30, 2.0, dict(drift_ppm=0.0)),
-        ("cam2", 1280, 720, NTSC_30, 4.0, dict(drift_ppm=8.0)),
-        ("cam3", 1280, 720, NTSC_60, 3.0, dict(drift_ppm=10.0))])
+    return _recipe(
+        "hd",
+        seed,
+        duration_ms,
+        [
+            ("cam1", 1920, 1080, NTSC_30, 2.0, dict(drift_ppm=0.0)),
+            ("cam2", 1280, 720, NTSC_30, 4.0, dict(drift_ppm=8.0)),
+            ("cam3", 1280, 720, NTSC_60, 3.0, dict(drift_ppm=10.0)),
+        ],
+    )
 
 
 def _twelve(seed: int, duration_ms: float) -> Scenario:
     rates = (25.0, 30.0, 50.0)
     exposures = (4.0, 2.0, 6.0, 3.0, 5.0, 4.0)
-    return _recipe("twelve", seed, duration_ms, [
-        (f"cam{i + 1}", 320, 180, rates[i % 3], exposures[i % 6], dict(miss_probability=0.3)) for i in range(12)],
-        flashes=16)
+    return _recipe(
+        "twelve",
+        seed,
+        duration_ms,
+        [(f"cam{i + 1}", 320, 180, rates[i % 3], exposures[i % 6], dict(miss_probability=0.3)) for i in range(12)],
+        flashes=16,
+    )
 
 
 #: The real-light issue's rigs use linear sensors, as its footage did: a tone curve
@@ -286,10 +363,14 @@ _LINEAR = dict(tone="linear")
 
 
 def _rolling_flicker(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("rolling-flicker", seed, duration_ms, [
-        ("cam1", 640, 360, 30.0, 0.5, _LINEAR),
-        ("cam2", 640, 360, 25.0, 1.0, _LINEAR)],
-        flicker_depth=0.03, flicker_hz=100.0)
+    return _recipe(
+        "rolling-flicker",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 30.0, 0.5, _LINEAR), ("cam2", 640, 360, 25.0, 1.0, _LINEAR)],
+        flicker_depth=0.03,
+        flicker_hz=100.0,
+    )
 
 
 _NEAR = dict(_LINEAR, position_m=(30.0, -4.0, 10.0), look_at_m=(30.0, 12.0), hfov_deg=60.0)
@@ -297,38 +378,65 @@ _FAR_SIDE = dict(_LINEAR, position_m=(30.0, 34.0, 10.0), look_at_m=(30.0, 18.0),
 
 
 def _large_movers(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("large-movers", seed, duration_ms, [
-        ("cam1", 320, 240, 25.0, 8.0, _NEAR),
-        ("cam2", 320, 240, 30.0, 8.0, _FAR_SIDE)],
-        n_players=10, player_radius_m=(0.55, 1.1))
+    return _recipe(
+        "large-movers",
+        seed,
+        duration_ms,
+        [("cam1", 320, 240, 25.0, 8.0, _NEAR), ("cam2", 320, 240, 30.0, 8.0, _FAR_SIDE)],
+        n_players=10,
+        player_radius_m=(0.55, 1.1),
+    )
 
 
 def _long_pair(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("long-pair", seed, duration_ms, [
-        ("cam1", 320, 240, 25.0, 8.0, _NEAR),
-        ("cam2", 320, 240, 30.0, 8.0, dict(_FAR_SIDE, drift_ppm=12.0, drift_rate_ppm_per_s=0.01))],
-        flashes=30, n_players=10, player_radius_m=(0.55, 1.1))
+    return _recipe(
+        "long-pair",
+        seed,
+        duration_ms,
+        [
+            ("cam1", 320, 240, 25.0, 8.0, _NEAR),
+            ("cam2", 320, 240, 30.0, 8.0, dict(_FAR_SIDE, drift_ppm=12.0, drift_rate_ppm_per_s=0.01)),
+        ],
+        flashes=30,
+        n_players=10,
+        player_radius_m=(0.55, 1.1),
+    )
 
 
 def _jittered_stamps(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("jittered-stamps", seed, duration_ms, [
-        ("cam1", 640, 360, 25.0, 4.0, {}),
-        ("cam2", 640, 360, 30.0, 5.0, dict(jitter_ms=1.2)),
-        ("cam3", 640, 360, 50.0, 3.0, {})])
+    return _recipe(
+        "jittered-stamps",
+        seed,
+        duration_ms,
+        [
+            ("cam1", 640, 360, 25.0, 4.0, {}),
+            ("cam2", 640, 360, 30.0, 5.0, dict(jitter_ms=1.2)),
+            ("cam3", 640, 360, 50.0, 3.0, {}),
+        ],
+    )
 
 
 def _stamp_rate_change(seed: int, duration_ms: float) -> Scenario:
     middle = int(duration_ms * 30.0 / 1000.0) // 2
-    return _recipe("stamp-rate-change", seed, duration_ms, [
-        ("cam1", 640, 360, 25.0, 4.0, {}),
-        ("cam2", 640, 360, 30.0, 5.0, dict(stamp_rate_changes=((middle, 1.5),)))])
+    return _recipe(
+        "stamp-rate-change",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 25.0, 4.0, {}), ("cam2", 640, 360, 30.0, 5.0, dict(stamp_rate_changes=((middle, 1.5),)))],
+    )
 
 
 def _flash_free(seed: int, duration_ms: float) -> Scenario:
-    return _recipe("flash-free", seed, duration_ms, [
-        ("cam1", 320, 240, 25.0, 8.0, _NEAR),
-        ("cam2", 320, 240, 30.0, 8.0, _FAR_SIDE)],
-        flashes=0, flicker_depth=0.05, flicker_hz=100.0, n_players=20)
+    return _recipe(
+        "flash-free",
+        seed,
+        duration_ms,
+        [("cam1", 320, 240, 25.0, 8.0, _NEAR), ("cam2", 320, 240, 30.0, 8.0, _FAR_SIDE)],
+        flashes=0,
+        flicker_depth=0.05,
+        flicker_hz=100.0,
+        n_players=20,
+    )
 
 
 #: Named rigs: ``RECIPES[name] = (build(seed, duration_ms) -> Scenario, default duration

@@ -40,13 +40,13 @@ CONTAINERS = ("mp4", "mkv")
 RISES = ("linear", "cosine")
 TONES = ("linear", "srgb", "gamma")
 FLICKER_WAVEFORMS = ("sine", "rectified")
-X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower",
-                "veryslow")
+X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
 
-def clock_world_ms(t_ms: float | np.ndarray, offset_ms: float, drift_ppm: float,
-                   drift_rate_ppm_per_s: float = 0.0) -> np.ndarray:
+def clock_world_ms(
+    t_ms: float | np.ndarray, offset_ms: float, drift_ppm: float, drift_rate_ppm_per_s: float = 0.0
+) -> np.ndarray:
     """Map camera time onto world time.
 
     Parameters
@@ -356,32 +356,44 @@ def check_scenario(scenario: Scenario, source: str) -> None:
     require(scenario.n_players >= 0, "n_players must be >= 0")
     require(scenario.flicker_hz > 0, "flicker_hz must be positive")
     require(0 <= scenario.flicker_depth < 1, "flicker_depth must be in [0, 1)")
-    require(scenario.flicker_waveform in FLICKER_WAVEFORMS,
-            f"flicker_waveform must be one of {FLICKER_WAVEFORMS}")
+    require(scenario.flicker_waveform in FLICKER_WAVEFORMS, f"flicker_waveform must be one of {FLICKER_WAVEFORMS}")
     radius = scenario.player_radius_m
-    require(len(radius) == 2 and 0 < radius[0] <= radius[1],
-            "player_radius_m must be [min, max] metres with 0 < min <= max")
+    require(
+        len(radius) == 2 and 0 < radius[0] <= radius[1], "player_radius_m must be [min, max] metres with 0 < min <= max"
+    )
     for k, fl in enumerate(scenario.flashes):
-        require(fl.decay_ms >= 0 and fl.rise_ms >= 0 and fl.hold_ms >= 0 and fl.strength >= 0,
-                f"flash {k}: decay_ms, rise_ms, hold_ms and strength must be >= 0")
-        require(fl.decay_ms + fl.rise_ms + fl.hold_ms > 0,
-                f"flash {k}: the pulse has no duration; give decay_ms, rise_ms or hold_ms")
+        require(
+            fl.decay_ms >= 0 and fl.rise_ms >= 0 and fl.hold_ms >= 0 and fl.strength >= 0,
+            f"flash {k}: decay_ms, rise_ms, hold_ms and strength must be >= 0",
+        )
+        require(
+            fl.decay_ms + fl.rise_ms + fl.hold_ms > 0,
+            f"flash {k}: the pulse has no duration; give decay_ms, rise_ms or hold_ms",
+        )
         require(fl.rise in RISES, f"flash {k}: rise must be one of {RISES}")
     for k, sw in enumerate(scenario.switches):
         require(sw.factor > 0, f"switch {k}: factor must be positive")
     ref = scenario.cameras[0]
-    require(ref.drift_rate_ppm_per_s == 0,
-            f"reference camera {ref.name} must have drift_rate_ppm_per_s 0; put another camera first")
+    require(
+        ref.drift_rate_ppm_per_s == 0,
+        f"reference camera {ref.name} must have drift_rate_ppm_per_s 0; put another camera first",
+    )
     for c in scenario.cameras:
         where = f"camera {c.name}"
-        require(isinstance(c.name, str) and _NAME.match(c.name) is not None,
-                f"camera name {c.name!r} is not a plain file stem (letters, digits, _ . -)")
-        require(c.width > 0 and c.height > 0 and c.width % 2 == 0 and c.height % 2 == 0,
-                f"{where}: width and height must be positive and even, got {c.width}x{c.height}")
+        require(
+            isinstance(c.name, str) and _NAME.match(c.name) is not None,
+            f"camera name {c.name!r} is not a plain file stem (letters, digits, _ . -)",
+        )
+        require(
+            c.width > 0 and c.height > 0 and c.width % 2 == 0 and c.height % 2 == 0,
+            f"{where}: width and height must be positive and even, got {c.width}x{c.height}",
+        )
         require(c.fps > 0, f"{where}: fps must be positive")
         require(c.r0 >= 0 and c.r1 >= 0, f"{where}: r0 and r1 must be >= 0")
-        require(0 < c.exposure_ms <= c.frame_period_ms,
-                f"{where}: exposure_ms must be in (0, {c.frame_period_ms:.3f}] (one frame period)")
+        require(
+            0 < c.exposure_ms <= c.frame_period_ms,
+            f"{where}: exposure_ms must be in (0, {c.frame_period_ms:.3f}] (one frame period)",
+        )
         require(c.start_ms >= 0, f"{where}: start_ms must be >= 0 (stamps are non-negative)")
         require(c.container in CONTAINERS, f"{where}: container must be one of {CONTAINERS}")
         require(c.quantize_ms is None or c.quantize_ms > 0, f"{where}: quantize_ms must be positive")
@@ -393,22 +405,36 @@ def check_scenario(scenario: Scenario, source: str) -> None:
         require(0 <= c.crf <= 51, f"{where}: crf must be in 0..51")
         require(c.keyint is None or c.keyint >= 1, f"{where}: keyint must be >= 1")
         require(c.bframes is None or 0 <= c.bframes <= 16, f"{where}: bframes must be in 0..16")
-        require(c.x264_preset is None or c.x264_preset in X264_PRESETS,
-                f"{where}: x264_preset must be one of {', '.join(X264_PRESETS)}")
+        require(
+            c.x264_preset is None or c.x264_preset in X264_PRESETS,
+            f"{where}: x264_preset must be one of {', '.join(X264_PRESETS)}",
+        )
         require(c.tone in TONES, f"{where}: tone must be one of {TONES}")
-        require(0 <= c.black_level < 255 and c.white_level > 0,
-                f"{where}: black_level must be in [0, 255) and white_level positive")
+        require(
+            0 <= c.black_level < 255 and c.white_level > 0,
+            f"{where}: black_level must be in [0, 255) and white_level positive",
+        )
         require(0 <= c.vignetting < 1, f"{where}: vignetting must be in [0, 1)")
-        require(all(len(g) == 2 and g[1] >= 1 for g in c.frame_gaps),
-                f"{where}: frame_gaps must be pairs [first sensor frame, count >= 1]")
-        require(all(len(s) == 2 and s[1] > 0 for s in c.stamp_rate_changes),
-                f"{where}: stamp_rate_changes must be pairs [sensor frame, factor > 0]")
-        require(all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
-                f"{where}: missed_flashes must be indices of flashes (0..{len(scenario.flashes) - 1})")
-        require(all(len(s) == 2 and s[1] > 0 for s in c.gain_steps),
-                f"{where}: gain_steps must be pairs [world_ms, factor > 0]")
-        require(len(c.position_m) == 3 and c.position_m[2] > 0,
-                f"{where}: position_m must be [x, y, z] with z > 0 (above the ice)")
+        require(
+            all(len(g) == 2 and g[1] >= 1 for g in c.frame_gaps),
+            f"{where}: frame_gaps must be pairs [first sensor frame, count >= 1]",
+        )
+        require(
+            all(len(s) == 2 and s[1] > 0 for s in c.stamp_rate_changes),
+            f"{where}: stamp_rate_changes must be pairs [sensor frame, factor > 0]",
+        )
+        require(
+            all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
+            f"{where}: missed_flashes must be indices of flashes (0..{len(scenario.flashes) - 1})",
+        )
+        require(
+            all(len(s) == 2 and s[1] > 0 for s in c.gain_steps),
+            f"{where}: gain_steps must be pairs [world_ms, factor > 0]",
+        )
+        require(
+            len(c.position_m) == 3 and c.position_m[2] > 0,
+            f"{where}: position_m must be [x, y, z] with z > 0 (above the ice)",
+        )
         require(len(c.look_at_m) == 2, f"{where}: look_at_m must be [x, y]")
         require(0 < c.hfov_deg < 170, f"{where}: hfov_deg must be in (0, 170)")
         try:
@@ -424,8 +450,7 @@ def _build(cls: type, data: dict, where: str, source: str) -> object:
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
-            raise FlashsyncError(
-                f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
+            raise FlashsyncError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
     try:
         return cls(**data)
     except TypeError as err:
@@ -479,7 +504,8 @@ def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
     for key in data:
         if key not in names:
             raise FlashsyncError(
-                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
+                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}"
+            )
     if "cameras" in data:
         cams = data["cameras"]
         if not isinstance(cams, list):
@@ -543,26 +569,60 @@ def load_scenario(path: str | Path) -> Scenario:
     return scenario_from_dict(data, str(path))
 
 
-def _flash_schedule(rng: np.random.Generator, start_ms: float, stop_ms: float, count: int, min_gap_ms: float,
-                    strengths: tuple = (0.35, 0.7), decay_ms: float = 0.5) -> tuple[FlashSpec, ...]:
+def _flash_schedule(
+    rng: np.random.Generator,
+    start_ms: float,
+    stop_ms: float,
+    count: int,
+    min_gap_ms: float,
+    strengths: tuple = (0.35, 0.7),
+    decay_ms: float = 0.5,
+) -> tuple[FlashSpec, ...]:
     """Up to `count` flashes at irregular instants in [start_ms, stop_ms], `min_gap_ms` apart or more."""
     count = max(1, min(count, 1 + int((stop_ms - start_ms) // min_gap_ms)))
     slack = max(stop_ms - start_ms - (count - 1) * min_gap_ms, 0.0)
     offsets = np.sort(rng.uniform(0.0, slack, count)) + np.arange(count) * min_gap_ms
     return tuple(
-        FlashSpec(world_ms=round(float(start_ms + o), 3), strength=round(float(rng.uniform(*strengths)), 3),
-                  decay_ms=decay_ms)
-        for o in offsets)
+        FlashSpec(
+            world_ms=round(float(start_ms + o), 3), strength=round(float(rng.uniform(*strengths)), 3), decay_ms=decay_ms
+        )
+        for o in offsets
+    )
 
 
 def _tiny(duration_ms: float = 2400.0) -> Scenario:
     rng = np.random.default_rng(11)
     cams = (
-        CameraSpec("cam1", 320, 180, 25.0, r0=8, r1=4, exposure_ms=10.0, start_ms=0.0,
-                   position_m=(30.0, -10.0, 14.0), look_at_m=(30.0, 12.0), hfov_deg=80.0),
-        CameraSpec("cam2", 320, 180, 30.0, r0=6, r1=6, exposure_ms=8.0, start_ms=1334.5,
-                   offset_ms=-1234.5, drift_ppm=15.0, container="mkv", flash_gain=0.9,
-                   position_m=(-6.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=70.0),
+        CameraSpec(
+            "cam1",
+            320,
+            180,
+            25.0,
+            r0=8,
+            r1=4,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            position_m=(30.0, -10.0, 14.0),
+            look_at_m=(30.0, 12.0),
+            hfov_deg=80.0,
+        ),
+        CameraSpec(
+            "cam2",
+            320,
+            180,
+            30.0,
+            r0=6,
+            r1=6,
+            exposure_ms=8.0,
+            start_ms=1334.5,
+            offset_ms=-1234.5,
+            drift_ppm=15.0,
+            container="mkv",
+            flash_gain=0.9,
+            position_m=(-6.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=70.0,
+        ),
     )
     flashes = _flash_schedule(rng, 0.12 * duration_ms, 0.92 * duration_ms, 4, 0.12 * duration_ms)
     return Scenario("tiny", cams, duration_ms=duration_ms, flashes=flashes, n_players=4, seed=1)
@@ -571,46 +631,164 @@ def _tiny(duration_ms: float = 2400.0) -> Scenario:
 def _sample(duration_ms: float = 8000.0) -> Scenario:
     rng = np.random.default_rng(2024)
     cams = (
-        CameraSpec("cam1", 640, 360, 30.0, r0=12, r1=8, exposure_ms=10.0, start_ms=0.0,
-                   drift_ppm=5.0, crf=28, noise_std=1.5,
-                   position_m=(30.0, -11.0, 15.0), look_at_m=(30.0, 11.0), hfov_deg=80.0),
-        CameraSpec("cam2", 480, 270, 25.0, r0=10, r1=6, exposure_ms=16.0, start_ms=4471.7,
-                   offset_ms=-4321.7, drift_ppm=-10.0, container="mkv", drop_fraction=0.01,
-                   flash_gain=1.2, crf=28, noise_std=1.5,
-                   position_m=(-7.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=75.0),
-        CameraSpec("cam3", 512, 288, 50.0, r0=14, r1=10, exposure_ms=8.0, start_ms=12115.6,
-                   offset_ms=-12345.6, drift_ppm=20.0, flash_gain=0.8, crf=28, noise_std=1.5,
-                   missed_flashes=(4,),
-                   position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0), hfov_deg=75.0),
-        CameraSpec("cam4", 320, 240, 29.97, r0=8, r1=6, exposure_ms=12.0, start_ms=7420.3,
-                   offset_ms=-7000.3, drift_ppm=12.0, jitter_ms=0.1, crf=28, noise_std=1.5,
-                   position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0), hfov_deg=70.0),
+        CameraSpec(
+            "cam1",
+            640,
+            360,
+            30.0,
+            r0=12,
+            r1=8,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            drift_ppm=5.0,
+            crf=28,
+            noise_std=1.5,
+            position_m=(30.0, -11.0, 15.0),
+            look_at_m=(30.0, 11.0),
+            hfov_deg=80.0,
+        ),
+        CameraSpec(
+            "cam2",
+            480,
+            270,
+            25.0,
+            r0=10,
+            r1=6,
+            exposure_ms=16.0,
+            start_ms=4471.7,
+            offset_ms=-4321.7,
+            drift_ppm=-10.0,
+            container="mkv",
+            drop_fraction=0.01,
+            flash_gain=1.2,
+            crf=28,
+            noise_std=1.5,
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+        ),
+        CameraSpec(
+            "cam3",
+            512,
+            288,
+            50.0,
+            r0=14,
+            r1=10,
+            exposure_ms=8.0,
+            start_ms=12115.6,
+            offset_ms=-12345.6,
+            drift_ppm=20.0,
+            flash_gain=0.8,
+            crf=28,
+            noise_std=1.5,
+            missed_flashes=(4,),
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+        ),
+        CameraSpec(
+            "cam4",
+            320,
+            240,
+            29.97,
+            r0=8,
+            r1=6,
+            exposure_ms=12.0,
+            start_ms=7420.3,
+            offset_ms=-7000.3,
+            drift_ppm=12.0,
+            jitter_ms=0.1,
+            crf=28,
+            noise_std=1.5,
+            position_m=(30.0, 42.0, 17.0),
+            look_at_m=(30.0, 18.0),
+            hfov_deg=70.0,
+        ),
     )
     flashes = _flash_schedule(rng, 800.0, duration_ms - 500.0, 7, 450.0, decay_ms=0.5)
-    return Scenario("sample", cams, duration_ms=duration_ms, flashes=flashes, n_players=10,
-                    color=True, seed=7)
+    return Scenario("sample", cams, duration_ms=duration_ms, flashes=flashes, n_players=10, color=True, seed=7)
 
 
 def _paper(duration_ms: float = 60000.0) -> Scenario:
     rng = np.random.default_rng(2017)
     common = dict(fps=25.0, crf=23, noise_std=1.5, drop_fraction=0.003)
     cams = (
-        CameraSpec("cam1", 960, 540, r0=18, r1=12, exposure_ms=10.0, start_ms=0.0,
-                   position_m=(30.0, -11.0, 15.0), look_at_m=(30.0, 11.0), hfov_deg=80.0, **common),
-        CameraSpec("cam2", 960, 540, r0=20, r1=10, exposure_ms=12.0, start_ms=23456.0 + 850.0,
-                   offset_ms=-23456.0, drift_ppm=-10.0, container="mkv", flash_gain=1.1,
-                   position_m=(-7.0, 15.0, 14.0), look_at_m=(18.0, 15.0), hfov_deg=75.0, **common),
-        CameraSpec("cam3", 640, 360, r0=12, r1=8, exposure_ms=8.0, start_ms=41000.5 - 1200.0,
-                   offset_ms=-41000.5, drift_ppm=7.0, quantize_ms=1.0, flash_gain=0.9,
-                   position_m=(66.0, 33.0, 16.0), look_at_m=(44.0, 16.0), hfov_deg=75.0, **common),
-        CameraSpec("cam4", 640, 360, r0=14, r1=10, exposure_ms=16.0, start_ms=12000.0 + 400.0,
-                   offset_ms=-12000.0, drift_ppm=4.0, flash_gain=1.0,
-                   position_m=(30.0, 42.0, 17.0), look_at_m=(30.0, 18.0), hfov_deg=70.0, **common),
+        CameraSpec(
+            "cam1",
+            960,
+            540,
+            r0=18,
+            r1=12,
+            exposure_ms=10.0,
+            start_ms=0.0,
+            position_m=(30.0, -11.0, 15.0),
+            look_at_m=(30.0, 11.0),
+            hfov_deg=80.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam2",
+            960,
+            540,
+            r0=20,
+            r1=10,
+            exposure_ms=12.0,
+            start_ms=23456.0 + 850.0,
+            offset_ms=-23456.0,
+            drift_ppm=-10.0,
+            container="mkv",
+            flash_gain=1.1,
+            position_m=(-7.0, 15.0, 14.0),
+            look_at_m=(18.0, 15.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam3",
+            640,
+            360,
+            r0=12,
+            r1=8,
+            exposure_ms=8.0,
+            start_ms=41000.5 - 1200.0,
+            offset_ms=-41000.5,
+            drift_ppm=7.0,
+            quantize_ms=1.0,
+            flash_gain=0.9,
+            position_m=(66.0, 33.0, 16.0),
+            look_at_m=(44.0, 16.0),
+            hfov_deg=75.0,
+            **common,
+        ),
+        CameraSpec(
+            "cam4",
+            640,
+            360,
+            r0=14,
+            r1=10,
+            exposure_ms=16.0,
+            start_ms=12000.0 + 400.0,
+            offset_ms=-12000.0,
+            drift_ppm=4.0,
+            flash_gain=1.0,
+            position_m=(30.0, 42.0, 17.0),
+            look_at_m=(30.0, 18.0),
+            hfov_deg=70.0,
+            **common,
+        ),
     )
-    flashes = _flash_schedule(rng, 0.05 * duration_ms + 900.0, 0.95 * duration_ms - 1300.0, 12,
-                              0.04 * duration_ms)
-    return Scenario("paper", cams, duration_ms=duration_ms, flashes=flashes, n_players=10,
-                    flicker_depth=0.02, flicker_hz=100.0, flicker_phase=0.7, seed=17)
+    flashes = _flash_schedule(rng, 0.05 * duration_ms + 900.0, 0.95 * duration_ms - 1300.0, 12, 0.04 * duration_ms)
+    return Scenario(
+        "paper",
+        cams,
+        duration_ms=duration_ms,
+        flashes=flashes,
+        n_players=10,
+        flicker_depth=0.02,
+        flicker_hz=100.0,
+        flicker_phase=0.7,
+        seed=17,
+    )
 
 
 _PRESETS = {"sample": _sample, "tiny": _tiny, "paper": _paper}

@@ -140,12 +140,14 @@ class Scene:
 def _smooth_noise(rng: np.random.Generator, shape: tuple, cell_px: int, amplitude: float) -> np.ndarray:
     """Band-limited noise: a coarse random grid upsampled with cubic interpolation."""
     coarse = rng.normal(0.0, amplitude, (shape[0] // cell_px + 2, shape[1] // cell_px + 2))
-    return cv2.resize(coarse.astype(np.float32), (shape[1] + cell_px * 2, shape[0] + cell_px * 2),
-                      interpolation=cv2.INTER_CUBIC)[:shape[0], :shape[1]]
+    return cv2.resize(
+        coarse.astype(np.float32), (shape[1] + cell_px * 2, shape[0] + cell_px * 2), interpolation=cv2.INTER_CUBIC
+    )[: shape[0], : shape[1]]
 
 
-def make_texture(rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M,
-                 margin_m: float = TEXTURE_MARGIN_M) -> np.ndarray:
+def make_texture(
+    rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M, margin_m: float = TEXTURE_MARGIN_M
+) -> np.ndarray:
     """Draw the rink: ice with scratches and markings, boards with ads, stands around.
 
     Parameters
@@ -173,7 +175,7 @@ def make_texture(rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M,
 
     # Stands, in 0.5 m seats: sections of seat rows around the rink, half the seats taken.
     cell = 0.5
-    yy, xx = np.mgrid[0:h / s:cell, 0:w / s:cell] - margin_m
+    yy, xx = np.mgrid[0 : h / s : cell, 0 : w / s : cell] - margin_m
     outside = np.maximum(np.maximum(-xx, xx - RINK_LENGTH_M), np.maximum(-yy, yy - RINK_WIDTH_M))
     angle = np.arctan2(yy - RINK_WIDTH_M / 2, (xx - RINK_LENGTH_M / 2) / 2)
     section = ((angle + np.pi) / (2 * np.pi) * 24).astype(int)
@@ -200,8 +202,12 @@ def make_texture(rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M,
     rx1, ry1 = px(RINK_LENGTH_M, RINK_WIDTH_M)
     cv2.rectangle(mask, (rx0 + corner, ry0), (rx1 - corner, ry1), 255, -1)
     cv2.rectangle(mask, (rx0, ry0 + corner), (rx1, ry1 - corner), 255, -1)
-    for cx, cy in ((rx0 + corner, ry0 + corner), (rx1 - corner, ry0 + corner),
-                   (rx0 + corner, ry1 - corner), (rx1 - corner, ry1 - corner)):
+    for cx, cy in (
+        (rx0 + corner, ry0 + corner),
+        (rx1 - corner, ry0 + corner),
+        (rx0 + corner, ry1 - corner),
+        (rx1 - corner, ry1 - corner),
+    ):
         cv2.circle(mask, (cx, cy), corner, 255, -1, cv2.LINE_AA)
     ice = np.empty_like(img)
     ice[:] = _ICE
@@ -235,8 +241,9 @@ def make_texture(rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M,
     return cv2.GaussianBlur(img, (0, 0), 0.7)
 
 
-def make_scene(seed: int, n_players: int = 8, puck_speed_mps: float = 36.0,
-               player_radius_m: tuple[float, float] = (0.4, 0.55)) -> Scene:
+def make_scene(
+    seed: int, n_players: int = 8, puck_speed_mps: float = 36.0, player_radius_m: tuple[float, float] = (0.4, 0.55)
+) -> Scene:
     """Generate the rink and its objects from a seed.
 
     Parameters
@@ -259,14 +266,21 @@ def make_scene(seed: int, n_players: int = 8, puck_speed_mps: float = 36.0,
     for i in range(n_players):
         centre = (rng.uniform(15, 45), rng.uniform(9, 21))
         amp = (rng.uniform(5, 13), rng.uniform(3, 7))
-        players.append(Player(
-            centre_m=centre, amplitude_m=amp,
-            period_ms=(rng.uniform(9000, 20000), rng.uniform(7000, 16000)),
-            phase=(rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi)),
-            radius_m=rng.uniform(*player_radius_m), color=_TEAM_COLORS[i % len(_TEAM_COLORS)]))
+        players.append(
+            Player(
+                centre_m=centre,
+                amplitude_m=amp,
+                period_ms=(rng.uniform(9000, 20000), rng.uniform(7000, 16000)),
+                phase=(rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi)),
+                radius_m=rng.uniform(*player_radius_m),
+                color=_TEAM_COLORS[i % len(_TEAM_COLORS)],
+            )
+        )
     angle = rng.uniform(0, 2 * np.pi)
-    puck = Puck(start_m=(rng.uniform(10, 50), rng.uniform(5, 25)),
-                velocity_mps=(puck_speed_mps * np.cos(angle), puck_speed_mps * np.sin(angle)))
+    puck = Puck(
+        start_m=(rng.uniform(10, 50), rng.uniform(5, 25)),
+        velocity_mps=(puck_speed_mps * np.cos(angle), puck_speed_mps * np.sin(angle)),
+    )
     return Scene(texture, TEXTURE_PX_PER_M, TEXTURE_MARGIN_M, tuple(players), puck)
 
 
@@ -306,7 +320,8 @@ def rink_to_image(camera: CameraSpec) -> np.ndarray:
     if np.any(rays[:, 2] / np.linalg.norm(rays, axis=1) > -np.sin(np.radians(1.0))):
         raise FlashsyncError(
             f"camera {camera.name}: the top of the image looks above the horizon; "
-            "aim it lower (look_at_m closer, position_m higher) or narrow hfov_deg")
+            "aim it lower (look_at_m closer, position_m higher) or narrow hfov_deg"
+        )
     return k @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ centre])
 
 
@@ -342,8 +357,7 @@ def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
         return np.where(den[..., None] > 0, num / den[..., None], np.nan)
 
 
-def camera_background(scene: Scene, homography: np.ndarray, width: int, height: int, color: bool
-                      ) -> np.ndarray:
+def camera_background(scene: Scene, homography: np.ndarray, width: int, height: int, color: bool) -> np.ndarray:
     """The static rink as a camera sees it, before lighting.
 
     Parameters
@@ -366,8 +380,13 @@ def camera_background(scene: Scene, homography: np.ndarray, width: int, height: 
     rink_to_texture = np.array([[s, 0, m * s], [0, s, m * s], [0, 0, 1.0]])
     half = np.array([[0.5, 0, -0.25], [0, 0.5, -0.25], [0, 0, 1.0]])
     image2_to_texture = rink_to_texture @ homography @ half
-    big = cv2.warpPerspective(scene.texture, image2_to_texture, (2 * width, 2 * height),
-                              flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                              borderMode=cv2.BORDER_CONSTANT, borderValue=(_FAR, _FAR, _FAR))
+    big = cv2.warpPerspective(
+        scene.texture,
+        image2_to_texture,
+        (2 * width, 2 * height),
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=(_FAR, _FAR, _FAR),
+    )
     img = cv2.resize(big, (width, height), interpolation=cv2.INTER_AREA).astype(np.float32)
     return img if color else cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)

@@ -39,8 +39,9 @@ def tone_curve(v: np.ndarray, tone: str) -> np.ndarray:
     if tone == "gamma":
         return np.power(v, 1.0 / 2.2, dtype=v.dtype)
     if tone == "srgb":
-        return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1.0 / 2.4, dtype=v.dtype) - 0.055
-                        ).astype(v.dtype)
+        return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1.0 / 2.4, dtype=v.dtype) - 0.055).astype(
+            v.dtype
+        )
     raise ValueError(f"unknown tone curve {tone!r}")
 
 
@@ -53,7 +54,8 @@ def shading(camera: CameraSpec) -> np.ndarray | None:
     y = (np.arange(camera.height) - (camera.height - 1) / 2.0) / (camera.height / 2.0)
     x = (np.arange(camera.width) - (camera.width - 1) / 2.0) / (camera.width / 2.0)
     rho2 = (y[:, None] ** 2 * camera.height**2 + x[None, :] ** 2 * camera.width**2) / (
-        camera.height**2 + camera.width**2)
+        camera.height**2 + camera.width**2
+    )
     return (1.0 - camera.vignetting * rho2).astype(np.float32)
 
 

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
 from flashsync.atomic import write_text
+from flashsync.errors import FlashsyncError
 from flashsync.simulation.light import half_light_ms
 from flashsync.simulation.scenario import CameraSpec, Scenario, clock_world_ms
 
@@ -99,8 +99,15 @@ def _params(ref: CameraSpec, cam: CameraSpec) -> tuple[float, float, float]:
     return alpha, beta, row
 
 
-def camera_truth(camera: CameraSpec, file: str, frame_index: np.ndarray, frame_times_ms: np.ndarray,
-                 stamps_ms: np.ndarray, flashes_seen: dict, reference: CameraSpec) -> CameraTruth:
+def camera_truth(
+    camera: CameraSpec,
+    file: str,
+    frame_index: np.ndarray,
+    frame_times_ms: np.ndarray,
+    stamps_ms: np.ndarray,
+    flashes_seen: dict,
+    reference: CameraSpec,
+) -> CameraTruth:
     """Collect a camera's truth record (see `CameraTruth`).
 
     Parameters
@@ -122,13 +129,27 @@ def camera_truth(camera: CameraSpec, file: str, frame_index: np.ndarray, frame_t
     """
     alpha, beta, row = _params(reference, camera)
     return CameraTruth(
-        name=camera.name, file=file, width=camera.width, height=camera.height, fps=camera.fps,
-        r0=camera.r0, r1=camera.r1, flipped=camera.flipped, exposure_ms=camera.exposure_ms,
-        drift_ppm=camera.drift_ppm, drift_rate_ppm_per_s=camera.drift_rate_ppm_per_s,
-        offset_ms=camera.offset_ms, start_ms=camera.start_ms, alpha=alpha, beta_ms=beta, row_time_ms=row,
-        frame_index=[int(f) for f in frame_index], frame_times_ms=[float(t) for t in frame_times_ms],
+        name=camera.name,
+        file=file,
+        width=camera.width,
+        height=camera.height,
+        fps=camera.fps,
+        r0=camera.r0,
+        r1=camera.r1,
+        flipped=camera.flipped,
+        exposure_ms=camera.exposure_ms,
+        drift_ppm=camera.drift_ppm,
+        drift_rate_ppm_per_s=camera.drift_rate_ppm_per_s,
+        offset_ms=camera.offset_ms,
+        start_ms=camera.start_ms,
+        alpha=alpha,
+        beta_ms=beta,
+        row_time_ms=row,
+        frame_index=[int(f) for f in frame_index],
+        frame_times_ms=[float(t) for t in frame_times_ms],
         stamps_ms=[float(t) for t in stamps_ms],
-        flashes_seen={int(k): [int(f) for f in v] for k, v in flashes_seen.items()})
+        flashes_seen={int(k): [int(f) for f in v] for k, v in flashes_seen.items()},
+    )
 
 
 @dataclass(frozen=True)
@@ -167,8 +188,9 @@ class GroundTruth:
     def global_from_world_ms(self, w_ms: float | np.ndarray) -> np.ndarray:
         """Global time (ms) of world times `w_ms` (ms)."""
         ref = self.cameras[self.reference]
-        return ((np.asarray(w_ms, dtype=float) - ref.offset_ms) / (1.0 + ref.drift_ppm * 1e-6)
-                - ref.r0 * ref.sensor_row_ms)
+        return (np.asarray(w_ms, dtype=float) - ref.offset_ms) / (
+            1.0 + ref.drift_ppm * 1e-6
+        ) - ref.r0 * ref.sensor_row_ms
 
     def global_time_ms(self, camera: str, frame: int | np.ndarray, row: float | np.ndarray) -> np.ndarray:
         """Global time of the end of exposure of stored-image rows.
@@ -201,9 +223,15 @@ class GroundTruth:
 
     def to_dict(self) -> dict:
         """Plain dict as stored in ``truth.json``."""
-        return {"format": FORMAT, "version": VERSION, "reference": self.reference,
-                "cameras": {n: asdict(c) for n, c in self.cameras.items()},
-                "flashes": self.flashes, "switches": self.switches, "scenario": self.scenario}
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "reference": self.reference,
+            "cameras": {n: asdict(c) for n, c in self.cameras.items()},
+            "flashes": self.flashes,
+            "switches": self.switches,
+            "scenario": self.scenario,
+        }
 
     def save(self, path: str | Path) -> None:
         """Write ``truth.json`` atomically."""
@@ -226,15 +254,23 @@ def ground_truth(scenario: Scenario, cameras: list[CameraTruth]) -> GroundTruth:
     partial = GroundTruth(cameras[0].name, {c.name: c for c in cameras}, [], [], scenario.to_dict())
     flashes = []
     for k, fl in enumerate(scenario.flashes):
-        flashes.append({
-            "world_ms": fl.world_ms,
-            "global_ms": float(partial.global_from_world_ms(fl.world_ms)),
-            "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + half_light_ms(fl))),
-            "strength": fl.strength, "decay_ms": fl.decay_ms, "rise_ms": fl.rise_ms, "rise": fl.rise,
-            "hold_ms": fl.hold_ms,
-            "seen_by": [c.name for c in cameras if c.flashes_seen.get(k)]})
-    switches = [{"world_ms": s.world_ms, "global_ms": float(partial.global_from_world_ms(s.world_ms)),
-                 "factor": s.factor} for s in scenario.switches]
+        flashes.append(
+            {
+                "world_ms": fl.world_ms,
+                "global_ms": float(partial.global_from_world_ms(fl.world_ms)),
+                "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + half_light_ms(fl))),
+                "strength": fl.strength,
+                "decay_ms": fl.decay_ms,
+                "rise_ms": fl.rise_ms,
+                "rise": fl.rise,
+                "hold_ms": fl.hold_ms,
+                "seen_by": [c.name for c in cameras if c.flashes_seen.get(k)],
+            }
+        )
+    switches = [
+        {"world_ms": s.world_ms, "global_ms": float(partial.global_from_world_ms(s.world_ms)), "factor": s.factor}
+        for s in scenario.switches
+    ]
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
 
 
@@ -263,7 +299,8 @@ def load_ground_truth(path: str | Path) -> GroundTruth:
         raise FlashsyncError(f"{path}: not a flashsync ground-truth file")
     if data.get("version") != VERSION:
         raise FlashsyncError(
-            f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})")
+            f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})"
+        )
     cameras = {}
     for name, c in data["cameras"].items():
         c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})
