@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from flashsync.detect import detect_video
+from flashsync.events import Edge, Flag
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 FPS, R0, R1, FLASHES = 25.0, 20, 60, 8
@@ -47,12 +48,12 @@ def edge_errors(width: int, height: int, crf: int, seed: int, folder: Path) -> t
     )
     truth = render_scenario(Scenario("edges", (camera,), flashes=flashes, n_players=4, seed=seed), folder)
     events = detect_video(folder / "cam.mp4").events
-    leading = events[events["edge"] == "leading"]
+    leading = events.take(events.edge == Edge.LEADING)
     if len(leading) != FLASHES:
         raise RuntimeError(f"seed {seed}: {len(leading)} leading edges for {FLASHES} flashes")
-    found = truth.global_time_ms("cam", leading["frame"].to_numpy(), leading["row"].to_numpy())
+    found = truth.global_time_ms("cam", leading.frame, leading.row)
     true = np.array([flash["half_rise_global_ms"] for flash in truth.flashes])
-    return (found - true) / row_ms, leading["flags"].str.contains("saturated").to_numpy()
+    return (found - true) / row_ms, leading.has_flag(Flag.SATURATED)
 
 
 def main() -> None:

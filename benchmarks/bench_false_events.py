@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 from flashsync.detect import detect_video
+from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, Scenario, render_scenario
 
 
@@ -42,11 +43,11 @@ def main() -> None:
     elapsed = time.perf_counter() - start
     events = detection.events
     print(
-        f"{args.minutes:g} min, {len(detection.frame_times_ms)} frames: {events['event'].nunique() if len(events) else 0} "
+        f"{args.minutes:g} min, {len(detection.frame_times_ms)} frames: {len(set(events.event.tolist()))} "
         f"false events ({len(events)} edges), detection {len(detection.frame_times_ms) / elapsed:.0f} fps"
     )
     if len(events):
-        print(events.to_string())
+        print(events_to_frame(events).to_string())
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--durati
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
 into a temporary folder (removed afterwards) and run as a new user would, with no options,
-exactly as ``flashsync sync`` does: ``detect_videos(videos, estimate_readout=True)`` then
+exactly as ``flashsync sync`` does: ``detect_videos(videos)`` (both ways up) then
 ``synchronize(detections)``. Every camera is measured against the truth over all frames and
 every 8th row (`flashsync.evaluate.camera_accuracy`): sync error (RMS, max), exposure
 error, time-per-row error, and the calibration of the predicted sigma (RMS of error/sigma
@@ -28,27 +28,30 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flashsync import detect_videos, synchronize
+from flashsync import CameraDetection, detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import RECIPES, random_rig, recipe
+from flashsync.simulation.truth import CameraTruth
 
 #: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
 TARGET_RMS_MS, TARGET_MAX_MS, TARGET_EXPOSURE_MS = 0.03, 0.1, 0.1
 
 
-def detection_counts(detection, truth_camera) -> dict:
+def detection_counts(detection: CameraDetection, truth_camera: CameraTruth) -> dict:
     """False events (no flash on any of their frames) and missed flashes (seen by the
-    camera, no event on their frames) of one camera's detection."""
+    camera, no event on their frames) of one camera's detection, in its reading in use."""
     flash_frames = {k: set(frames) for k, frames in truth_camera.flashes_seen.items() if frames}
-    lit = set().union(*flash_frames.values()) if flash_frames else set()
+    lit = set().union(*flash_frames.values())
     events = detection.events
-    frames_of = events.groupby("event")["frame"].apply(set) if len(events) else pd.Series(dtype=object)
-    false = sum(1 for frames in frames_of if not frames & lit)
-    found = set().union(*frames_of) if len(frames_of) else set()
+    frames_of: dict[int, set[int]] = {}
+    for event, frame in zip(events.event.tolist(), events.frame.tolist()):
+        frames_of.setdefault(event, set()).add(frame)
+    false = sum(1 for frames in frames_of.values() if not frames & lit)
+    found = set().union(*frames_of.values())
     missed = sum(1 for frames in flash_frames.values() if not frames & found)
     return {
-        "events": int(len(frames_of)),
+        "events": len(frames_of),
         "false_events": false,
         "flashes_seen": len(flash_frames),
         "missed_flashes": missed,
@@ -95,7 +98,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
             info["render_s"] = time.perf_counter() - start
             stage = "detect"
             videos = [folder / truth.cameras[c.name].file for c in scenario.cameras]
-            detections = detect_videos(videos, estimate_readout=True)
+            detections = detect_videos(videos)
             stage = "sync"
             model, report = synchronize(detections)
             stage = "evaluate"
@@ -104,9 +107,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
             info.update(failure=f"{stage}: {type(error).__name__}: {error}", traceback=traceback.format_exc(limit=-3))
             if stage in ("sync", "evaluate"):
                 counts = [
-                    detection_counts(
-                        d.read_flipped(spec.flipped) if d.alternative is not None else d, truth.cameras[d.camera]
-                    )
+                    detection_counts(d.read_flipped(spec.flipped) if d.undecided else d, truth.cameras[d.camera])
                     for d, spec in zip(detections, scenario.cameras)
                 ]
                 info["false_events"] = sum(c["false_events"] for c in counts)
@@ -119,7 +120,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
     counts = []
     for spec in scenario.cameras:
         detection = by_name[spec.name]
-        if detection.alternative is not None and spec.name in model.cameras:
+        if detection.undecided and spec.name in model.cameras:
             detection = detection.read_flipped(model.cameras[spec.name].flipped)
         counts.append(detection_counts(detection, truth.cameras[spec.name]))
     extra = pd.DataFrame(counts).assign(

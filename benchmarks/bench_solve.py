@@ -14,11 +14,11 @@ import time
 
 import numpy as np
 
-from flashsync.solve import Events, Priors, solve_clocks
+from flashsync.solve import Observations, Priors, solve_clocks
 
 
 def synthetic_events(n_cameras: int, n_flashes: int, seed: int = 0):
-    """Events of ``n_flashes`` flashes in 10 minutes seen by ``n_cameras`` cameras, and the
+    """Observations of ``n_flashes`` flashes in 10 minutes seen by ``n_cameras`` cameras, and the
     true (alpha, beta_ms, row_time_ms) per camera (camera 0 is the reference)."""
     rng = np.random.default_rng(seed)
     tau = np.sort(rng.uniform(0, 600_000.0, n_flashes))
@@ -39,7 +39,7 @@ def synthetic_events(n_cameras: int, n_flashes: int, seed: int = 0):
         flash += list(seen[visible])
         t_frame += list(frames[frame[visible]])
         q += list(rows[visible] + rng.normal(0, 0.05 / row_time, visible.sum()))
-    events = Events(np.array(camera), np.array(flash), np.array(t_frame), np.array(q))
+    events = Observations(np.array(camera), np.array(flash), np.array(t_frame), np.array(q))
     return events, np.array(truth)
 
 

@@ -11,17 +11,41 @@ import itertools
 import sys
 from pathlib import Path
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError, ModelFileError
 
 EXAMPLES = {
     "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv",
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
     "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
-    "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
+    "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
+    "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+    "  flashsync validate restamped.csv --model sync.json --homographies homographies.json --json validation.json\n"
+    "  flashsync view --model sync.json --videos cam1.mp4 cam2.mkv cam3.mp4 --events events.csv \\\n"
+    "      --detections restamped.csv --homographies homographies.json --validation validation.json --save sync.rrd\n"
+    "  rerun sync.rrd        (or: ... --serve, then open the address it prints)",
     "simulate": "flashsync simulate sample -o sim/",
     "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
+    "frames": "flashsync frames --model sync.json --rate 100 -o frames.csv",
+    "resample": "flashsync resample restamped.csv --model sync.json --rate 100 -o tracks.csv",
+    "montage": "flashsync montage cam1.mp4 cam2.mkv --model sync.json --rate 25 -o synced.mp4",
+}
+
+#: The library's parameters and the options that set them: an error about a parameter's value
+#: is shown after its option.
+OPTIONS = {
+    "anchors": "--anchor",
+    "end_ms": "--end-ms",
+    "exposure_ms": "--exposure",
+    "flipped": "--flipped",
+    "max_gap_ms": "--max-gap-ms",
+    "rate_hz": "--rate",
+    "reference": "--reference",
+    "row_times": "--row-time",
+    "samples": "--samples",
+    "start_ms": "--start-ms",
+    "timestamps": "--timestamps",
 }
 
 
@@ -32,11 +56,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args) or 0
     except FlashsyncError as error:
-        print(f"flashsync {args.command}: error: {error}", file=sys.stderr)
+        print(f"flashsync {args.command}: error: {_message(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"flashsync {args.command}: interrupted; no output written", file=sys.stderr)
         return 130
+
+
+def _message(error: FlashsyncError) -> str:
+    """The error's line, after the option that set the parameter it is about."""
+    option = OPTIONS.get(error.parameter)
+    return f"{option} {error}" if option else str(error)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -85,7 +115,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="CAMERA:EVENT",
-        help="events (0-based per camera) that are one flash; optional, repeatable",
+        help="events that are one flash, by their event number in the events table (--events); optional, repeatable",
     )
     sync.add_argument("--events", type=Path, help="also write the detected events table here")
     sync.add_argument(
@@ -149,13 +179,30 @@ def _parser() -> argparse.ArgumentParser:
         "videos in sync, trajectories, on one global timeline.",
         _run_view,
     )
+    view.epilog += VIEW_UNITS
     view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
-    output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
     output.add_argument(
-        "--serve", action="store_true", help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C"
+        "--spawn", action="store_true", help="open the native viewer (needs a display; it listens on 127.0.0.1)"
+    )
+    output.add_argument(
+        "--serve", action="store_true", help="serve the web viewer (default http://127.0.0.1:9090) until Ctrl-C"
+    )
+    view.add_argument(
+        "--bind",
+        default="127.0.0.1",
+        metavar="ADDRESS",
+        help="IP address --serve listens on (default 127.0.0.1: this machine only; "
+        "0.0.0.0: every IPv4 interface, reachable from other machines)",
+    )
+    view.add_argument("--port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    view.add_argument(
+        "--grpc-port",
+        type=int,
+        default=9876,
+        help="port --serve streams the recording from, or --spawn's viewer listens on (default 9876)",
     )
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
@@ -192,7 +239,92 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument(
         "--rrd", type=Path, metavar="OUT.rrd", help="also write a Rerun recording of the demo (videos, events, puck)"
     )
+
+    frames = command(
+        "frames",
+        "Which frame and row of each camera is exposed at common instants (ticks) of the global clock.",
+        _run_frames,
+    )
+    frames.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(frames, rate_default=None)
+    frames.add_argument(
+        "-o", "--output", type=Path, default=Path("frames.csv"), help="table, .csv or .parquet (default: frames.csv)"
+    )
+
+    resample = command(
+        "resample",
+        "Each (camera, object) track interpolated at common instants of the global clock (input for triangulation).",
+        _run_resample,
+    )
+    resample.add_argument("detections", type=Path, metavar="DETECTIONS")
+    resample.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(resample, rate_default=None)
+    resample.add_argument(
+        "--max-gap-ms",
+        type=float,
+        help="longest time between the two detections a tick is interpolated "
+        "between (default 2.5 frame periods of the camera)",
+    )
+    resample.add_argument(
+        "--exposure",
+        action="append",
+        default=[],
+        metavar="CAMERA=MS",
+        help="exposure time of a camera in ms (mid-exposure instants); repeatable",
+    )
+    resample.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
+    resample.add_argument(
+        "-o", "--output", type=Path, default=Path("tracks.csv"), help="table, .csv or .parquet (default: tracks.csv)"
+    )
+
+    montage = command(
+        "montage",
+        "The videos tiled in one H.264 video, in sync, with the row exposed at each instant drawn on every tile.",
+        _run_montage,
+    )
+    montage.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
+    montage.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
+    _tick_options(montage, rate_default="the highest frame rate of the videos")
+    montage.add_argument(
+        "--cell", metavar="WIDTHxHEIGHT", help="size of each camera's cell, px (default: the largest width and height)"
+    )
+    montage.add_argument(
+        "-o", "--output", type=Path, default=Path("synced.mp4"), help="video, .mp4, .mkv or .mov (default: synced.mp4)"
+    )
     return parser
+
+
+def _tick_options(parser: argparse.ArgumentParser, rate_default: str | None) -> None:
+    parser.add_argument(
+        "--rate",
+        type=float,
+        required=rate_default is None,
+        metavar="HZ",
+        help="ticks per second" + (f" (default: {rate_default})" if rate_default else ""),
+    )
+    parser.add_argument(
+        "--start-ms",
+        type=float,
+        metavar="MS",
+        help="first tick, global clock (default: the first tick on the rate's grid in the span covered by any camera)",
+    )
+    parser.add_argument(
+        "--end-ms",
+        type=float,
+        metavar="MS",
+        help="end of the ticks, exclusive (default: the end of the last recording)",
+    )
+
+
+VIEW_UNITS = """
+
+units: the time axis (global_time) is seconds from the start of the recordings, the
+earliest first frame of any camera; the recording's description and the first lines of
+the flash log give that instant's t_global_ms (ms, the reference camera's clock).
+Residuals and their +-1 sigma band are in ms; plane positions and validation errors in
+metres (error arrows are drawn enlarged: the factor is in the plane view's title and on
+its scale bar); image positions in px. The plane view is a top view turned as the first
+camera with a homography sees it."""
 
 
 def _view_inputs(parser: argparse.ArgumentParser) -> None:
@@ -204,9 +336,22 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
         metavar="VIDEO",
         help="videos to show in sync (camera = file stem)",
     )
-    parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
+    parser.add_argument("--events", type=Path, help="events table from detect or sync --events (adds unmatched events)")
     parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
-    parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
+    parser.add_argument(
+        "--homographies",
+        type=Path,
+        help='JSON {camera: 3x3 image px -> plane m matrix}, optionally with "plane": '
+        '{"outline_m": [[x, y], ...]}, the plane\'s outline (m)',
+    )
+    parser.add_argument(
+        "--plane",
+        type=float,
+        nargs=4,
+        metavar=("X0", "Y0", "X1", "Y1"),
+        help="the plane's outline as the rectangle with corners (X0, Y0) and (X1, Y1), m (e.g. 0 0 60 30); "
+        "replaces one in --homographies. Without either, no outline is drawn",
+    )
     parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
 
 
@@ -234,7 +379,7 @@ def _timestamp_files(values: list[str]) -> dict[str, Path]:
     for text in values:
         camera, _, path = text.partition("=")
         if not camera or not path:
-            raise FlashsyncError(f"--timestamps {text}: expected CAMERA=FILE.csv")
+            raise InputError(f"--timestamps {text}: expected CAMERA=FILE.csv")
         result[camera] = Path(path)
     return result
 
@@ -251,16 +396,21 @@ _BAR_POSITIONS = itertools.count()
 
 
 def _run_detect(args) -> None:
+    from flashsync.io import save_events
     from flashsync.pipeline import all_events, detect_videos
-    from flashsync.tables import write_table
 
-    events = all_events(
-        detect_videos(args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps))
+    detections = detect_videos(
+        args.videos,
+        args.flipped,
+        estimate_readout=False,
+        progress=_progress,
+        timestamps=_timestamp_files(args.timestamps),
     )
-    write_table(events, args.output)
+    save_events(all_events(detections), args.output)
     print(
-        f"{len(events)} edges of {events.groupby('camera')['event'].nunique().sum()} events "
-        f"in {len(args.videos)} videos -> {args.output}",
+        f"{sum(len(d.events) for d in detections)} edges of "
+        f"{sum(len(set(d.events.event.tolist())) for d in detections)} events in {len(args.videos)} videos "
+        f"-> {args.output}",
         file=sys.stderr,
     )
 
@@ -269,20 +419,15 @@ def _run_sync(args) -> None:
     import json
 
     from flashsync.atomic import write_text
-    from flashsync.model_file import save_model
+    from flashsync.io import events_to_frame, save_events, save_model
     from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
     from flashsync.report import pairwise_table, pairwise_text, rejected_events, sync_summary, sync_table
-    from flashsync.tables import write_table
 
     detections = detect_videos(
-        args.videos,
-        args.flipped,
-        estimate_readout=True,
-        progress=_progress,
-        timestamps=_timestamp_files(args.timestamps),
+        args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps)
     )
     if args.events:
-        write_table(all_events(detections), args.events)
+        save_events(all_events(detections), args.events)
     options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
     model, report = synchronize(detections, args.reference, **options)
     for warning in report.warnings:
@@ -315,7 +460,7 @@ def _run_sync(args) -> None:
     if args.rrd:
         import viz
 
-        viz.save_recording(args.rrd, model, videos=args.videos, events=all_events(detections))
+        viz.save_recording(args.rrd, model, videos=args.videos, events=events_to_frame(all_events(detections)))
         print(f"recording -> {args.rrd}", file=sys.stderr)
     print(f"model -> {args.output}", file=sys.stderr)
 
@@ -328,18 +473,28 @@ def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
         try:
             result[camera] = float(value)
         except ValueError:
-            raise FlashsyncError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
+            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
         if not result[camera] > 0:
-            raise FlashsyncError(f"{option} {text}: the value must be a positive number of ms")
+            raise InputError(f"{option} {text}: the value must be a positive number of ms")
     return result
 
 
+def _load_model(path: Path):
+    """The model file, or an error saying how to make one."""
+    from flashsync.io import load_model
+
+    if not path.is_file():
+        raise ModelFileError(
+            f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the model with --model"
+        )
+    return load_model(path)
+
+
 def _run_restamp(args) -> int:
-    from flashsync.model_file import load_model
     from tracking_adapter.restamp import format_summary, restamp_file
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
-    model = load_model(args.model)
+    model = _load_model(args.model)
     summary = restamp_file(
         args.detections,
         output,
@@ -361,19 +516,15 @@ def _run_restamp(args) -> int:
 
 
 def _run_validate(args) -> None:
-    import json
-
     import pandas as pd
 
-    from flashsync.atomic import write_text
-    from flashsync.model_file import load_model
-    from tracking_adapter.formats import load_homographies, read_detections
+    from flashsync.io import load_detections, load_homographies, save_validation
     from tracking_adapter.validate import format_report, validate
 
-    detections = pd.concat([read_detections(path) for path in args.detections], ignore_index=True)
+    detections = pd.concat([load_detections(path) for path in args.detections], ignore_index=True)
     report = validate(
         detections,
-        load_model(args.model),
+        _load_model(args.model),
         load_homographies(args.homographies),
         max_gap_ms=args.max_gap_ms,
         exposure_ms=_per_camera_ms("--exposure", args.exposure),
@@ -381,44 +532,55 @@ def _run_validate(args) -> None:
     )
     print(format_report(report))
     if args.json:
-        write_text(args.json, json.dumps(report.to_dict(), indent=1))
+        save_validation(report, args.json)
 
 
 def _run_view(args) -> None:
-    import json
-
-    import pandas as pd
+    import warnings
 
     import viz
-    from flashsync.model_file import load_model
-    from tracking_adapter.formats import load_homographies, read_detections
+    from flashsync.io import (
+        events_to_frame,
+        load_detections,
+        load_events,
+        load_homographies,
+        load_plane_outline,
+        load_validation,
+    )
 
-    model = load_model(args.model)
+    model = _load_model(args.model)
     data = {
         "videos": args.videos or None,
-        "events": read_detections(args.events) if args.events else None,
-        "detections": read_detections(args.detections) if args.detections else None,
+        "events": events_to_frame(load_events(args.events)) if args.events else None,
+        "detections": load_detections(args.detections) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
+        "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
+        "validation": load_validation(args.validation) if args.validation else None,
     }
-    if args.validation:
-        try:
-            triples = json.loads(args.validation.read_text())["triples"]
-        except (OSError, ValueError, KeyError, TypeError) as error:
-            raise FlashsyncError(
-                f"{args.validation}: not the JSON of 'flashsync validate --json' ({type(error).__name__}: {error})"
-            ) from None
-        data["validation"] = pd.DataFrame.from_records(triples)
-    if args.save:
-        viz.save_recording(args.save, model, **data)
-        print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
-    elif args.spawn:
-        viz.spawn(model, **data)
-    else:
-        viz.serve(model, **data)
+    if args.plane:
+        data["plane_outline_m"] = viz.rectangle_outline(*args.plane)
+    show = warnings.showwarning
+
+    def plane_warning(message, category, *rest, **options):
+        if not issubclass(category, viz.PlaneWarning):
+            return show(message, category, *rest, **options)
+        print(f"flashsync view: warning: {args.homographies}: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", viz.PlaneWarning)
+        warnings.showwarning = plane_warning
+        if args.save:
+            viz.save_recording(args.save, model, **data)
+            print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
+        elif args.spawn:
+            viz.spawn(model, grpc_port=args.grpc_port, **data)
+        else:
+            viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
 
 
 def _run_simulate(args) -> None:
-    from flashsync.simulation import load_scenario, render_scenario
+    from flashsync.io import load_scenario
+    from flashsync.simulation import render_scenario
 
     truth = render_scenario(load_scenario(args.scenario), args.output)
     print(f"{len(truth.cameras)} cameras rendered -> {args.output}", file=sys.stderr)
@@ -432,7 +594,13 @@ def _run_diagnose(args) -> None:
     from flashsync.pipeline import detect_videos
 
     diagnosis = diagnose(
-        detect_videos(args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps)),
+        detect_videos(
+            args.videos,
+            args.flipped,
+            estimate_readout=False,
+            progress=_progress,
+            timestamps=_timestamp_files(args.timestamps),
+        ),
         args.reference,
     )
     print(format_diagnosis(diagnosis))
@@ -449,3 +617,71 @@ def _run_demo(args) -> None:
     from flashsync.demo import run_demo
 
     print(run_demo(args.samples, args.output, progress=_progress, recording=args.rrd))
+
+
+def _run_frames(args) -> None:
+    from flashsync.io.tables import table_format, write_table
+    from flashsync.ticks import frame_table, model_ticks_ms
+
+    table_format(args.output)
+    model = _load_model(args.model)
+    table = frame_table(model, model_ticks_ms(model, args.rate, args.start_ms, args.end_ms))
+    write_table(table, args.output)
+    shown = table["reason"] == ""
+    print(
+        f"{table['t_global_ms'].nunique()} ticks x {len(model.cameras)} cameras -> {args.output}: "
+        f"{int(shown.sum())} located"
+        + "".join(f", {count} {reason}" for reason, count in table.loc[~shown, "reason"].value_counts().items()),
+        file=sys.stderr,
+    )
+
+
+def _run_resample(args) -> None:
+    from flashsync.io import load_detections
+    from flashsync.io.tables import table_format, write_table
+    from flashsync.ticks import model_ticks_ms
+    from tracking_adapter.resample import format_resampled, resample
+
+    table_format(args.output)
+    model = _load_model(args.model)
+    ticks = model_ticks_ms(model, args.rate, args.start_ms, args.end_ms)
+    result = resample(
+        load_detections(args.detections, camera=args.camera),
+        model,
+        ticks,
+        max_gap_ms=args.max_gap_ms,
+        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        source=str(args.detections),
+    )
+    write_table(result.tracks, args.output)
+    print(format_resampled(result, str(args.detections), str(args.output)), file=sys.stderr)
+
+
+def _run_montage(args) -> None:
+    from flashsync.montage import write_montage
+
+    summary = write_montage(
+        args.videos,
+        _load_model(args.model),
+        args.output,
+        args.rate,
+        args.start_ms,
+        args.end_ms,
+        cell=_cell(args.cell),
+        progress=_progress,
+    )
+    print(
+        f"{summary.frames} frames of {summary.width}x{summary.height} at {summary.rate_hz:g} Hz "
+        f"from {summary.start_ms:.1f} ms -> {summary.path}",
+        file=sys.stderr,
+    )
+
+
+def _cell(text: str | None) -> tuple[int, int] | None:
+    """``'640x360'`` -> ``(640, 360)``."""
+    if text is None:
+        return None
+    width, _, height = text.lower().partition("x")
+    if not (width.isdigit() and height.isdigit() and int(width) >= 16 and int(height) >= 16):
+        raise InputError(f"--cell {text}: expected WIDTHxHEIGHT in px, at least 16x16, e.g. 640x360")
+    return int(width), int(height)

@@ -8,14 +8,19 @@ from pathlib import Path
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
-from flashsync.model_file import save_model
+from flashsync.io import (
+    events_to_frame,
+    load_detections,
+    load_ground_truth,
+    load_homographies,
+    load_plane_outline,
+    save_events,
+    save_model,
+)
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
-from flashsync.simulation import load_ground_truth
-from flashsync.tables import write_table
-from tracking_adapter.formats import load_homographies, read_detections
 from tracking_adapter.restamp import format_summary, restamp_file
 
 VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
@@ -27,6 +32,15 @@ def default_samples() -> Path:
     return shipped if shipped.is_dir() else Path("samples")
 
 
+def _below_working_directory(path: Path) -> Path:
+    """``path`` relative to the working directory where it lies below it (so that the report
+    names it as the user would), else as it is."""
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve())
+    except ValueError:
+        return path
+
+
 def run_demo(
     samples: Path | None,
     output: Path,
@@ -36,16 +50,17 @@ def run_demo(
     """Run the chain on ``samples`` (videos, ``truth.json``, ``detections.csv``), write
     ``events.csv``, ``sync.json`` and ``restamped.csv`` into ``output`` (and a Rerun
     recording to ``recording`` if given); return the report."""
-    samples = samples or default_samples()
+    samples = _below_working_directory(samples or default_samples())
     videos = sorted(p for p in samples.glob("*") if p.suffix.lower() in VIDEO_SUFFIXES)
     if not videos or not (samples / "truth.json").is_file():
-        raise FlashsyncError(
-            f"{samples}: no sample videos with truth.json; run the demo from the "
-            "repository, or give --samples DIR (flashsync simulate sample -o DIR)"
+        raise InputError(
+            f"{samples}: no sample videos with truth.json; run the demo from the repository, "
+            "or on a folder that 'flashsync simulate sample' rendered",
+            parameter="samples",
         )
     started = time.perf_counter()
-    detections = detect_videos(videos, estimate_readout=True, progress=progress)
-    write_table(all_events(detections), output / "events.csv")
+    detections = detect_videos(videos, progress=progress)
+    save_events(all_events(detections), output / "events.csv")
     model, report = synchronize(detections)
     save_model(model, output / "sync.json")
     summary = restamp_file(samples / "detections.csv", output / "restamped.csv", model)
@@ -53,7 +68,7 @@ def run_demo(
 
     truth = load_ground_truth(samples / "truth.json")
     errors = sync_errors(model, truth)
-    detection_error = stamp_errors(read_detections(output / "restamped.csv"), model, truth)
+    detection_error = stamp_errors(load_detections(output / "restamped.csv"), model, truth)
 
     lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "", sync_table(model, report), ""]
     lines += [f"warning: {w}" for w in report.warnings]
@@ -72,9 +87,10 @@ def run_demo(
             recording,
             model,
             videos=videos,
-            events=all_events(detections),
-            detections=read_detections(output / "restamped.csv"),
+            events=events_to_frame(all_events(detections)),
+            detections=load_detections(output / "restamped.csv"),
             homographies=load_homographies(samples / "homographies.json"),
+            plane_outline_m=load_plane_outline(samples / "homographies.json"),
         )
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

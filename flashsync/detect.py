@@ -14,7 +14,8 @@ A band that reaches the last row continues in the next frame (one event, flagged
 ``split``); a band that starts at row 0 with nothing open before it had its leading edge in
 the vertical blanking (flagged ``leading_hidden``, only its trailing edge is reported). A
 change that fills whole frames for several frames is a light switching on or off (``on`` /
-``off``); one without any edge (auto-exposure) only resets the baseline.
+``off``); one without any edge (auto-exposure) only resets the baseline. The records are in
+:mod:`flashsync.events`.
 
 The detector is streaming: :class:`EventDetector` keeps a few profiles, not the video.
 """
@@ -29,29 +30,17 @@ from pathlib import Path
 
 import numba
 import numpy as np
-import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
+from flashsync.events import Band, Edge, Events, Flag
+from flashsync.model import readout_rows
 from flashsync.profiles import read_profiles
 from flashsync.ramp import fit_pulse_edge
+from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
 
 #: Profile level (fraction of white) of a row whose pixels are clipped.
 SATURATED = 0.98
-
-EVENT_COLUMNS = [
-    "camera",
-    "event",
-    "frame",
-    "t_frame_ms",
-    "row",
-    "edge",
-    "band",
-    "rise_rows",
-    "strength",
-    "quality",
-    "flags",
-]
 
 
 @dataclass(frozen=True)
@@ -135,7 +124,7 @@ class EventDetector:
         self._lit_rows = (0, height)
         self._global_frames = 0
         self._n_events = 0
-        self.events: list[dict] = []
+        self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
         """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
@@ -185,12 +174,12 @@ class EventDetector:
         self._next = (self._next + 1) % len(self._history)
         self._n_history = min(self._n_history + 1, len(self._history))
 
-    def finish(self) -> pd.DataFrame:
-        """Close a band still open at the end of the video; return all events (EVENT_COLUMNS)."""
+    def finish(self) -> Events:
+        """Close a band still open at the end of the video; return all the events' edges."""
         if self._open is not None:
-            self._emit(self._open, "pulse", trailing_visible=False)
+            self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
-        return pd.DataFrame(self.events, columns=EVENT_COLUMNS)
+        return Events.from_columns(*zip(*self._edges)) if self._edges else Events.concat([])
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
         """Follow bands across frames. A band reaching the first (last) lit row of the frame
@@ -201,9 +190,9 @@ class EventDetector:
             if at_top and opened is not None and segment.sign == opened.segments[0].sign:
                 opened.segments.append(segment)
                 if not at_bottom:
-                    self._emit(opened, "pulse")
+                    self._emit(opened, Band.PULSE)
                 elif opened.full_frames + 1 >= self.settings.step_frames:
-                    self._emit(opened, "on" if segment.sign > 0 else "off", trailing_visible=False)
+                    self._emit(opened, Band.ON if segment.sign > 0 else Band.OFF, trailing_visible=False)
                     self._reset_baseline(readout)
                 else:
                     opened.full_frames += 1
@@ -217,9 +206,9 @@ class EventDetector:
             elif at_bottom:
                 self._open = _Event([segment])
             else:
-                self._emit(_Event([segment]), "pulse")
+                self._emit(_Event([segment]), Band.PULSE)
         if opened is not None:
-            self._emit(opened, "pulse", trailing_visible=False)
+            self._emit(opened, Band.PULSE, trailing_visible=False)
         self._global_frames = 0
 
     def _reset_baseline(self, readout: np.ndarray) -> None:
@@ -227,11 +216,11 @@ class EventDetector:
         self._remember(readout)
         self._global_frames = 0
 
-    def _emit(self, event: _Event, kind: str, trailing_visible: bool = True) -> None:
+    def _emit(self, event: _Event, kind: Band, trailing_visible: bool = True) -> None:
         """Locate the edges of a finished band (:func:`_local_edge`) and record them; a band
         that darkens rows without staying dark (a passing shadow) is not an event."""
         first, last = event.segments[0], event.segments[-1]
-        if kind == "pulse" and first.sign < 0:
+        if kind is Band.PULSE and first.sign < 0:
             return
         plateau = float(np.median(np.concatenate([s.change[s.start : s.stop] for s in event.segments])))
         window = max(6, self.height // 40)
@@ -239,29 +228,28 @@ class EventDetector:
         trailing, trailing_rise = (
             _local_edge(_falling_crossing, last, plateau, window, kind) if trailing_visible else (None, np.nan)
         )
-        flags = {"split"} if len(event.segments) > 1 and kind == "pulse" else set()
-        flags |= {"saturated"} if any(s.saturated for s in event.segments) else set()
-        flags |= {"leading_hidden"} if leading is None else set()
-        flags |= {"trailing_hidden"} if trailing is None and kind == "pulse" else set()
-        edges = (("leading", first, leading, leading_rise), ("trailing", last, trailing, trailing_rise))
+        flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
+        flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
+        flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
+        flags |= {Flag.TRAILING_HIDDEN} if trailing is None and kind is Band.PULSE else set()
+        edges = ((Edge.LEADING, first, leading, leading_rise), (Edge.TRAILING, last, trailing, trailing_rise))
         for edge, segment, row, rise in edges:
             if row is None:
                 continue
-            stored = self.height - 1 - row if self.settings.flipped else row
-            self.events.append(
-                {
-                    "camera": self.camera,
-                    "event": self._n_events,
-                    "frame": segment.frame,
-                    "t_frame_ms": segment.t_frame_ms,
-                    "row": stored,
-                    "edge": edge,
-                    "band": kind,
-                    "rise_rows": rise,
-                    "strength": first.sign * plateau,
-                    "quality": plateau / first.sigma,
-                    "flags": "|".join(sorted(flags)),
-                }
+            self._edges.append(
+                (
+                    self.camera,
+                    self._n_events,
+                    segment.frame,
+                    segment.t_frame_ms,
+                    readout_rows(row, self.height, self.settings.flipped),
+                    edge,
+                    kind,
+                    rise,
+                    first.sign * plateau,
+                    plateau / first.sigma,
+                    frozenset(flags),
+                )
             )
         self._n_events += 1
 
@@ -310,7 +298,7 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
         if r > 0 and not np.isnan(change[r - 1]):
             steps[n_steps] = abs(change[r] - change[r - 1])
             n_steps += 1
-    noise = 1.4826 / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
+    noise = MAD_TO_SIGMA / np.sqrt(2.0) * np.median(steps[:n_steps]) if n_steps else np.nan
     if lit_stop == 0:
         lit_start, lit_stop = 0, height
     return change, noise, peak, lit_start, lit_stop
@@ -351,7 +339,7 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
     return merged
 
 
-def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: str) -> tuple[float | None, float]:
+def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: Band) -> tuple[float | None, float]:
     """Sub-row edge of a band and its rise (rows from 25 % to 75 % of the local plateau).
 
     The edge is the half-rise point for a pulse, the foot of the ramp for a step.
@@ -381,9 +369,9 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
     quarter = crossing(segment.change, 0.25 * level, segment.start, segment.stop)
     three_quarters = crossing(segment.change, 0.75 * level, segment.start, segment.stop)
     if quarter is None or three_quarters is None:
-        return (row if kind == "pulse" else None), np.nan
+        return (row if kind is Band.PULSE else None), np.nan
     rise = abs(three_quarters - quarter)
-    if kind != "pulse":
+    if kind is not Band.PULSE:
         return row - (three_quarters - quarter), rise
     return fit_pulse_edge(segment.change, row, rise, level, rising=crossing is _rising_crossing), rise
 
@@ -421,12 +409,30 @@ def _falling_crossing(values: np.ndarray, level: float, start: int, stop: int) -
     return i + (values[i] - level) / (values[i] - values[i + 1])
 
 
-@dataclass
+@dataclass(frozen=True)
 class CameraDetection:
-    """One video's detection pass: its frame timestamps and its events.
+    """One video's detection pass: its frame times and its events, read one or both ways up.
 
-    ``events`` are read in the direction ``flipped`` says; ``alternative`` holds the same
-    video's events read the other way, where the direction is still to be estimated.
+    A camera mounted upside down reads its stored image bottom-up, so its bands start at
+    their bottom row. Where the mounting is known, the video is read that way only; where it
+    is not, it is read both ways and :func:`~flashsync.pipeline.synchronize` picks the
+    reading that explains the flashes best.
+
+    Attributes
+    ----------
+    camera : str
+        Camera name (video file stem).
+    video : Path
+    width, height : int
+        Stored image size, px.
+    frame_times_ms : ndarray of shape (n_frames,)
+        Frame times, ms: the container stamps (or given ones), or the frame clock once
+        retimed.
+    top_down, bottom_up : Events or None
+        The events as read with the sensor reading top-down (upright camera) and bottom-up
+        (upside down); None where not read that way.
+    flipped : bool
+        The reading in use: bottom-up.
     """
 
     camera: str
@@ -434,15 +440,34 @@ class CameraDetection:
     width: int
     height: int
     frame_times_ms: np.ndarray
-    events: pd.DataFrame
+    top_down: Events | None
+    bottom_up: Events | None = None
     flipped: bool = False
-    alternative: pd.DataFrame | None = None
+
+    @property
+    def events(self) -> Events:
+        """The events of the reading in use."""
+        return self.bottom_up if self.flipped else self.top_down
+
+    @property
+    def undecided(self) -> bool:
+        """Read both ways up: the readout direction is still to be chosen."""
+        return self.top_down is not None and self.bottom_up is not None
 
     def read_flipped(self, flipped: bool) -> CameraDetection:
-        """This detection with the readout direction ``flipped`` (needs ``alternative``)."""
-        if flipped == self.flipped:
-            return self
-        return replace(self, events=self.alternative, alternative=self.events, flipped=flipped)
+        """This detection with the reading bottom-up (``flipped``) or top-down in use."""
+        if (self.bottom_up if flipped else self.top_down) is None:
+            raise ValueError(f"{self.video} was not read {'bottom-up' if flipped else 'top-down'}")
+        return replace(self, flipped=flipped)
+
+    def retimed(self, frame_times_ms: np.ndarray) -> CameraDetection:
+        """This detection with other frame times (ms, one per decoded frame), its events' too."""
+        return replace(
+            self,
+            frame_times_ms=frame_times_ms,
+            top_down=self.top_down.retimed(frame_times_ms) if self.top_down is not None else None,
+            bottom_up=self.bottom_up.retimed(frame_times_ms) if self.bottom_up is not None else None,
+        )
 
 
 def detect_video(
@@ -457,14 +482,14 @@ def detect_video(
     ----------
     path : path of a video file FFmpeg can open.
     flipped : the camera reads bottom-up in stored rows (mounted upside down); None: not
-        known, events are detected both ways (``events`` top-down, ``alternative`` bottom-up).
+        known, the video is read both ways up (the top-down reading in use).
     settings : detector tuning; ``flipped`` overrides its field.
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking the number
         of frames decoded since its last call.
 
     Returns
     -------
-    CameraDetection with ``events`` in EVENT_COLUMNS (rows are stored-image rows).
+    CameraDetection
     """
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
@@ -480,15 +505,15 @@ def detect_video(
             update(1)
     frame_times = check_timestamps(np.asarray(times), str(info.path))
     if len(frame_times) < 2:
-        raise FlashsyncError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
-    events = [detector.finish() for detector in detectors]
+        raise NotEnoughDataError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
+    readings = {direction: detector.finish() for direction, detector in zip(directions, detectors)}
     return CameraDetection(
         info.camera,
         info.path,
         info.width,
         info.height,
         frame_times,
-        events[0],
-        directions[0],
-        events[1] if len(events) > 1 else None,
+        readings.get(False),
+        readings.get(True),
+        flipped=directions[0],
     )

@@ -213,3 +213,18 @@ def stamp_errors(stamped: pd.DataFrame, model: SyncModel, truth: TrueClock) -> n
         for name, group in stamped.groupby("camera", sort=False)
     ]
     return np.concatenate(errors) if errors else np.empty(0)
+
+
+def tick_errors_ms(table: pd.DataFrame, model: SyncModel, truth: TrueClock) -> np.ndarray:
+    """True end-of-exposure time minus the tick, ms, of each located row of a frame table
+    (:func:`flashsync.ticks.frame_table`; rows without a frame are left out), in the
+    table's order."""
+    located = table[table["frame"].notna()]
+    error = np.empty(len(located))
+    for name in located["camera"].unique():
+        mine = (located["camera"] == name).to_numpy()
+        true_ms = truth.global_time_ms(
+            name, located["frame"].to_numpy(dtype=np.int64)[mine], located["row"].to_numpy()[mine]
+        )
+        error[mine] = true_ms + clock_origin_ms(model, truth) - located["t_global_ms"].to_numpy()[mine]
+    return error

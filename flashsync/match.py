@@ -1,27 +1,50 @@
-"""Pair events across cameras from the pattern of their times, with no manual step.
+"""Pair events across cameras from the pattern of their times, with no manual step: the one
+matcher of the pipeline and of ``diagnose``.
 
-Every camera's sync events get an approximate time on its own clock, ``t_frame + q *
-T_nominal`` (``T_nominal`` = frame period / height, a few per cent off: good to a few ms).
-For each pair of cameras, the offsets between all their event times vote for the shift
-(flashes fired by hand are irregular, so only the true shift lines many of them up); each
-leading candidate is refined into an affine map (shift and drift) by alternating one-to-one
-matching and fitting. Pairs are then merged, strongest first, into flashes: groups of at
-most one event per camera.
+Every camera's events get an approximate time on its own clock, ``t_frame + q * T_nominal``
+(``T_nominal`` = frame period / height, a few per cent off: good to a few ms). For each pair
+of cameras, the offsets between all their event times vote for the shift (flashes fired by
+hand are irregular, so only the true shift lines many of them up); each leading candidate is
+refined into an affine map (shift and drift) by alternating one-to-one matching and fitting.
+Pairs sharing at least :data:`MIN_SHARED_FLASHES` events without a rival shift are then
+merged, strongest first, into flashes: groups of at most one event per camera
+(:func:`match_events`). Cameras are tied together through chains of shared flashes
+(:meth:`Matching.tied_to`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.detect import CameraDetection
+from flashsync.errors import InputError
+from flashsync.events import Events
+from flashsync.model import readout_rows
+from flashsync.timestamps import median_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
 MAX_DRIFT = 100e-6
 #: Another shift that explains this fraction of the best one's matches makes a pair
 #: ambiguous (a periodic strobe fits at every multiple of its period).
 RIVAL_FRACTION = 0.7
+#: Fewest flashes two cameras must share for their pair alignment to count.
+MIN_SHARED_FLASHES = 3
+#: The matching tolerance, in frame periods of the slowest camera (and at least
+#: MIN_TOLERANCE_MS): where every camera's readout direction is known, approximate times
+#: are off by the few per cent the nominal time per row is off; where it may be wrong, a
+#: camera read the wrong way up misplaces a band by up to a frame.
+TOLERANCE_FRAMES = {True: 0.25, False: 1.0}
+MIN_TOLERANCE_MS = 5.0
+
+
+def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Times of the camera's ``events`` on its own clock, ms, with a nominal time per row: frame
+    time + readout row x median frame step / height (a few per cent off: good to a few ms)."""
+    row_time = median_step_ms(detection.frame_times_ms) / detection.height
+    return events.t_frame_ms + readout_rows(events.row, detection.height, detection.flipped) * row_time
 
 
 @dataclass(frozen=True)
@@ -180,17 +203,127 @@ def group_flashes(
     return flashes
 
 
-def parse_anchors(anchors: list[str], n_events: dict[str, int]) -> dict[str, int]:
-    """``['cam1:0', 'cam2:3']`` -> ``{'cam1': 0, 'cam2': 3}``: these events are one flash."""
+def match_tolerance_ms(frame_periods_ms: Iterable[float], readout_known: bool) -> float:
+    """How far two cameras' approximate times of one flash may be apart, ms (see
+    :data:`TOLERANCE_FRAMES`)."""
+    return max(MIN_TOLERANCE_MS, TOLERANCE_FRAMES[readout_known] * max(frame_periods_ms))
+
+
+@dataclass(frozen=True)
+class Matching:
+    """Events of several cameras matched into flashes.
+
+    Attributes
+    ----------
+    alignments : dict
+        ``(camera a, camera b) -> PairAlignment`` of every pair that counts.
+    flashes : dict
+        ``(camera, event index) -> flash number`` of every event in a flash of two or more
+        cameras (:func:`group_flashes`).
+    """
+
+    alignments: dict[tuple[str, str], PairAlignment]
+    flashes: dict[tuple[str, int], int]
+
+    def tied_to(self, reference: str) -> set[str]:
+        """The cameras linked to ``reference`` through chains of shared flashes (it included)."""
+        seen_by: dict[int, set[str]] = {}
+        for (camera, _), flash in self.flashes.items():
+            seen_by.setdefault(flash, set()).add(camera)
+        tied, grew = {reference}, True
+        while grew:
+            grew = False
+            for group in seen_by.values():
+                if group & tied and not group <= tied:
+                    tied |= group
+                    grew = True
+        return tied
+
+
+def match_events(
+    times_ms: dict[str, np.ndarray], tolerance_ms: float, anchors: dict[str, int] | None = None
+) -> Matching:
+    """Align every pair of cameras and merge the pairs that count into flashes.
+
+    Parameters
+    ----------
+    times_ms : dict of str to array of shape (n_events,)
+        Per camera, its events' approximate times on its own clock, ms.
+    tolerance_ms : float
+        See :func:`align_pair` and :func:`match_tolerance_ms`.
+    anchors : dict of str to int, optional
+        Per camera, the index of an event known to be one flash with the other cameras'.
+
+    Returns
+    -------
+    Matching
+        With the pairs that share at least :data:`MIN_SHARED_FLASHES` events and have no
+        rival shift.
+    """
+    anchors = anchors or {}
+    names = list(times_ms)
+    alignments = {}
+    for i, name_a in enumerate(names):
+        for name_b in names[i + 1 :]:
+            anchor = (anchors[name_a], anchors[name_b]) if name_a in anchors and name_b in anchors else None
+            alignment = align_pair(times_ms[name_a], times_ms[name_b], tolerance_ms, anchor)
+            if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
+                alignments[(name_a, name_b)] = alignment
+    return Matching(alignments, group_flashes({name: len(times) for name, times in times_ms.items()}, alignments))
+
+
+def shared_flashes(camera: np.ndarray, flash: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which of some flashes' observations belong to a flash two or more cameras saw.
+
+    Parameters
+    ----------
+    camera, flash : int arrays of shape (n,)
+        The camera and the flash number of each observation.
+
+    Returns
+    -------
+    keep : bool array of shape (n,)
+    numbers : int array of shape (keep.sum(),)
+        The kept observations' flashes numbered 0, 1, ... in the order of their numbers.
+    """
+    camera, flash = np.asarray(camera, dtype=np.int64), np.asarray(flash, dtype=np.int64)
+    if not len(flash):
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64)
+    seen = np.unique(np.stack([flash, camera]), axis=1)[0]
+    keep = np.bincount(seen, minlength=flash.max() + 1)[flash] >= 2
+    return keep, np.unique(flash[keep], return_inverse=True)[1]
+
+
+def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> dict[str, int]:
+    """``['cam1:0', 'cam2:3']``: these events are one flash.
+
+    Parameters
+    ----------
+    anchors : list of str
+        ``CAMERA:EVENT``, EVENT the detector's event number (the events table's ``event``).
+    event_numbers : dict of str to int array
+        Per camera, the event number of each of its sync events (leading edges).
+
+    Returns
+    -------
+    dict of str to int
+        Per anchored camera, the index of that event among its sync events.
+    """
     result = {}
     for text in anchors:
-        camera, _, index = text.rpartition(":")
-        if camera not in n_events or not index.isdigit():
-            raise FlashsyncError(
-                f"--anchor {text}: expected CAMERA:EVENT_INDEX with a camera of "
-                f"{', '.join(n_events)} and a 0-based event index"
+        camera, _, number = text.rpartition(":")
+        if camera not in event_numbers or not number.isdigit():
+            raise InputError(
+                f"{text}: expected CAMERA:EVENT with a camera of {', '.join(event_numbers)} and an "
+                "event number (the events table's event column)",
+                parameter="anchors",
             )
-        if int(index) >= n_events[camera]:
-            raise FlashsyncError(f"--anchor {text}: {camera} has only {n_events[camera]} sync events")
-        result[camera] = int(index)
+        where = np.flatnonzero(np.asarray(event_numbers[camera]) == int(number))
+        if not where.size:
+            raise InputError(
+                f"{text}: {camera} has no event {number} with a visible leading edge; anchor one "
+                "of its events " + ", ".join(map(str, event_numbers[camera])),
+                parameter="anchors",
+            )
+        result[camera] = int(where[0])
     return result

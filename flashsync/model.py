@@ -6,8 +6,8 @@ reads bottom-up)::
 
     t_global_ms(f, row) = alpha * t_f + beta_ms + q * row_time_ms
 
-``t_global_ms`` is the end-of-exposure instant of that row (DESIGN.md, time convention).
-This module knows no file format; :mod:`flashsync.model_file` reads and writes it.
+``t_global_ms`` is the end-of-exposure instant of that row (docs/architecture.md, time convention).
+This module knows no file format; :mod:`flashsync.io.model_file` reads and writes it.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 
 
 @dataclass
@@ -73,8 +73,7 @@ class CameraClock:
 
     def readout_row(self, row: np.ndarray) -> np.ndarray:
         """Readout index (0 = first row read) of stored-image rows."""
-        row = np.asarray(row, dtype=np.float64)
-        return self.height - 1 - row if self.flipped else row
+        return readout_rows(np.asarray(row, dtype=np.float64), self.height, self.flipped)
 
     def t_global_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
         """Global time (ms) of the end of exposure of ``row`` in ``frame``.
@@ -126,8 +125,13 @@ class CameraClock:
         q = (t - starts[np.clip(frame, 0, None)]) / self.row_time_ms
         visible = (frame >= 0) & (q <= self.height - 1 + 1e-6)
         q = np.where(visible, q, np.nan)
-        row = self.height - 1 - q if self.flipped else q
-        return frame, row
+        return frame, readout_rows(q, self.height, self.flipped)
+
+
+def readout_rows(rows: np.ndarray, height: int, flipped: bool) -> np.ndarray:
+    """Readout index (0 = first row read) of stored-image rows (top = 0) of a camera that reads
+    bottom-up when ``flipped``; the same map takes readout rows back to stored rows."""
+    return height - 1 - rows if flipped else rows
 
 
 def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
@@ -138,6 +142,23 @@ def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
     if interior <= 0:
         return np.zeros(t.shape + (0,))
     return np.stack([np.interp(t, knots_ms, np.eye(interior + 2)[j + 1]) for j in range(interior)], axis=-1)
+
+
+#: The columns of :attr:`SyncModel.events`, one row per sync event matched into a flash: the
+#: flash's number, the camera, the detector's event number, the frame and stored row of its
+#: leading edge, the frame's time (ms), the flash's global time (ms), the event's residual in
+#: the solve (ms) and whether the robust solve kept it.
+MATCHED_EVENT_COLUMNS = {
+    "flash": "int64",
+    "camera": "str",
+    "event": "int64",
+    "frame": "int64",
+    "row": "float64",
+    "t_frame_ms": "float64",
+    "t_global_ms": "float64",
+    "residual_ms": "float64",
+    "inlier": "bool",
+}
 
 
 @dataclass
@@ -151,8 +172,7 @@ class SyncModel:
     cameras : dict[str, CameraClock]
         In the order the videos were given.
     events : DataFrame
-        Matched events: ``flash, camera, frame, row, t_frame_ms, t_global_ms,
-        residual_ms, inlier``.
+        Matched events, columns :data:`MATCHED_EVENT_COLUMNS`.
     """
 
     reference: str
@@ -164,7 +184,7 @@ class SyncModel:
         try:
             return self.cameras[name]
         except KeyError:
-            raise FlashsyncError(
+            raise InputError(
                 f"camera {name!r} is not in the model (it has {', '.join(self.cameras)}); "
                 "sync its video too or fix the camera name"
             ) from None

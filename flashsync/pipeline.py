@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from itertools import combinations
 from pathlib import Path
@@ -25,25 +25,33 @@ import numpy as np
 import pandas as pd
 
 from flashsync.detect import CameraDetection, DetectorSettings, detect_video
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.match import PairAlignment, align_pair, group_flashes, parse_anchors
-from flashsync.model import CameraClock, SyncModel
-from flashsync.solve import Durations, Events, Priors, Solution, solve_with_drift_model
-from flashsync.timestamps import csv_timestamps
+from flashsync.io.timestamps import load_timestamps
+from flashsync.match import (
+    MIN_SHARED_FLASHES,
+    PairAlignment,
+    approximate_times_ms,
+    match_events,
+    match_tolerance_ms,
+    parse_anchors,
+    shared_flashes,
+)
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (1.05 x height),
 #: std 8 %; only decisive where the events cannot tell T_row (few flashes).
 NOMINAL_HIDDEN_ROWS = 1.05
 NOMINAL_ROW_TIME_STD = 0.08
-#: Fewest flashes two cameras must share for their pair alignment to count.
-MIN_SHARED_FLASHES = 3
 
 
 def detect_videos(
     paths: Sequence[str | Path],
     flipped: Sequence[str] = (),
-    estimate_readout: bool = False,
+    estimate_readout: bool = True,
     settings: DetectorSettings | None = None,
     progress: Callable[[str, int], Callable[[int], None]] | None = None,
     timestamps: dict[str, Path] | None = None,
@@ -54,11 +62,12 @@ def detect_videos(
     ----------
     paths : video files.
     flipped : cameras known to be mounted upside down.
-    estimate_readout : detect the other cameras' events both ways, so that
-        :func:`synchronize` can find an upside-down camera.
+    estimate_readout : read the other cameras both ways up, so that :func:`synchronize` can
+        find an upside-down camera (as ``flashsync sync`` does); False reads them top-down
+        only (``flashsync detect``, which writes one reading).
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
-        per decoded frame) used instead of the container's (see :func:`csv_timestamps`).
+        per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
 
     Videos are decoded in parallel threads, one per core (decoding and the compiled row
     kernel release the GIL).
@@ -67,15 +76,15 @@ def detect_videos(
     stems = [p.stem for p in paths]
     duplicates = sorted({s for s in stems if stems.count(s) > 1})
     if duplicates:
-        raise FlashsyncError(
+        raise InputError(
             f"camera names come from file stems and {', '.join(duplicates)} is given twice; rename one of the videos"
         )
     timestamps = timestamps or {}
-    for option, names in (("--flipped", flipped), ("--timestamps", timestamps)):
+    for parameter, names in (("flipped", flipped), ("timestamps", timestamps)):
         unknown = sorted(set(names) - set(stems))
         if unknown:
-            raise FlashsyncError(f"{option} {', '.join(unknown)}: no such camera among {', '.join(stems)}")
-    stamps = {camera: csv_timestamps(path) for camera, path in timestamps.items()}
+            raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}", parameter=parameter)
+    stamps = {camera: load_timestamps(path) for camera, path in timestamps.items()}
 
     def detect(path: Path) -> CameraDetection:
         direction = True if path.stem in flipped else (None if estimate_readout else False)
@@ -83,19 +92,20 @@ def detect_videos(
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
-            raise FlashsyncError(
+            raise InputError(
                 f"{timestamps[path.stem]}: {len(stamps[path.stem])} timestamps for the "
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
             )
-        return with_frame_times(detection, stamps[path.stem])
+        return detection.retimed(stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         return list(pool.map(detect, paths))
 
 
-def all_events(detections: Sequence[CameraDetection]) -> pd.DataFrame:
-    """One events table (``detect`` output) for all cameras."""
-    return pd.concat([d.events for d in detections], ignore_index=True)
+def all_events(detections: Sequence[CameraDetection]) -> Events:
+    """The events of all cameras (in their readings in use), one camera after the other: the
+    events table ``flashsync detect`` writes (:func:`~flashsync.io.events.save_events`)."""
+    return Events.concat([d.events for d in detections])
 
 
 @dataclass
@@ -128,19 +138,23 @@ def synchronize(
 
     Parameters
     ----------
-    detections : one per camera (from :func:`detect_videos`); a detection with
-        ``alternative`` events has its readout direction chosen here.
+    detections : one per camera (from :func:`detect_videos`); a detection read both ways
+        up has its readout direction chosen here.
     reference : camera whose clock is the global clock; default the first.
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
-    anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional).
+    anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
+        the detector's event number, as in the events table and the model's events.
     """
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
     if reference not in names:
-        raise FlashsyncError(f"--reference {reference}: no such camera among {', '.join(names)}")
+        raise InputError(
+            f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
+            parameter="reference",
+        )
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
-    cameras = {d.camera: with_frame_times(d, report.frame_clocks[d.camera].times_ms) for d in detections}
-    undecided = [name for name, d in cameras.items() if d.alternative is not None]
+    cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
+    undecided = [name for name, d in cameras.items() if d.undecided]
     best = _best_readout(cameras, undecided, lambda trial: _attempt(trial, reference, row_times, anchors))
     report.alignments, report.warnings = best.alignments, best.warnings
     report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
@@ -192,6 +206,61 @@ def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[
     return results
 
 
+@dataclass(frozen=True)
+class Matches:
+    """The sync events (leading edges) that belong to a flash seen by two or more cameras,
+    arrays of shape (n,).
+
+    Attributes
+    ----------
+    flash : int array
+        Flash number, 0..n_flashes-1.
+    camera : str array
+        Camera name.
+    camera_index : int array
+        Index of the camera among the cameras solved.
+    event, frame : int arrays
+        The detector's event number and the decoded frame of its leading edge.
+    row, q : float arrays
+        Stored-image row and readout row of the edge.
+    t_frame_ms : float array
+        The frame's time (frame clock), ms.
+    """
+
+    flash: np.ndarray
+    camera: np.ndarray
+    camera_index: np.ndarray
+    event: np.ndarray
+    frame: np.ndarray
+    row: np.ndarray
+    q: np.ndarray
+    t_frame_ms: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.flash)
+
+    def observations(self) -> Observations:
+        """What the solve needs of them."""
+        return Observations(self.camera_index, self.flash, self.t_frame_ms, self.q)
+
+    def table(self, solution: Solution) -> pd.DataFrame:
+        """The matched events with the solve's results (:data:`~flashsync.model.MATCHED_EVENT_COLUMNS`)."""
+        n_events = len(self)
+        return pd.DataFrame(
+            {
+                "flash": self.flash,
+                "camera": list(self.camera),
+                "event": self.event,
+                "frame": self.frame,
+                "row": self.row,
+                "t_frame_ms": self.t_frame_ms,
+                "t_global_ms": solution.flash_ms[self.flash],
+                "residual_ms": solution.residual_ms[:n_events],
+                "inlier": solution.inlier[:n_events],
+            },
+        ).astype(MATCHED_EVENT_COLUMNS)
+
+
 @dataclass
 class _Attempt:
     """One matching and solve with given readout directions."""
@@ -200,7 +269,7 @@ class _Attempt:
     connected: list[str]
     alignments: dict[tuple[str, str], PairAlignment]
     warnings: list[str]
-    observations: pd.DataFrame
+    matches: Matches
     durations: Durations
     solution: Solution
 
@@ -211,10 +280,10 @@ class _Attempt:
         matched to nothing) uniform over a frame period. Counting inliers alone would
         prefer a wrong direction whose loose fit (a scale ten times larger) lets one more
         event in."""
-        n_inliers = int(self.solution.inlier[: len(self.observations)].sum())
+        n_inliers = int(self.solution.inlier[: len(self.matches)].sum())
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
         sigma = max(self.solution.sigma_ms, 1e-4)
-        period = max(_frame_period(d) for d in self.cameras.values())
+        period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
         return n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_events - n_inliers) * np.log(period)
 
     def model(self, reference: str) -> SyncModel:
@@ -236,13 +305,7 @@ class _Attempt:
                 s.knots_ms,
                 s.warp_ms,
             )
-        n_events = len(self.observations)
-        events = self.observations.assign(
-            t_global_ms=self.solution.flash_ms[self.observations["flash"].to_numpy()],
-            residual_ms=self.solution.residual_ms[:n_events],
-            inlier=self.solution.inlier[:n_events],
-        )
-        return SyncModel(reference, clocks, events.drop(columns=["camera_index", "q"]))
+        return SyncModel(reference, clocks, self.matches.table(self.solution))
 
 
 def _attempt(
@@ -258,13 +321,17 @@ def _attempt(
     ]
     if len(usable) < 2:
         counts = ", ".join(f"{cameras[n].video.name}: {len(sync_events[n])}" for n in cameras)
-        raise FlashsyncError(
+        raise NotEnoughDataError(
             f"need two or more cameras with at least two flash events each; found "
             f"{counts}; check that the videos show flashes (or lights switching)"
         )
-    alignments = _align_pairs({n: cameras[n] for n in usable}, {n: sync_events[n] for n in usable}, anchors)
-    flashes = group_flashes({n: len(sync_events[n]) for n in usable}, alignments)
-    connected = _connected(reference, usable, alignments)
+    anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
+    tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
+    matching = match_events(
+        {n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events
+    )
+    tied = matching.tied_to(reference)
+    connected = [name for name in usable if name in tied]
     warnings += [
         f"{cameras[name].video}: shares fewer than {MIN_SHARED_FLASHES} unambiguous flashes "
         f"with the other cameras; cannot be tied to {reference}; left out"
@@ -272,63 +339,17 @@ def _attempt(
         if name not in connected
     ]
     if reference not in connected or len(connected) < 2:
-        raise FlashsyncError(
+        raise NotEnoughDataError(
             f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
             "check that the videos overlap in time and saw the same flashes"
         )
-    observations = _observations(connected, sync_events, flashes)
+    matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     durations = _durations([cameras[name] for name in connected])
     priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
     solution = solve_with_drift_model(
-        Events(
-            observations["camera_index"].to_numpy(),
-            observations["flash"].to_numpy(),
-            observations["t_frame_ms"].to_numpy(),
-            observations["q"].to_numpy(),
-        ),
-        len(connected),
-        connected.index(reference),
-        durations=durations,
-        priors=Priors(priors),
+        matches.observations(), len(connected), connected.index(reference), durations=durations, priors=Priors(priors)
     )
-    return _Attempt(cameras, connected, alignments, warnings, observations, durations, solution)
-
-
-def with_frame_times(detection: CameraDetection, times_ms: np.ndarray) -> CameraDetection:
-    """The detection with other frame times (ms, one per decoded frame), its events' frame
-    times too."""
-
-    def retimed(events: pd.DataFrame | None) -> pd.DataFrame | None:
-        if events is None:
-            return None
-        return events.assign(t_frame_ms=times_ms[events["frame"].to_numpy(dtype=np.int64)])
-
-    return replace(
-        detection, frame_times_ms=times_ms, events=retimed(detection.events), alternative=retimed(detection.alternative)
-    )
-
-
-def _align_pairs(
-    cameras: dict[str, CameraDetection], sync_events: dict[str, pd.DataFrame], anchors: Sequence[str]
-) -> dict[tuple[str, str], PairAlignment]:
-    """Coarse alignment of every pair of cameras; pairs sharing too few or ambiguous flashes
-    are left out."""
-    anchor_events = parse_anchors(list(anchors), {n: len(e) for n, e in sync_events.items()})
-    approx = {name: _approximate_times(cameras[name], sync_events[name]) for name in cameras}
-    tolerance = max(5.0, 0.25 * max(_frame_period(d) for d in cameras.values()))
-    names = list(cameras)
-    alignments = {}
-    for i, name_a in enumerate(names):
-        for name_b in names[i + 1 :]:
-            anchor = (
-                (anchor_events[name_a], anchor_events[name_b])
-                if name_a in anchor_events and name_b in anchor_events
-                else None
-            )
-            alignment = align_pair(approx[name_a], approx[name_b], tolerance, anchor)
-            if alignment is not None and len(alignment.matches) >= MIN_SHARED_FLASHES and not alignment.ambiguous:
-                alignments[(name_a, name_b)] = alignment
-    return alignments
+    return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
 
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
@@ -338,7 +359,7 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
         else:
-            nominal = _frame_period(camera) / (NOMINAL_HIDDEN_ROWS * camera.height)
+            nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
 
@@ -355,80 +376,55 @@ def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: f
     return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
 
 
-def _with_readout_rows(detection: CameraDetection) -> pd.DataFrame:
-    """The camera's events with their readout row ``q``."""
+def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Readout rows of the camera's events."""
+    return readout_rows(events.row, detection.height, detection.flipped)
+
+
+def _sync_events(detection: CameraDetection) -> Events:
+    """Leading edges: the synchronisation events."""
     events = detection.events
-    q = detection.height - 1 - events["row"] if detection.flipped else events["row"]
-    return events.assign(q=q.to_numpy())
-
-
-def _sync_events(detection: CameraDetection) -> pd.DataFrame:
-    """Leading edges, the synchronisation events, with their readout row ``q``."""
-    events = _with_readout_rows(detection)
-    return events[events["edge"] == "leading"].reset_index(drop=True)
+    return events.take(events.edge == Edge.LEADING)
 
 
 def _durations(detections: list[CameraDetection]) -> Durations:
     """Pulse bands with both edges visible and unsaturated, camera indices in list order."""
     camera, dt, dq = [], [], []
     for index, detection in enumerate(detections):
-        events = _with_readout_rows(detection)
-        usable = events[(events["band"] == "pulse") & ~events["flags"].str.contains("saturated")]
-        both = usable.pivot_table(index="event", columns="edge", values=["t_frame_ms", "q"])
-        if not {("q", "leading"), ("q", "trailing")} <= set(both.columns):
-            continue
-        both = both.dropna()
-        camera += [index] * len(both)
-        dt += list(both[("t_frame_ms", "trailing")] - both[("t_frame_ms", "leading")])
-        dq += list(both[("q", "trailing")] - both[("q", "leading")])
+        events = detection.events
+        bands = events.bands()
+        first = bands.first_edges()
+        bands = bands.take(
+            bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.SATURATED)[first]
+        )
+        q = _readout_rows(detection, events)
+        camera += [index] * len(bands)
+        dt += list(events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
+        dq += list(q[bands.trailing] - q[bands.leading])
     return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
 
 
-def _frame_period(detection: CameraDetection) -> float:
-    return float(np.median(np.diff(detection.frame_times_ms)))
-
-
-def _approximate_times(detection: CameraDetection, events: pd.DataFrame) -> np.ndarray:
-    """Event times on the camera's own clock, ms, with a nominal time per row."""
-    row_time = _frame_period(detection) / detection.height
-    return events["t_frame_ms"].to_numpy() + events["q"].to_numpy() * row_time
-
-
-def _connected(reference: str, names: list[str], alignments: dict[tuple[str, str], PairAlignment]) -> list[str]:
-    """Cameras reachable from the reference through accepted pair alignments, in input order."""
-    reached, frontier = {reference}, [reference]
-    while frontier:
-        current = frontier.pop()
-        for a, b in alignments:
-            for here, there in ((a, b), (b, a)):
-                if here == current and there not in reached:
-                    reached.add(there)
-                    frontier.append(there)
-    return [name for name in names if name in reached]
-
-
-def _observations(
-    names: list[str], sync_events: dict[str, pd.DataFrame], flashes: dict[tuple[str, int], int]
-) -> pd.DataFrame:
-    """One row per (camera, event) that belongs to a flash seen by >= 2 connected cameras."""
-    rows = []
-    for index, name in enumerate(names):
-        for i, event in sync_events[name].iterrows():
-            if (name, i) in flashes:
-                rows.append(
-                    {
-                        "flash": flashes[(name, i)],
-                        "camera": name,
-                        "camera_index": index,
-                        "event": int(event["event"]),
-                        "frame": int(event["frame"]),
-                        "row": float(event["row"]),
-                        "q": float(event["q"]),
-                        "t_frame_ms": float(event["t_frame_ms"]),
-                    }
-                )
-    table = pd.DataFrame(rows)
-    counts = table.groupby("flash")["camera"].transform("size")
-    table = table[counts >= 2].copy()
-    table["flash"] = pd.factorize(table["flash"], sort=True)[0]
-    return table.reset_index(drop=True)
+def _matches(
+    cameras: list[CameraDetection], sync_events: dict[str, Events], flashes: dict[tuple[str, int], int]
+) -> Matches:
+    """The sync events of ``cameras`` that belong to a flash seen by two or more of them."""
+    chosen, flash, camera_index = [], [], []
+    for index, detection in enumerate(cameras):
+        mine = [i for i in range(len(sync_events[detection.camera])) if (detection.camera, i) in flashes]
+        chosen.append(sync_events[detection.camera].take(np.array(mine, dtype=np.int64)))
+        flash += [flashes[(detection.camera, i)] for i in mine]
+        camera_index += [index] * len(mine)
+    events = Events.concat(chosen)
+    q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
+    camera_index = np.asarray(camera_index, dtype=np.int64)
+    keep, flash = shared_flashes(camera_index, flash)
+    return Matches(
+        flash,
+        events.camera[keep],
+        camera_index[keep],
+        events.event[keep],
+        events.frame[keep],
+        events.row[keep],
+        q[keep],
+        events.t_frame_ms[keep],
+    )

@@ -17,7 +17,7 @@ import av
 import cv2
 import numpy as np
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError
 from flashsync.timestamps import open_video
 
 #: Column blocks of a row profile.
@@ -42,7 +42,7 @@ def video_info(container: av.container.InputContainer, path: Path) -> VideoInfo:
     """Size and approximate frame count of an open video, or a one-line error."""
     stream = container.streams.video[0]
     if not stream.width or not stream.height:
-        raise FlashsyncError(f"{path}: video stream has no frame size; is the file complete?")
+        raise InputError(f"{path}: video stream has no frame size; is the file complete?")
     hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
     return VideoInfo(path, stream.width, stream.height, hint)
 
@@ -127,9 +127,7 @@ def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tu
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
-                    raise FlashsyncError(
-                        f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)"
-                    )
+                    raise InputError(f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)")
                 yield float(frame.pts * frame.time_base) * 1000.0, row_profile(luma_plane(frame), *luma_range(frame))
         except av.FFmpegError as error:
-            raise FlashsyncError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None
+            raise InputError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None

@@ -69,9 +69,8 @@ def sync_table(model: SyncModel, report=None) -> str:
     ]
     for row in table.itertuples():
         name = row.camera + ("*" if row.reference else "") + ("^" if row.flipped else "")
-        exposure = (
-            f"{row.exposure_ms:>6.2f}" if row.exposure_ms is not None and np.isfinite(row.exposure_ms) else f"{'-':>6}"
-        )
+        known = row.exposure_ms is not None and np.isfinite(row.exposure_ms)
+        exposure = f"{row.exposure_ms:>6.2f}" if known else f"{'-':>6}"
         line = (
             f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>8.4f} {row.shift_ms:>14.3f} "
             f"{row.shift_std_ms:>7.4f} {row.row_time_ms:>10.6f} "

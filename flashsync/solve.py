@@ -6,7 +6,7 @@ of them, so cameras need not share flashes with the reference directly)::
 
     alpha_c * t + beta_c + q * T_row_c - tau_k = 0          (reference: alpha = 1, beta = 0)
 
-Information inside one camera enters too (DESIGN.md, "a trap"): a band lasts the same
+Information inside one camera enters too (docs/architecture.md, "a trap"): a band lasts the same
 time ``D_c`` in every frame of a camera, so a band split across two frames, whose rows
 skip the hidden rows, ties ``T_row_c`` to the frame period::
 
@@ -28,16 +28,14 @@ import scipy.sparse as sparse
 from scipy import linalg
 from threadpoolctl import threadpool_limits
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 from flashsync.model import hat_basis
-
-#: Floor of the robust residual scale, ms: below a microsecond, residuals are all equal.
-MIN_SIGMA_MS = 1e-3
+from flashsync.robust import MIN_SCALE_MS, cauchy_irls, mad_sigma
 
 
 @dataclass(frozen=True)
-class Events:
-    """Matched event edges: one entry per (camera, flash) observation.
+class Observations:
+    """Matched sync events: one entry per (camera, flash) observation.
 
     ``camera``, ``flash``: int arrays (n,); ``t_frame_ms``: frame timestamps (n,), ms;
     ``q``: readout rows (n,).
@@ -101,7 +99,7 @@ class Solution:
 
 
 def solve_clocks(
-    events: Events,
+    events: Observations,
     n_cameras: int,
     reference: int = 0,
     durations: Durations | None = None,
@@ -116,7 +114,7 @@ def solve_clocks(
 
     Parameters
     ----------
-    events : matched event edges.
+    events : matched sync events.
     n_cameras : number of cameras (indices 0..n_cameras-1).
     reference : index of the reference camera.
     durations : bands with both edges; used for cameras where they can tell ``T_row``
@@ -129,7 +127,7 @@ def solve_clocks(
 
     Raises
     ------
-    FlashsyncError
+    NotEnoughDataError
         When the equations cannot determine every unknown.
     """
     with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
@@ -145,17 +143,20 @@ def solve_clocks(
 
 
 def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float, iterations: int) -> Solution:
-    """The robust iterations of :func:`solve_clocks` on a built system."""
-    weights = np.ones(system.n_equations)
-    for _ in range(iterations):
-        x = system.solve(weights)
-        residual = system.residuals(x)
-        sigma = _robust_sigma(residual)
-        weights = 1.0 / (1.0 + (residual / (cauchy_k * sigma)) ** 2)
+    """The robust iterations of :func:`solve_clocks` on a built system: Cauchy weights at
+    ``cauchy_k`` robust sigmas, ``iterations`` solves in all."""
+    _, residual, _ = cauchy_irls(
+        system.solve,
+        system.residuals,
+        system.n_equations,
+        lambda residual, _: cauchy_k * mad_sigma(residual, MIN_SCALE_MS),
+        iterations - 1,
+    )
+    sigma = mad_sigma(residual, MIN_SCALE_MS)
     inlier = np.abs(residual) <= reject_sigma * sigma
     x = system.solve(inlier.astype(np.float64))
     residual = system.residuals(x)
-    sigma = _robust_sigma(residual[inlier])
+    sigma = mad_sigma(residual[inlier], MIN_SCALE_MS)
     dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
     covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
@@ -179,7 +180,7 @@ MIN_EVENTS_PER_SEGMENT = 4
 MIN_BIC_GAIN = 10.0
 
 
-def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0, **options) -> Solution:
+def solve_with_drift_model(events: Observations, n_cameras: int, reference: int = 0, **options) -> Solution:
     """:func:`solve_clocks` with the drift model chosen by the data.
 
     Each camera's clock is tried affine, then with its rate changing piecewise-linearly
@@ -202,7 +203,7 @@ def solve_with_drift_model(events: Events, n_cameras: int, reference: int = 0, *
             break
         try:
             trial = solve_clocks(events, n_cameras, reference, drift_knots=dict(knots), **options)
-        except FlashsyncError:
+        except NotEnoughDataError:
             break
         bic = _bic(trial)
         if bic < best_bic - MIN_BIC_GAIN:
@@ -217,11 +218,6 @@ def _bic(solution: Solution) -> float:
     return n * np.log(max(float(np.mean(residual**2)), 1e-18)) + solution.n_unknowns * np.log(n)
 
 
-def _robust_sigma(residual: np.ndarray) -> float:
-    """1.4826 x median absolute residual, ms (at least MIN_SIGMA_MS)."""
-    return max(1.4826 * float(np.median(np.abs(residual))), MIN_SIGMA_MS) if residual.size else MIN_SIGMA_MS
-
-
 class _System:
     """The sparse design of :func:`solve_clocks`, columns scaled to unit norm.
 
@@ -233,7 +229,7 @@ class _System:
 
     def __init__(
         self,
-        events: Events,
+        events: Observations,
         n_cameras: int,
         reference: int,
         durations: Durations | None,
@@ -304,7 +300,7 @@ class _System:
         matrix = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
-            raise FlashsyncError(
+            raise NotEnoughDataError(
                 "the matched events leave a camera parameter undetermined; "
                 "each camera needs events on flashes shared with other cameras"
             )
@@ -337,10 +333,10 @@ class _System:
         except linalg.LinAlgError:
             factor = None
         if factor is None or np.min(np.diag(factor[0])) ** 2 <= 1e-12 * np.max(np.diag(schur)):
-            raise FlashsyncError(
+            raise NotEnoughDataError(
                 "the matched events cannot separate every camera's drift, shift and time per row "
                 "(too few flashes, or all at the same rows); record more flashes seen by several "
-                "cameras, or give --row-time"
+                "cameras, or give the cameras' times per row (datasheet)"
             )
         return factor, coupling, d, right_cams, right_flashes
 
@@ -349,9 +345,10 @@ class _System:
         equations are too few or (nearly) singular."""
         n_used = int(np.count_nonzero(weights)) + self.n_priors
         if n_used < self.n_unknowns:
-            raise FlashsyncError(
+            raise NotEnoughDataError(
                 f"the cameras share too few events: {n_used} equations for {self.n_unknowns} "
-                "unknowns; record more flashes seen by several cameras, or give --row-time"
+                "unknowns; record more flashes seen by several cameras, or give the cameras' times "
+                "per row (datasheet)"
             )
         factor, coupling, d, right_cams, right_flashes = self._reduced(weights)
         x_cams = linalg.cho_solve(factor, right_cams - coupling @ (right_flashes / d))

@@ -1,4 +1,5 @@
-"""Frame timestamps in ms: from video containers, from CSV files and from RTP 90 kHz stamps.
+"""Frame timestamps in ms: from video containers and from RTP 90 kHz stamps (CSV files of
+frame times: :mod:`flashsync.io.timestamps`).
 
 flashsync works with container timestamps, never with ``frame_index / fps``, so dropped
 frames and variable frame rates cost nothing. All functions return float64 arrays of
@@ -11,9 +12,8 @@ from pathlib import Path
 
 import av
 import numpy as np
-import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 
 RTP_CLOCK_HZ = 90_000
 _RTP_WRAP = 2**32
@@ -31,16 +31,16 @@ def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
     """
     times = np.asarray(times_ms, dtype=np.float64)
     if times.ndim != 1 or times.size == 0:
-        raise FlashsyncError(f"{source}: no frame timestamps found; check that it holds video frames")
+        raise InputError(f"{source}: no frame timestamps found; check that it holds video frames")
     if not np.all(np.isfinite(times)):
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; "
             "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
         )
     steps = np.diff(times)
     if np.any(steps <= 0):
         bad = int(np.argmax(steps <= 0)) + 1
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: frame timestamps are not increasing at frame {bad} "
             f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); remux the file or give the "
             "timestamps as CSV"
@@ -65,7 +65,7 @@ def video_timestamps(path: str | Path) -> np.ndarray:
         pts = [packet.pts for packet in container.demux(stream) if packet.size > 0]
         time_base = stream.time_base
     if any(p is None for p in pts):
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: {sum(p is None for p in pts)} frames have no timestamp; remux the file "
             "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
         )
@@ -76,39 +76,22 @@ def video_timestamps(path: str | Path) -> np.ndarray:
 def open_video(path: Path) -> av.container.InputContainer:
     """Open a video file for reading, or raise a one-line error naming the file."""
     if not path.is_file():
-        raise FlashsyncError(f"{path}: no such file; check the path")
+        raise InputError(f"{path}: no such file; check the path")
     try:
         container = av.open(str(path))
     except av.FFmpegError as error:
-        raise FlashsyncError(f"{path}: not a video file FFmpeg can open ({error.strerror})") from None
+        raise InputError(f"{path}: not a video file FFmpeg can open ({error.strerror})") from None
     if not container.streams.video:
         container.close()
-        raise FlashsyncError(f"{path}: has no video stream; give a video file")
+        raise InputError(f"{path}: has no video stream; give a video file")
     return container
 
 
-def csv_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
-    """Frame times (ms) from a CSV file, one row per frame in presentation order.
-
-    The column is ``column`` if given, else the first of ``t_ms``, ``timestamp_ms``,
-    ``time_ms``; a column ``rtp`` (90 kHz RTP stamps) is unwrapped with
-    :func:`rtp_timestamps`.
-    """
-    path = Path(path)
-    try:
-        table = pd.read_csv(path)
-    except (OSError, ValueError) as error:
-        raise FlashsyncError(f"{path}: cannot read as CSV ({error})") from None
-    candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
-    found = [name for name in candidates if name in table.columns]
-    if not found:
-        raise FlashsyncError(f"{path}: no timestamp column; expected one of {', '.join(candidates)}")
-    values = pd.to_numeric(table[found[0]], errors="coerce").to_numpy()
-    if found[0] == "rtp":
-        if np.any(~np.isfinite(values)):
-            raise FlashsyncError(f"{path}: column rtp has empty or non-numeric values")
-        values = rtp_timestamps(values.astype(np.uint64))
-    return check_timestamps(values, str(path))
+def median_step_ms(times_ms: np.ndarray) -> float:
+    """The median interval between consecutive frame times, ms: the nominal frame period
+    (0 for fewer than two frames)."""
+    times = np.asarray(times_ms, dtype=np.float64)
+    return float(np.median(np.diff(times))) if times.size > 1 else 0.0
 
 
 def rtp_timestamps(stamps: np.ndarray, clock_hz: int = RTP_CLOCK_HZ) -> np.ndarray:

@@ -10,7 +10,8 @@ import pytest
 
 from flashsync import detect_videos, synchronize
 from flashsync.evaluate import sync_errors
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+from flashsync.io import load_ground_truth
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
 def irregular_flashes(rng, n, start_ms, stop_ms, min_gap_ms):

@@ -6,26 +6,11 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from cli_run import one_error_line, run
 
-from flashsync.cli import main
 from flashsync.evaluate import sync_errors
-from flashsync.model_file import load_model
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
-
-
-def run(capsys, *args):
-    """Run the CLI in-process; return (exit code, stdout, stderr)."""
-    code = main([str(a) for a in args])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
-def one_error_line(err: str, *words: str) -> None:
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err and "error:" in lines[0]
-    for word in words:
-        assert word in lines[0], lines[0]
+from flashsync.io import load_ground_truth, load_model
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
 @pytest.fixture(scope="module")
@@ -125,7 +110,7 @@ def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, 
 
 
 def test_help_of_every_command_has_an_example():
-    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo"):
+    for command in ("detect", "sync", "restamp", "validate", "simulate", "demo", "frames", "resample", "montage"):
         result = subprocess.run([sys.executable, "-m", "flashsync", command, "--help"], capture_output=True, text=True)
         assert result.returncode == 0 and "example:" in result.stdout and "flashsync " + command in result.stdout
 
@@ -285,3 +270,15 @@ def test_timestamps_from_an_rtp_csv(tiny_scenario, tmp_path, capsys):
     code, _, err = run(capsys, "detect", tiny_scenario / "cam1.mp4", "--timestamps", "cam9=x.csv")
     assert code == 1
     one_error_line(err, "--timestamps cam9")
+
+
+def test_library_errors_name_data_and_the_command_adds_its_option(tiny_scenario, capsys):
+    from flashsync.errors import InputError
+    from flashsync.pipeline import detect_videos
+
+    with pytest.raises(InputError) as error:
+        detect_videos([tiny_scenario / "cam1.mp4"], flipped=["cam9"])
+    assert error.value.parameter == "flipped" and "--" not in str(error.value)
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv", "--reference", "cam9")
+    assert code == 1
+    one_error_line(err, "--reference cam9: no such camera among cam1, cam2")

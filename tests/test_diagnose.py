@@ -11,8 +11,9 @@ import pytest
 from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.workflow import NOISE_FACTOR
 from flashsync.errors import FlashsyncError
+from flashsync.io import events_from_frame, events_to_frame, load_ground_truth
 from flashsync.pipeline import detect_videos
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, load_ground_truth, render_scenario
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 DURATION_MS = 6000.0
 
@@ -106,10 +107,10 @@ def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(detections):
 
 def test_one_bad_edge_names_nothing(detections):
     ref, other = pair(detections, f"{CAMERA['flipped']}+declared")
-    events = ref.events.copy()
+    events = events_to_frame(ref.events)
     bad = events.index[events["edge"] == "trailing"][1]  # an edge a weak fit bends to
     events.loc[bad, "row"] -= 15.0  # 15 rows = 3.3 ms off
-    d = diagnose([replace(ref, events=events), other])
+    d = diagnose([replace(ref, top_down=events_from_frame(events)), other])
     assert d.steps == [], format_diagnosis(d)
 
 
@@ -132,7 +133,7 @@ def test_too_few_cameras_or_shared_flashes_is_one_line_error(detections):
     with pytest.raises(FlashsyncError, match="two or more cameras"):
         diagnose([ref])
     with pytest.raises(FlashsyncError, match="shares at least 3 flashes") as error:
-        diagnose([ref, replace(other, events=other.events.iloc[:4])])
+        diagnose([ref, replace(other, top_down=other.events.take(slice(0, 4)))])
     assert "\n" not in str(error.value)
 
 

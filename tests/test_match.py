@@ -96,3 +96,39 @@ def test_a_bad_pair_cannot_chain_two_events_of_one_camera():
     bad = PairAlignment(1.0, 0.0, np.array([[0, 1]]), 0.0, False)  # a0 with b1: conflicts
     groups = group_flashes({"a": 2, "b": 2}, {("a", "b"): good, ("b", "a"): bad})
     assert groups[("a", 0)] == groups[("b", 0)] != groups[("b", 1)]
+
+
+def test_cameras_are_tied_through_chains_of_shared_flashes():
+    """a and c share one flash (too few to align them) but both share many with b; d's flashes
+    are another session's."""
+    from flashsync.match import match_events
+
+    rng = np.random.default_rng(3)
+    tau = flashes(rng, n=12)
+    a, _ = seen_by(rng, tau[:7], 1.0, 0.0, 40.0)
+    b, _ = seen_by(rng, tau, 1.0, -50_000.0, 33.3)
+    c, _ = seen_by(rng, tau[6:], 1.0, 20_000.0, 40.0)
+    d, _ = seen_by(rng, flashes(rng, n=12), 1.0, 0.0, 40.0)
+    matching = match_events({"a": a, "b": b, "c": c, "d": d}, TOLERANCE_MS)
+    assert matching.tied_to("a") == {"a", "b", "c"}
+    assert matching.tied_to("d") == {"d"}
+
+
+def test_only_flashes_two_cameras_saw_are_kept_and_renumbered():
+    from flashsync.match import shared_flashes
+
+    keep, numbers = shared_flashes(camera=[0, 1, 0, 0, 2, 2], flash=[4, 4, 7, 9, 9, 9])
+    assert list(keep) == [True, True, False, True, True, True]
+    assert list(numbers) == [0, 0, 1, 1, 1]
+
+
+def test_anchors_name_the_detectors_event_numbers():
+    """cam1's event 2 has no leading edge (hidden): its sync events are events 0, 1, 3, 4."""
+    from flashsync.errors import InputError
+    from flashsync.match import parse_anchors
+
+    numbers = {"cam1": np.array([0, 1, 3, 4]), "cam2": np.array([0, 1, 2])}
+    assert parse_anchors(["cam1:3", "cam2:1"], numbers) == {"cam1": 2, "cam2": 1}
+    with pytest.raises(InputError, match="cam1:2: cam1 has no event 2") as error:
+        parse_anchors(["cam1:2"], numbers)
+    assert error.value.parameter == "anchors"

@@ -3,8 +3,8 @@ import pandas as pd
 import pytest
 
 from flashsync.errors import FlashsyncError
+from flashsync.io import load_model, save_model
 from flashsync.model import CameraClock, SyncModel
-from flashsync.model_file import load_model, save_model
 
 
 def camera(flipped=False):

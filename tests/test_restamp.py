@@ -9,8 +9,9 @@ import pyarrow.parquet as pq
 import pytest
 
 from flashsync.errors import FlashsyncError
+from flashsync.io import load_detections, load_mot, save_detections
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter import format_summary, read_detections, read_mot, restamp, restamp_file, write_detections
+from tracking_adapter import format_summary, restamp, restamp_file
 
 N_FRAMES = 50
 
@@ -251,11 +252,11 @@ def test_parquet_in_and_out_keeps_types(tmp_path, model):
 
 def test_read_restamp_write_round_trip(tmp_path, model):
     source = write(tmp_path / "dets.csv", CSV_TEXT)
-    stamped = restamp(read_detections(source), model)
-    write_detections(stamped, tmp_path / "out.parquet")
+    stamped = restamp(load_detections(source), model)
+    save_detections(stamped, tmp_path / "out.parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "out.parquet"), stamped)
     with pytest.raises(FlashsyncError, match="out.txt"):
-        write_detections(stamped, tmp_path / "out.txt")
+        save_detections(stamped, tmp_path / "out.txt")
 
 
 def test_csv_to_parquet_keeps_the_text(tmp_path, model):
@@ -274,7 +275,7 @@ MOT_HEADER = "frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z\n"
 @pytest.mark.parametrize("header, extra", [("", ["mot_8", "mot_9", "mot_10"]), (MOT_HEADER, ["mot_x", "mot_y", "z"])])
 def test_mot_input(tmp_path, model, header, extra):
     source = write(tmp_path / "cam2.txt", header + MOT_ROWS)
-    detections = read_mot(source)
+    detections = load_mot(source)
     assert list(detections.columns) == [
         "camera",
         "frame",
@@ -302,7 +303,7 @@ def test_mot_input(tmp_path, model, header, extra):
 
 def test_mot_camera_name_given(tmp_path, model):
     source = write(tmp_path / "det.txt", MOT_ROWS)
-    assert set(read_mot(source, camera="cam1").camera) == {"cam1"}
+    assert set(load_mot(source, camera="cam1").camera) == {"cam1"}
     summary = restamp_file(source, tmp_path / "out.parquet", model, camera="cam1")
     assert summary.stamped == 2
 

@@ -10,15 +10,9 @@ import pytest
 from decoded import decode, half_rise, row_profile
 
 from flashsync.errors import FlashsyncError
-from flashsync.simulation import (
-    CameraSpec,
-    FlashSpec,
-    LightSwitch,
-    load_ground_truth,
-    load_scenario,
-    preset,
-    render_scenario,
-)
+from flashsync.io import load_ground_truth, load_scenario
+from flashsync.io.scenario import scenario_from_dict
+from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, preset, render_scenario
 from flashsync.simulation.encode import write_video
 from flashsync.simulation.render import (
     Lighting,
@@ -29,7 +23,6 @@ from flashsync.simulation.render import (
     puck_track,
     render_frame,
 )
-from flashsync.simulation.scenario import scenario_from_dict
 from flashsync.simulation.scene import apply_homography, make_scene
 
 # A camera with a non-trivial clock: 50 ppm fast, camera time 7 s ahead of the world.

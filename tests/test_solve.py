@@ -3,7 +3,7 @@ import pytest
 from synthetic import observe
 
 from flashsync.errors import FlashsyncError
-from flashsync.solve import Events, solve_clocks
+from flashsync.solve import Observations, solve_clocks
 
 CAMERAS = [  # alpha, beta_ms, row_time_ms, fps, height
     (1.0, 0.0, 0.0370, 25.0, 1000),
@@ -27,7 +27,7 @@ def observations(rng, n_flashes=40, cameras=CAMERAS):
 
 def test_exact_events_recover_every_parameter():
     (camera, flash, t_frame, q), tau = observations(np.random.default_rng(1))
-    solution = solve_clocks(Events(camera, flash, t_frame, q), n_cameras=3)
+    solution = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
     for truth, solved in zip(CAMERAS, solution.cameras):
         alpha, beta, row_time = truth[:3]
         assert solved.alpha == pytest.approx(alpha, rel=1e-9)
@@ -42,7 +42,7 @@ def test_noise_gives_honest_uncertainty():
     (camera, flash, t_frame, q), _ = observations(rng, n_flashes=60)
     noise_ms = 0.05
     q = q + rng.normal(0, noise_ms, len(q)) / np.array([c[2] for c in CAMERAS])[camera]
-    solution = solve_clocks(Events(camera, flash, t_frame, q), n_cameras=3)
+    solution = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
     assert 0.6 * noise_ms < solution.sigma_ms < 1.4 * noise_ms
     for truth, solved in zip(CAMERAS[1:], solution.cameras[1:]):
         std = np.sqrt(np.diag(solved.covariance))
@@ -52,11 +52,11 @@ def test_noise_gives_honest_uncertainty():
 
 def test_one_wrong_event_does_not_move_a_camera():
     (camera, flash, t_frame, q), _ = observations(np.random.default_rng(3))
-    clean = solve_clocks(Events(camera, flash, t_frame, q), n_cameras=3)
+    clean = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
     bad = np.flatnonzero(camera == 1)[5]
     q = q.copy()
     q[bad] += 300.0  # a mislocated edge: 9 ms off
-    robust = solve_clocks(Events(camera, flash, t_frame, q), n_cameras=3)
+    robust = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
     assert not robust.inlier[bad]
     assert robust.inlier.sum() == len(q) - 1
     assert robust.cameras[1].beta_ms == pytest.approx(clean.cameras[1].beta_ms, abs=1e-6)
@@ -71,7 +71,7 @@ def test_cameras_tied_only_through_another_camera():
     camera, flash, t_frame, q = camera[keep], flash[keep], t_frame[keep], q[keep]
     assert not set(flash[camera == 0]) & set(flash[camera == 2])
     _, flash = np.unique(flash, return_inverse=True)
-    solution = solve_clocks(Events(camera, flash, t_frame, q), n_cameras=3)
+    solution = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
     assert solution.cameras[2].alpha == pytest.approx(CAMERAS[2][0], rel=1e-9)
     assert solution.cameras[2].beta_ms == pytest.approx(CAMERAS[2][1], abs=1e-4)
 
@@ -80,13 +80,13 @@ def test_too_few_shared_events_is_a_clear_error():
     (camera, flash, t_frame, q), _ = observations(np.random.default_rng(5), n_flashes=40)
     keep = np.isin(flash, np.unique(flash[camera == 1])[:2])
     with pytest.raises(FlashsyncError, match="too few events|cannot separate"):
-        solve_clocks(Events(camera[keep], flash[keep], t_frame[keep], q[keep]), n_cameras=3)
+        solve_clocks(Observations(camera[keep], flash[keep], t_frame[keep], q[keep]), n_cameras=3)
 
 
 def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.0):
     """Two cameras over ``hours``; camera 1's rate changes linearly (temperature). Returns
     the events, camera 1's frame times and its true global frame starts."""
-    from flashsync.solve import Events
+    from flashsync.solve import Observations
 
     span = hours * 3_600_000.0
     tau = np.sort(rng.uniform(1_000.0, span - 1_000.0, n_flashes))
@@ -110,7 +110,7 @@ def drifting_observations(rng, rate_change_ppm_per_hour, n_flashes=120, hours=2.
         q += list(rows[seen] + rng.normal(0, 0.03 / row_time, seen.sum()))
         if index:
             starts_1 = (frames, starts)
-    return Events(np.array(camera), np.array(flash), np.array(t_frame), np.array(q)), starts_1
+    return Observations(np.array(camera), np.array(flash), np.array(t_frame), np.array(q)), starts_1
 
 
 def test_changing_clock_rate_gets_a_richer_drift_model():
@@ -145,3 +145,17 @@ def test_steady_clock_stays_affine():
 
     events, _ = drifting_observations(np.random.default_rng(9), 0.0)
     assert solve_with_drift_model(events, n_cameras=2).cameras[1].warp_ms.size == 0
+
+
+def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_columns():
+    from flashsync.robust import cauchy_fit
+
+    rng = np.random.default_rng(4)
+    x = np.linspace(-1.0, 1.0, 40)
+    design = np.column_stack([np.ones_like(x), x])
+    observed = 2.0 + 0.5 * x + rng.normal(0.0, 0.01, len(x))
+    observed[7] += 5.0
+    parameters, residual, scale = cauchy_fit(design, observed)
+    np.testing.assert_allclose(parameters, [2.0, 0.5], atol=0.01)
+    assert residual[7] > 4.9 and scale < 0.02
+    assert cauchy_fit(np.column_stack([x, 2 * x]), observed) is None

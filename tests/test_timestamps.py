@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from flashsync.errors import FlashsyncError
+from flashsync.io.timestamps import load_timestamps
 from flashsync.simulation.encode import write_video
-from flashsync.timestamps import csv_timestamps, rtp_timestamps, video_timestamps
+from flashsync.timestamps import rtp_timestamps, video_timestamps
 
 
 def frames(n):
@@ -37,17 +38,17 @@ def test_rtp_wraparound_is_unwrapped():
 def test_rtp_csv_and_step_backwards(tmp_path):
     good = tmp_path / "rtp.csv"
     good.write_text("rtp\n" + "\n".join(str((2**32 - 3600 + i * 3000) % 2**32) for i in range(5)))
-    np.testing.assert_allclose(csv_timestamps(good), np.arange(5) * 1000 / 30)
+    np.testing.assert_allclose(load_timestamps(good), np.arange(5) * 1000 / 30)
     bad = tmp_path / "back.csv"
     bad.write_text("rtp\n1000\n4600\n2000\n")
     with pytest.raises(FlashsyncError, match="not increasing at frame 2"):
-        csv_timestamps(bad)
+        load_timestamps(bad)
 
 
 def test_csv_timestamps_in_ms(tmp_path):
     path = tmp_path / "t.csv"
     path.write_text("frame,t_ms\n0,0.0\n1,33.4\n2,66.7\n")
-    np.testing.assert_allclose(csv_timestamps(path), [0.0, 33.4, 66.7])
+    np.testing.assert_allclose(load_timestamps(path), [0.0, 33.4, 66.7])
 
 
 @pytest.mark.parametrize(
@@ -62,7 +63,7 @@ def test_bad_timestamp_csv(tmp_path, content, message):
     path = tmp_path / "t.csv"
     path.write_text(content)
     with pytest.raises(FlashsyncError, match=message):
-        csv_timestamps(path)
+        load_timestamps(path)
 
 
 def test_not_a_video_and_missing_file(tmp_path):
@@ -72,3 +73,21 @@ def test_not_a_video_and_missing_file(tmp_path):
         video_timestamps(text)
     with pytest.raises(FlashsyncError, match="no such file"):
         video_timestamps(tmp_path / "missing.mp4")
+
+
+def test_frame_clock_behind_quantised_stamps_with_drops_and_its_parts():
+    """29.97 fps stamped on a 1 ms grid, two frames dropped: the clock finds the period and
+    the drops; each part switched off leaves what it explains."""
+    from flashsync.frame_clock import fit_frame_clock
+
+    period = 1000.0 / 29.97
+    slots = np.delete(np.arange(400), [100, 250])
+    true_ms = 5000.0 + slots * period
+    clock = fit_frame_clock(np.round(true_ms))
+    assert clock.steady and clock.dropped == 2 and clock.quantum_ms == 1.0
+    assert clock.period_ms == pytest.approx(period, abs=1e-4)
+    assert np.max(np.abs(clock.times_ms - true_ms)) < 0.05
+    index_only = fit_frame_clock(np.round(true_ms), count_gaps=False, smoothing=False)
+    assert not index_only.steady and index_only.missing == 0
+    median_step = fit_frame_clock(np.round(true_ms), least_squares=False, smoothing=False)
+    assert median_step.period_ms == median_step.median_step_ms == 33.0 and not median_step.steady

@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from flashsync.io import load_detections, load_ground_truth, load_homographies
 from flashsync.model import CameraClock, SyncModel
-from flashsync.simulation import load_ground_truth, preset, render_scenario
-from tracking_adapter.formats import load_homographies, read_detections
+from flashsync.simulation import preset, render_scenario
 from tracking_adapter.validate import format_report, image_to_plane, validate
 
 SPEED_MPS = 36.0
@@ -144,7 +144,7 @@ def true_model(truth, frame_times="frame_times_ms"):
 def test_simulated_puck_with_the_true_model(tiny):
     truth = load_ground_truth(tiny)
     model = true_model(truth)
-    detections = read_detections(tiny / "detections.csv")
+    detections = load_detections(tiny / "detections.csv")
     for name in truth.cameras:  # the model is the truth
         mine = detections[detections.camera == name]
         np.testing.assert_allclose(
@@ -169,14 +169,14 @@ def test_simulated_timing_error_shows_as_speed_times_error(tiny):
     model = true_model(truth)
     cam2 = model.camera("cam2")
     model.cameras["cam2"] = replace(cam2, beta_ms=cam2.beta_ms + 2.0)
-    report = validate(read_detections(tiny / "detections.csv"), model, load_homographies(tiny / "homographies.json"))
+    report = validate(load_detections(tiny / "detections.csv"), model, load_homographies(tiny / "homographies.json"))
     for pair in report.pairs:
         assert pair.stats["subframe"].median_m == pytest.approx(SPEED_MPS * 0.002, rel=0.15)
 
 
 def test_report_text(tiny):
     truth = load_ground_truth(tiny)
-    detections = read_detections(tiny / "detections.csv")
+    detections = load_detections(tiny / "detections.csv")
     report = validate(detections, true_model(truth, "stamps_ms"), load_homographies(tiny / "homographies.json"))
     text = format_report(report)
     for pair in report.pairs:

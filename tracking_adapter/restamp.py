@@ -3,8 +3,8 @@
 Every input row and column is kept, in order and unchanged, and new columns follow:
 
 ``t_global_ms``
-    End-of-exposure instant of the detection's row, reference clock, ms (DESIGN.md, time
-    convention); empty where the row cannot be stamped.
+    End-of-exposure instant of the detection's row, reference clock, ms
+    (docs/architecture.md, time convention); empty where the row cannot be stamped.
 ``t_global_std_ms``
     Its standard deviation from the solve's covariance, ms (only with ``with_std=True``).
 ``t_center_ms``
@@ -33,17 +33,17 @@ import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
 from flashsync.atomic import atomic_output
-from flashsync.errors import FlashsyncError
-from flashsync.model import SyncModel
-from tracking_adapter.formats import (
+from flashsync.errors import InputError
+from flashsync.io.detections import (
     REQUIRED_COLUMNS,
     detections_format,
-    first_line,
     iter_csv_blocks,
+    load_mot,
     read_csv_header,
-    read_mot,
     require_columns,
 )
+from flashsync.io.files import first_line
+from flashsync.model import SyncModel
 
 #: Why a row was not stamped, in the order the checks run (the first failing one is reported).
 REASONS = (
@@ -149,7 +149,7 @@ def restamp_file(
     CSV to CSV copies every input line byte for byte and appends the new values, so
     nothing is reformatted. CSV to Parquet stores the input columns as text, exactly as
     in the CSV. Parquet input keeps its column types. A MOTChallenge file (one camera,
-    read whole) becomes the table of :func:`~tracking_adapter.formats.read_mot`. The
+    read whole) becomes the table of :func:`~flashsync.io.detections.load_mot`. The
     output is written atomically: an interrupted run leaves no file behind.
 
     Parameters
@@ -179,12 +179,12 @@ def restamp_file(
     kind = detections_format(in_path, input_format)
     out_kind = detections_format(out_path)
     if camera is not None and kind != "mot":
-        raise FlashsyncError(
+        raise InputError(
             f"{in_path}: a camera name is only given for MOTChallenge files; "
             "the detections' camera column names the cameras"
         )
     if out_kind == "mot":
-        raise FlashsyncError(
+        raise InputError(
             f"{out_path}: re-stamped detections are written as .csv or .parquet; change the output extension"
         )
     exposures = _exposures(model, exposure_ms)
@@ -238,13 +238,11 @@ def _restamp_csv_text(
             try:
                 table = pacsv.read_csv(pa.BufferReader(block), **options)
             except pa.ArrowInvalid as error:
-                raise FlashsyncError(
+                raise InputError(
                     f"{in_path}: {first_line(error)}; every row needs the header's {len(header.names)} columns"
                 ) from None
             if table.num_rows != len(lines):
-                raise FlashsyncError(
-                    f"{in_path}: a quoted value spans several lines; remove the line breaks inside values"
-                )
+                raise InputError(f"{in_path}: a quoted value spans several lines; remove the line breaks inside values")
             columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std)
             _count(reasons, summary)
             texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string()) for name in names[:-1]]
@@ -263,7 +261,7 @@ def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
     ends = np.flatnonzero(data == ord("\n"))
     carriage = data[ends - 1] == ord("\r")
     if not np.all(carriage == (eol == b"\r\n")):
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: mixed line endings (\\n and \\r\\n); convert the file to one kind, e.g. with dos2unix"
         )
     offsets = np.concatenate([[0], ends + 1]).astype(np.int32)
@@ -305,7 +303,7 @@ def _restamp_batches(
                         pa.RecordBatch.from_arrays([*batch.columns, *new, _reason_texts(reasons)], schema=schema)
                     )
             except pa.ArrowInvalid as error:
-                raise FlashsyncError(f"{in_path}: {first_line(error)}; fix the file") from None
+                raise InputError(f"{in_path}: {first_line(error)}; fix the file") from None
 
 
 def _read_batches(
@@ -317,7 +315,7 @@ def _read_batches(
             parquet = pq.ParquetFile(path)
             return parquet.schema_arrow, parquet.iter_batches(batch_size=_BATCH_ROWS)
         if kind == "mot":
-            table = pa.Table.from_pandas(read_mot(path, camera), preserve_index=False)
+            table = pa.Table.from_pandas(load_mot(path, camera), preserve_index=False)
             return table.schema, iter(table.to_batches(max_chunksize=_BATCH_ROWS))
         header = read_csv_header(path)
         reader = pacsv.open_csv(
@@ -327,7 +325,7 @@ def _read_batches(
         )
         return reader.schema, reader
     except (OSError, pa.ArrowException) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
+        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
 
 
 def _stamp(
@@ -444,13 +442,14 @@ def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dic
     given = dict(exposure_ms or {})
     unknown = [name for name in given if name not in model.cameras]
     if unknown:
-        raise FlashsyncError(
-            f"exposure given for camera {', '.join(unknown)}, which the model "
-            f"does not have (it has {', '.join(model.cameras)}); fix the name"
+        raise InputError(
+            f"{', '.join(unknown)}: exposure given for a camera the model does not have "
+            f"(it has {', '.join(model.cameras)}); fix the name",
+            parameter="exposure_ms",
         )
     for name, value in given.items():
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
-            raise FlashsyncError(f"exposure of camera {name} is {value!r}; give a time >= 0 in ms")
+            raise InputError(f"exposure of camera {name} is {value!r}; give a time >= 0 in ms")
     return {name: given.get(name, clock.exposure_ms) for name, clock in model.cameras.items()}
 
 
@@ -467,6 +466,6 @@ def _new_columns(exposures: dict[str, float | None], with_std: bool) -> list[str
 def _check_free(columns: list, source: str | Path) -> None:
     taken = [name for name in NEW_COLUMNS if name in columns]
     if taken:
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: already has column {', '.join(taken)}; restamp the original detections or drop those columns"
         )

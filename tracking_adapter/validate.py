@@ -31,9 +31,16 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
+from flashsync.io.detections import require_columns
 from flashsync.model import CameraClock, SyncModel
-from tracking_adapter.formats import require_columns
+from tracking_adapter.interpolate import (
+    AFTER_TRACK,
+    BEFORE_TRACK,
+    GAP_OVER_LIMIT,
+    INTERPOLATED,
+    default_gap_ms,
+    interpolate_track,
+)
 from tracking_adapter.restamp import restamp
 
 TIME_MODELS = {
@@ -41,7 +48,6 @@ TIME_MODELS = {
     "frame": "frame-level (mid row)",
     "no_drift": "no drift (alpha = 1)",
 }
-DEFAULT_GAP_FRAMES = 2.5
 TRIPLE_COLUMNS = ["camera_a", "camera_b", "object", "t_global_ms", "x_b", "y_b", "x_a", "y_a", "error_m"]
 OBJECT_COLUMNS = ("object", "id")
 
@@ -180,7 +186,7 @@ def validate(
 
     Examples
     --------
-    >>> report = validate(read_detections("puck.csv"), load_model("sync.json"),
+    >>> report = validate(load_detections("puck.csv"), load_model("sync.json"),
     ...                   load_homographies("H.json"))               # doctest: +SKIP
     >>> print(format_report(report))                                  # doctest: +SKIP
     """
@@ -223,7 +229,7 @@ def validate(
     object_names = pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"])
     triples = []
     for a in used:
-        gap = max_gap_ms if max_gap_ms is not None else _default_gap_ms(model.camera(a))
+        gap = max_gap_ms if max_gap_ms is not None else default_gap_ms(model.camera(a))
         in_a = names == a
         for b in used:
             if a == b:
@@ -316,22 +322,15 @@ def _pair_stats(
     errors, skipped, found = [], {}, []
     for obj in np.unique(object_b):
         in_a, in_b = object_a == obj, object_b == obj
-        order = np.argsort(t_a[in_a], kind="stable")
-        times, points = t_a[in_a][order], plane_a[in_a][order]
-        if not len(times):
+        if not in_a.any():
             _add(skipped, "object not seen by A", int(in_b.sum()))
             continue
-        instants = t_b[in_b]
-        after = np.searchsorted(times, instants, side="right")
-        inside = (after > 0) & (after < len(times))
-        _add(skipped, "outside A's track", int((~inside).sum()))
-        after, instants, observed = after[inside], instants[inside], plane_b[in_b][inside]
-        gap = times[after] - times[after - 1]
-        close = gap <= max_gap_ms
-        _add(skipped, "A's gap over the limit", int((~close).sum()))
-        after, instants, observed, gap = after[close], instants[close], observed[close], gap[close]
-        weight = ((instants - times[after - 1]) / gap)[:, None]
-        interpolated = points[after - 1] + weight * (points[after] - points[after - 1])
+        instants, observed = t_b[in_b], plane_b[in_b]
+        sample = interpolate_track(t_a[in_a], plane_a[in_a], instants, max_gap_ms)
+        _add(skipped, "outside A's track", int(np.isin(sample.status, (BEFORE_TRACK, AFTER_TRACK)).sum()))
+        _add(skipped, "A's gap over the limit", int((sample.status == GAP_OVER_LIMIT).sum()))
+        kept = sample.status == INTERPOLATED
+        instants, observed, interpolated = instants[kept], observed[kept], sample.values[kept]
         errors.append(np.linalg.norm(interpolated - observed, axis=1))
         found.append(np.column_stack([np.full(len(instants), obj), instants, observed, interpolated]))
     errors = np.concatenate(errors) if errors else np.empty(0)
@@ -341,15 +340,6 @@ def _pair_stats(
     return ErrorStats(
         len(errors), float(np.median(errors)), float(np.percentile(errors, 95)), float(errors.max()), skipped
     ), found
-
-
-def _default_gap_ms(clock: CameraClock) -> float:
-    """``DEFAULT_GAP_FRAMES`` frame periods of a camera, ms (reference clock)."""
-    if clock.n_frames < 2:
-        raise FlashsyncError(
-            f"camera {clock.name} has {clock.n_frames} frame in the model; give --max-gap-ms or sync a longer video"
-        )
-    return DEFAULT_GAP_FRAMES * clock.alpha * float(np.median(np.diff(clock.frame_times_ms)))
 
 
 def _add(counts: dict[str, int], reason: str, count: int) -> None:

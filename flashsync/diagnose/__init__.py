@@ -11,8 +11,8 @@ Examples
 'drift'
 """
 
-from flashsync.diagnose.effects import CATALOGUE, Effect
+from flashsync.diagnose.effects import CATALOGUE, CameraEstimate, Effect
 from flashsync.diagnose.report import format_diagnosis
 from flashsync.diagnose.workflow import Diagnosis, Step, diagnose
 
-__all__ = ["CATALOGUE", "Diagnosis", "Effect", "Step", "diagnose", "format_diagnosis"]
+__all__ = ["CATALOGUE", "CameraEstimate", "Diagnosis", "Effect", "Step", "diagnose", "format_diagnosis"]

@@ -8,8 +8,8 @@ in frame ``f`` at readout row ``q`` as::
 ``P_c`` is the camera's median frame step (its nominal frame period), ``H_c`` its image
 height, ``tau_k`` the flash's global time, ``beta_c`` the camera's shift (0 for the
 reference) and ``E`` one exposure shared by all cameras (a trailing edge is the row whose
-exposure *starts* at the flash, DESIGN.md). Its frame clock ``t0_c + f * P_c`` also predicts
-the stamps.
+exposure *starts* at the flash, docs/architecture.md). Its frame clock ``t0_c + f * P_c``
+also predicts the stamps.
 
 An effect either adds a column to this linear model for one camera (``t`` is the model's
 frame time minus the camera's mid time, ``q`` the readout row) or changes how the model's
@@ -22,8 +22,8 @@ effect          residual structure it explains              how the model change
 dropped_frames  steps of whole frame periods at the frame   frame slots counted from the stamp
                 gaps, in stamps and edges                   gaps instead of the frame index
 frame_clock     stamps scattered about a steady clock (a    frame clock offset and period fitted
-                sawtooth locked to the stamp grid, or       to all stamps (least squares) instead
-                jitter) and the period error that leaves    of the median step
+                sawtooth locked to the stamp grid, or       to the stamps (robust least squares)
+                jitter) and the period error that leaves    instead of the median step
                 in the median step
 flipped         band edges on the wrong side: a trend       readout rows reversed, leading and
                 against the row of twice the time per row   trailing edges swapped
@@ -36,6 +36,10 @@ exposure        a constant gap between a camera's trailing  column ``[trailing]`
                 and leading edges' residuals                exposure minus the reference's, ms
 ==============  ==========================================  ======================================
 
+``dropped_frames`` and ``frame_clock`` switch on parts of the pipeline's frame clock
+(:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
+fitted model's :class:`CameraEstimate` of the camera, never from the fit itself.
+
 Flash decay is not in the catalogue: the detector marks each edge at half of the band's
 own rise, the same instant of the flash in every camera whatever its decay, so the decay
 leaves no event residual, and the detections keep no band profiles to compare shapes with.
@@ -45,12 +49,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from flashsync.diagnose.fit import Fit
 
 DROPPED_FRAMES = "dropped_frames"
 FRAME_CLOCK = "frame_clock"
@@ -89,6 +89,53 @@ class Features:
 
 
 @dataclass(frozen=True)
+class CameraEstimate:
+    """One camera under a fitted model, in plain numbers.
+
+    Attributes
+    ----------
+    camera : str
+    reference : bool
+        The reference camera.
+    flipped : bool
+        Reads bottom-up under the model.
+    frame_period_ms, median_step_ms : float
+        The model's frame period and the camera's median stamp step, ms.
+    missing_frames : int
+        Frame slots without a frame under the model.
+    stamp_rms_ms : float
+        RMS of the stamps about the model's frame clock, ms.
+    drift_ppm, drift_rate_ppm_per_s : float
+        Clock drift at mid time and its change.
+    shift_ms : float
+    row_time_ms, nominal_row_time_ms : float
+        Time per row under the model and frame period / height, ms.
+    exposure_ms : float
+    effects : list of str
+        The effects the model has on this camera.
+    """
+
+    camera: str
+    reference: bool
+    flipped: bool
+    frame_period_ms: float
+    median_step_ms: float
+    missing_frames: int
+    stamp_rms_ms: float
+    drift_ppm: float
+    drift_rate_ppm_per_s: float
+    shift_ms: float
+    row_time_ms: float
+    nominal_row_time_ms: float
+    exposure_ms: float
+    effects: list[str]
+
+    @property
+    def readout(self) -> str:
+        return "bottom-up" if self.flipped else "top-down"
+
+
+@dataclass(frozen=True)
 class Effect:
     """One effect of the catalogue.
 
@@ -105,7 +152,9 @@ class Effect:
     scope : str
         :data:`EVERY_CAMERA` or :data:`OTHER_CAMERAS`.
     describe : callable
-        ``describe(fit, camera)``: the effect's estimate in a fitted model, one phrase.
+        ``describe(camera, reference)``: what the effect came out as on a camera of a fitted
+        model, one phrase, from the :class:`CameraEstimate` of that camera and of the
+        reference.
     column : callable or None
         ``column(features)``: the design column it adds for a camera (before restricting it
         to that camera's edges), scaled so that its coefficient is the parameter; None for
@@ -119,46 +168,41 @@ class Effect:
     explains: str
     changes: str
     scope: str
-    describe: Callable[[Fit, int], str]
+    describe: Callable[[CameraEstimate, CameraEstimate], str]
     column: Callable[[Features], np.ndarray] | None = None
     implies: tuple[str, ...] = ()
 
 
-def _describe_drops(fit: Fit, camera: int) -> str:
-    missing = fit.clocks[camera].missing
+def _describe_drops(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    missing = camera.missing_frames
     return f"{missing} missing frame{'s' if missing != 1 else ''} (stamp gaps of whole frame periods)"
 
 
-def _describe_frame_clock(fit: Fit, camera: int) -> str:
-    clock = fit.clocks[camera]
+def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> str:
     return (
-        f"frame period {clock.period_ms:.4f} ms (median step {clock.median_step_ms:.4f}), "
-        f"stamps scatter {fit.stamp_rms_ms[camera]:.3f} ms RMS about it"
+        f"frame period {camera.frame_period_ms:.4f} ms (median step {camera.median_step_ms:.4f}), "
+        f"stamps scatter {camera.stamp_rms_ms:.3f} ms RMS about it"
     )
 
 
-def _describe_flip(fit: Fit, camera: int) -> str:
-    return "reads bottom-up" if fit.flipped[camera] else "reads top-down"
+def _describe_flip(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"reads {camera.readout}"
 
 
-def _describe_row_time(fit: Fit, camera: int) -> str:
-    nominal = fit.nominal_row_time_ms(camera)
-    return f"time per row {nominal + fit.coefficient(ROW_TIME, camera):.5f} ms (nominal {nominal:.5f})"
+def _describe_row_time(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"time per row {camera.row_time_ms:.5f} ms (nominal {camera.nominal_row_time_ms:.5f})"
 
 
-def _describe_drift(fit: Fit, camera: int) -> str:
-    return f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm"
+def _describe_drift(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"drift {camera.drift_ppm:.2f} ppm"
 
 
-def _describe_drift_rate(fit: Fit, camera: int) -> str:
-    return (
-        f"drift {1e6 * fit.coefficient(DRIFT, camera):.2f} ppm at mid time, changing "
-        f"{2e9 * fit.coefficient(DRIFT_RATE, camera):.3f} ppm/s"
-    )
+def _describe_drift_rate(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"drift {camera.drift_ppm:.2f} ppm at mid time, changing {camera.drift_rate_ppm_per_s:.3f} ppm/s"
 
 
-def _describe_exposure(fit: Fit, camera: int) -> str:
-    return f"exposure {fit.exposure_ms(camera):.3f} ms vs {fit.exposure_ms(fit.reference):.3f} ms on the reference"
+def _describe_exposure(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"exposure {camera.exposure_ms:.3f} ms vs {reference.exposure_ms:.3f} ms on the reference"
 
 
 CATALOGUE: dict[str, Effect] = {
@@ -177,7 +221,7 @@ CATALOGUE: dict[str, Effect] = {
             "timestamp quantisation / jitter",
             "stamps scattered about a steady clock (a sawtooth locked to the stamp grid, or "
             "jitter) and the period error that leaves in the median step",
-            "frame clock offset and period from a least-squares fit to all stamps instead of the median step",
+            "frame clock offset and period from a robust least-squares fit to the stamps instead of the median step",
             EVERY_CAMERA,
             _describe_frame_clock,
         ),

@@ -21,10 +21,10 @@ from itertools import combinations
 import numpy as np
 
 from flashsync.detect import CameraDetection
-from flashsync.diagnose.effects import CATALOGUE, DRIFT, DRIFT_RATE, OTHER_CAMERAS, ROW_TIME
-from flashsync.diagnose.fit import Fit, Term, fit_model
+from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
+from flashsync.diagnose.effects import CATALOGUE, OTHER_CAMERAS
 from flashsync.diagnose.measure import Measurement, measure
-from flashsync.errors import FlashsyncError
+from flashsync.errors import NotEnoughDataError
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -170,7 +170,7 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
 
     Raises
     ------
-    FlashsyncError
+    NotEnoughDataError
         Fewer than two cameras sharing flashes, or too few flashes to fit the plain model.
 
     Examples
@@ -179,9 +179,9 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     >>> print(format_diagnosis(d))                               # doctest: +SKIP
     """
     measurement = measure(detections, reference)
-    plain = fit_model(measurement, frozenset())
+    plain = fit_candidate(measurement, frozenset())
     if plain is None:
-        raise FlashsyncError(
+        raise NotEnoughDataError(
             f"{measurement.n_flashes} flashes seen by several cameras cannot determine even the "
             "plain model; record more flashes"
         )
@@ -200,7 +200,9 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     return _diagnosis(measurement, fits, steps)
 
 
-def _best_addition(measurement: Measurement, current: Fit, removed: set[Term]) -> tuple[tuple[Term, ...], Fit] | None:
+def _best_addition(
+    measurement: Measurement, current: Candidate, removed: set[Term]
+) -> tuple[tuple[Term, ...], Candidate] | None:
     """The effect, else the pair of effects on one camera, whose model has the lowest BIC
     among those that lower it by more than :data:`THRESHOLD` and shrink the RMS."""
     singles = _candidates(measurement, current.terms | removed)
@@ -212,7 +214,7 @@ def _best_addition(measurement: Measurement, current: Fit, removed: set[Term]) -
     for groups in ([(term,) for term in singles], pairs):
         best = None
         for group in groups:
-            trial = fit_model(measurement, current.terms.union(*map(_with_implied, group)))
+            trial = fit_candidate(measurement, current.terms.union(*map(_with_implied, group)))
             if (
                 trial is not None
                 and current.bic - trial.bic > THRESHOLD
@@ -225,17 +227,18 @@ def _best_addition(measurement: Measurement, current: Fit, removed: set[Term]) -
     return None
 
 
-def _step(terms: tuple[Term, ...], without: Fit, with_terms: Fit, removed: bool) -> Step:
+def _step(terms: tuple[Term, ...], without: Candidate, with_terms: Candidate, removed: bool) -> Step:
     """The record of adding ``terms`` (``without`` -> ``with_terms``) or of taking one out."""
     effects = [CATALOGUE[term.effect] for term in terms]
     before, after = (with_terms, without) if removed else (without, with_terms)
     camera = terms[0].camera
+    estimates = with_terms.estimates()
     return Step(
         "+".join(e.name for e in effects),
         " + ".join(e.title for e in effects),
-        with_terms.measurement.cameras[camera].name,
+        estimates[camera].camera,
         without.bic - with_terms.bic,
-        "; ".join(e.describe(with_terms, camera) for e in effects),
+        "; ".join(e.describe(estimates[camera], estimates[with_terms.reference]) for e in effects),
         before.rms_ms,
         after.rms_ms,
         before.stamp_rms_ms[camera],
@@ -244,13 +247,13 @@ def _step(terms: tuple[Term, ...], without: Fit, with_terms: Fit, removed: bool)
     )
 
 
-def _weakest(measurement: Measurement, current: Fit, newest: tuple[Term, ...]) -> tuple[Term, Fit] | None:
+def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, ...]) -> tuple[Term, Candidate] | None:
     """The earlier effect with the least evidence left, and the model without it, if that
     evidence is :data:`THRESHOLD` or less; effects another one implies stay."""
     implied = {t for term in current.terms for t in _with_implied(term) if t != term}
     weakest = None
     for term in sorted(current.terms - implied - frozenset().union(*map(_with_implied, newest))):
-        without = fit_model(measurement, current.terms - {term})
+        without = fit_candidate(measurement, current.terms - {term})
         if (
             without is not None
             and without.bic - current.bic <= THRESHOLD
@@ -274,14 +277,14 @@ def _with_implied(term: Term) -> frozenset[Term]:
     return frozenset([term] + [Term(name, term.camera) for name in CATALOGUE[term.effect].implies])
 
 
-def _diagnosis(measurement: Measurement, fits: list[Fit], steps: list[Step]) -> Diagnosis:
+def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step]) -> Diagnosis:
     plain, final = fits[0], fits[-1]
     n_edges = len(measurement.edges)
     dof = max(n_edges - measurement.n_flashes - len(final.coefficients), 1)
     expected = measurement.noise_ms * np.sqrt(dof / n_edges)
     return Diagnosis(
-        cameras=[c.name for c in measurement.cameras],
-        reference=measurement.cameras[measurement.reference].name,
+        cameras=[c.camera for c in measurement.cameras],
+        reference=measurement.cameras[measurement.reference].camera,
         n_flashes=measurement.n_flashes,
         n_edges=n_edges,
         steps=steps,
@@ -296,41 +299,39 @@ def _diagnosis(measurement: Measurement, fits: list[Fit], steps: list[Step]) -> 
     )
 
 
-def _edge_residuals(measurement: Measurement, fits: list[Fit]) -> dict:
+def _edge_residuals(measurement: Measurement, fits: list[Candidate]) -> dict:
     """Every edge's residual (ms) under the plain model and after each step, with its
     camera, flash and kind: what ``flashsync diagnose --rrd`` plots."""
     edges = measurement.edges
     return {
-        "camera": [measurement.cameras[c].name for c in edges.camera],
+        "camera": [measurement.cameras[c].camera for c in edges.camera],
         "flash": edges.flash.tolist(),
         "trailing": edges.trailing.tolist(),
         "residual_ms": [fit.residual_ms.tolist() for fit in fits],
     }
 
 
-def _camera_models(fit: Fit) -> list[dict]:
+def _camera_models(fit: Candidate) -> list[dict]:
     """The fitted model per camera, in plain numbers."""
-    models = []
-    for c, (camera, clock) in enumerate(zip(fit.measurement.cameras, fit.clocks)):
-        models.append(
-            {
-                "camera": camera.name,
-                "reference": c == fit.reference,
-                "readout": "bottom-up" if fit.flipped[c] else "top-down",
-                "frame_period_ms": clock.period_ms,
-                "missing_frames": clock.missing,
-                "drift_ppm": 1e6 * fit.coefficient(DRIFT, c),
-                "drift_rate_ppm_per_s": 2e9 * fit.coefficient(DRIFT_RATE, c),
-                "shift_ms": fit.coefficient("shift", c),
-                "row_time_ms": fit.nominal_row_time_ms(c) + fit.coefficient(ROW_TIME, c),
-                "exposure_ms": fit.exposure_ms(c),
-                "effects": sorted(t.effect for t in fit.terms if t.camera == c),
-            }
-        )
-    return models
+    return [
+        {
+            "camera": e.camera,
+            "reference": e.reference,
+            "readout": e.readout,
+            "frame_period_ms": e.frame_period_ms,
+            "missing_frames": e.missing_frames,
+            "drift_ppm": e.drift_ppm,
+            "drift_rate_ppm_per_s": e.drift_rate_ppm_per_s,
+            "shift_ms": e.shift_ms,
+            "row_time_ms": e.row_time_ms,
+            "exposure_ms": e.exposure_ms,
+            "effects": e.effects,
+        }
+        for e in fit.estimates()
+    ]
 
 
-def residual_structure(fit: Fit) -> list[dict]:
+def residual_structure(fit: Candidate) -> list[dict]:
     """Per camera: what is left in the edge residuals and the stamps of a fitted model.
 
     Returns
@@ -345,10 +346,10 @@ def residual_structure(fit: Fit) -> list[dict]:
     for c, (camera, clock) in enumerate(zip(fit.measurement.cameras, fit.clocks)):
         mine = fit.features.camera == c
         residual, trailing = fit.residual_ms[mine], fit.features.trailing[mine]
-        steps = np.diff(camera.stamps_ms)
+        steps = np.diff(camera.frame_times_ms)
         structure.append(
             {
-                "camera": camera.name,
+                "camera": camera.camera,
                 "edges": int(mine.sum()),
                 "rms_ms": float(np.sqrt(np.mean(residual**2))),
                 "time_slope_ppm": 1e6 * _slope(fit.features.t_ms[mine], residual),

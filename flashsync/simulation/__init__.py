@@ -2,7 +2,7 @@
 
 Render a named preset or a custom scenario into real H.264 files (MP4 with 90 kHz
 stamps, MKV with 1 ms stamps), with ``truth.json``, ``detections.csv`` and
-``homographies.json`` beside them.
+``homographies.json`` beside them (scenario files and ``truth.json``: :mod:`flashsync.io`).
 
 Examples
 --------
@@ -13,8 +13,8 @@ Examples
 """
 
 from flashsync.simulation.render import render_scenario
-from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, load_scenario, preset
-from flashsync.simulation.truth import GroundTruth, load_ground_truth
+from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, preset
+from flashsync.simulation.truth import GroundTruth
 
 __all__ = [
     "PRESETS",
@@ -23,8 +23,6 @@ __all__ = [
     "GroundTruth",
     "LightSwitch",
     "Scenario",
-    "load_ground_truth",
-    "load_scenario",
     "preset",
     "render_scenario",
 ]

@@ -35,6 +35,7 @@ from flashsync.simulation.scene import (
     camera_background,
     camera_homography,
     make_scene,
+    rink_outline_m,
     rink_to_image,
 )
 from flashsync.simulation.sensor import sensor_response, shading
@@ -331,7 +332,8 @@ def render_scenario(
     Writes ``<camera>.mp4`` or ``<camera>.mkv`` per camera, ``truth.json``,
     ``detections.csv`` (columns ``camera,frame,x,y,object``: the puck's centroid in each
     frame where it is in view, px) and ``homographies.json`` (``{camera: 3x3 image px ->
-    rink metres}``) into `out_dir`, each atomically.
+    rink metres}`` and ``"plane": {"outline_m": [[x, y], ...]}``, the edge of the ice)
+    into `out_dir`, each atomically.
 
     Parameters
     ----------
@@ -396,6 +398,7 @@ def render_scenario(
     writer.writerow(["camera", "frame", "x", "y", "object"])
     writer.writerows(detections)
     write_text(out / "detections.csv", buf.getvalue())
+    homographies["plane"] = {"outline_m": rink_outline_m().round(4).tolist()}
     write_text(out / "homographies.json", json.dumps(homographies, indent=1))
     truth.save(out / "truth.json")
     return truth

@@ -1,4 +1,4 @@
-"""Scenario records, named presets and loading a custom scenario from YAML or JSON.
+"""Scenario records and named presets (scenario files: :mod:`flashsync.io.scenario`).
 
 A scenario is everything the simulator needs to render a set of videos: the cameras
 (sensor geometry, clock, container, pose), the flashes and light switches in world
@@ -28,10 +28,8 @@ import dataclasses
 import json
 import re
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
-import yaml
 
 from flashsync.errors import FlashsyncError
 from flashsync.simulation.scene import rink_to_image
@@ -443,141 +441,7 @@ def check_scenario(scenario: Scenario, source: str) -> None:
             raise FlashsyncError(f"{source}: {err}") from None
 
 
-def _build(cls: type, data: dict, where: str, source: str) -> object:
-    """Instantiate dataclass `cls` from dict `data`, refusing unknown keys."""
-    if not isinstance(data, dict):
-        raise FlashsyncError(f"{source}: {where} must be a mapping of field names to values")
-    names = [f.name for f in dataclasses.fields(cls)]
-    for key in data:
-        if key not in names:
-            raise FlashsyncError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
-    try:
-        return cls(**data)
-    except TypeError as err:
-        raise FlashsyncError(f"{source}: {where}: {err}") from None
-
-
-def _camera(data: dict, where: str, source: str) -> CameraSpec:
-    cam = _build(CameraSpec, data, where, source)
-    return dataclasses.replace(
-        cam,
-        dropped_frames=tuple(int(f) for f in cam.dropped_frames),
-        frame_gaps=tuple((int(g[0]), int(g[1])) for g in cam.frame_gaps),
-        stamp_rate_changes=tuple((int(s[0]), float(s[1])) for s in cam.stamp_rate_changes),
-        missed_flashes=tuple(int(k) for k in cam.missed_flashes),
-        gain_steps=tuple(tuple(float(v) for v in s) for s in cam.gain_steps),
-        position_m=tuple(float(v) for v in cam.position_m),
-        look_at_m=tuple(float(v) for v in cam.look_at_m),
-    )
-
-
-def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
-    """Build a `Scenario` from a plain dict with the dataclasses' field names.
-
-    A ``preset`` key starts from that preset (see `preset`) and the other top-level keys
-    replace its fields; ``cameras``, ``flashes`` and ``switches`` are replaced whole.
-
-    Parameters
-    ----------
-    data : dict
-        Scenario fields; cameras, flashes and switches are lists of dicts.
-    source : str
-        Name used in error messages (the file).
-
-    Returns
-    -------
-    Scenario
-
-    Raises
-    ------
-    FlashsyncError
-        Unknown keys, wrong types or values that cannot be rendered.
-    """
-    if not isinstance(data, dict):
-        raise FlashsyncError(f"{source}: the scenario must be a mapping of field names to values")
-    data = dict(data)
-    base = None
-    if "preset" in data:
-        base = preset(data.pop("preset"))
-        data.setdefault("name", base.name)
-    names = [f.name for f in dataclasses.fields(Scenario)]
-    for key in data:
-        if key not in names:
-            raise FlashsyncError(
-                f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}"
-            )
-    if "cameras" in data:
-        cams = data["cameras"]
-        if not isinstance(cams, list):
-            raise FlashsyncError(f"{source}: 'cameras' must be a list")
-        data["cameras"] = tuple(_camera(c, f"cameras[{i}]", source) for i, c in enumerate(cams))
-    for key, cls in (("flashes", FlashSpec), ("switches", LightSwitch)):
-        if key in data:
-            items = data[key]
-            if not isinstance(items, list):
-                raise FlashsyncError(f"{source}: '{key}' must be a list")
-            data[key] = tuple(_build(cls, d, f"{key}[{i}]", source) for i, d in enumerate(items))
-    if "player_radius_m" in data:
-        data["player_radius_m"] = tuple(data["player_radius_m"])
-    if base is not None:
-        scenario = dataclasses.replace(base, **data)
-    else:
-        if "name" not in data or "cameras" not in data:
-            raise FlashsyncError(f"{source}: a scenario needs 'name' and 'cameras' (or a 'preset')")
-        scenario = _build(Scenario, data, "the scenario", source)
-    try:
-        check_scenario(scenario, source)
-    except TypeError as err:
-        raise FlashsyncError(f"{source}: a value has the wrong type ({err})") from None
-    return scenario
-
-
-def load_scenario(path: str | Path) -> Scenario:
-    """Load a scenario from a YAML (.yaml, .yml) or JSON (.json) file, or a preset by name.
-
-    Parameters
-    ----------
-    path : str or Path
-        Scenario file: a mapping with the `Scenario` field names, optionally ``preset``;
-        or the name of a preset (``sample``, ``tiny``, ``paper``) when no such file exists.
-
-    Returns
-    -------
-    Scenario
-
-    Examples
-    --------
-    A file holding ``{preset: tiny, seed: 7, duration_ms: 1500}`` gives the tiny
-    preset with another seed and 1.5 s of video.
-
-    >>> load_scenario("tiny").name
-    'tiny'
-    """
-    path = Path(path)
-    if str(path) in _PRESETS and not path.is_file():
-        return preset(str(path))
-    if not path.is_file():
-        raise FlashsyncError(f"{path}: no such scenario file, nor a preset ({', '.join(PRESETS)})")
-    suffix = path.suffix.lower()
-    if suffix not in (".yaml", ".yml", ".json"):
-        raise FlashsyncError(f"{path}: unknown scenario format '{suffix}'; use .yaml, .yml or .json")
-    text = path.read_text(encoding="utf-8")
-    try:
-        data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as err:
-        raise FlashsyncError(f"{path}: not valid {suffix[1:].upper()}: {str(err).splitlines()[0]}") from None
-    return scenario_from_dict(data, str(path))
-
-
-def _flash_schedule(
-    rng: np.random.Generator,
-    start_ms: float,
-    stop_ms: float,
-    count: int,
-    min_gap_ms: float,
-    strengths: tuple = (0.35, 0.7),
-    decay_ms: float = 0.5,
-) -> tuple[FlashSpec, ...]:
+def _flash_schedule(rng, start_ms, stop_ms, count, min_gap_ms, strengths=(0.35, 0.7), decay_ms=0.5):
     """Up to `count` flashes at irregular instants in [start_ms, stop_ms], `min_gap_ms` apart or more."""
     count = max(1, min(count, 1 + int((stop_ms - start_ms) // min_gap_ms)))
     slack = max(stop_ms - start_ms - (count - 1) * min_gap_ms, 0.0)

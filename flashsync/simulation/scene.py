@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
 RINK_LENGTH_M = 60.0
 RINK_WIDTH_M = 30.0
+RINK_CORNER_RADIUS_M = 8.5
 TEXTURE_PX_PER_M = 20.0
 TEXTURE_MARGIN_M = 20.0
 _FAR = 28.0  # reflectance of the unlit upper stands beyond the texture, DN
@@ -187,7 +188,7 @@ def make_texture(
     img = cv2.resize(seats, (w, h), interpolation=cv2.INTER_NEAREST)
 
     # Boards with advertising panels, then the ice inside the rounded rectangle.
-    corner = ln(8.5)
+    corner = ln(RINK_CORNER_RADIUS_M)
     x0, y0 = px(-1.2, -1.2)
     x1, y1 = px(RINK_LENGTH_M + 1.2, RINK_WIDTH_M + 1.2)
     cv2.rectangle(img, (x0, y0), (x1, y1), (60, 60, 60), -1)
@@ -239,6 +240,28 @@ def make_texture(
     inside = mask[..., None].astype(np.float32) / 255.0
     img = (ice * inside + img * (1.0 - inside)).astype(np.uint8)
     return cv2.GaussianBlur(img, (0, 0), 0.7)
+
+
+def rink_outline_m(points_per_corner: int = 12) -> np.ndarray:
+    """The edge of the ice: a 60 x 30 m rectangle from the origin with rounded corners.
+
+    Returns
+    -------
+    ndarray, shape (4 * points_per_corner + 1, 2)
+        Closed polyline (first point repeated last), rink metres.
+    """
+    r = RINK_CORNER_RADIUS_M
+    arc = np.linspace(0.0, np.pi / 2, points_per_corner)
+    corners = (
+        ((RINK_LENGTH_M - r, RINK_WIDTH_M - r), 0.0),
+        ((r, RINK_WIDTH_M - r), np.pi / 2),
+        ((r, r), np.pi),
+        ((RINK_LENGTH_M - r, r), 1.5 * np.pi),
+    )
+    outline = np.concatenate(
+        [np.stack([cx + r * np.cos(start + arc), cy + r * np.sin(start + arc)], axis=1) for (cx, cy), start in corners]
+    )
+    return np.concatenate([outline, outline[:1]])
 
 
 def make_scene(

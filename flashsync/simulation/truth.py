@@ -16,19 +16,15 @@ where ``t_f`` is the true camera time of frame ``f`` and ``q`` the readout row
 
 from __future__ import annotations
 
-import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from flashsync.atomic import write_text
 from flashsync.errors import FlashsyncError
 from flashsync.simulation.light import half_light_ms
 from flashsync.simulation.scenario import CameraSpec, Scenario, clock_world_ms
-
-FORMAT = "flashsync-truth"
-VERSION = 1
+from flashsync.simulation.scene import make_scene
 
 
 @dataclass(frozen=True)
@@ -221,21 +217,11 @@ class GroundTruth:
         t = np.asarray(cam.frame_times_ms)[np.asarray(frame)] + (cam.r0 + q) * cam.sensor_row_ms
         return self.global_from_world_ms(cam.world_ms(t))
 
-    def to_dict(self) -> dict:
-        """Plain dict as stored in ``truth.json``."""
-        return {
-            "format": FORMAT,
-            "version": VERSION,
-            "reference": self.reference,
-            "cameras": {n: asdict(c) for n, c in self.cameras.items()},
-            "flashes": self.flashes,
-            "switches": self.switches,
-            "scenario": self.scenario,
-        }
-
     def save(self, path: str | Path) -> None:
-        """Write ``truth.json`` atomically."""
-        write_text(path, json.dumps(self.to_dict(), indent=1))
+        """Write ``truth.json`` atomically (:func:`flashsync.io.truth.save_ground_truth`)."""
+        from flashsync.io.truth import save_ground_truth  # it reads these records: imported late
+
+        save_ground_truth(self, path)
 
 
 def ground_truth(scenario: Scenario, cameras: list[CameraTruth]) -> GroundTruth:
@@ -274,35 +260,30 @@ def ground_truth(scenario: Scenario, cameras: list[CameraTruth]) -> GroundTruth:
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
 
 
-def load_ground_truth(path: str | Path) -> GroundTruth:
-    """Read a ``truth.json`` written by `render_scenario`.
+def puck_image_px(truth: GroundTruth, homography: np.ndarray, t_global_ms: np.ndarray) -> np.ndarray:
+    """Where the scenario's puck is in a camera's image at instants of the true global
+    clock: its rink position then, through the inverse of the camera's image -> rink
+    homography (``homographies.json``).
 
     Parameters
     ----------
-    path : str or Path
-        The file, or the folder holding ``truth.json``.
+    truth : GroundTruth
+    homography : array of shape (3, 3)
+        The camera's image px -> rink m.
+    t_global_ms : ndarray, shape (n,)
+        Instants, true global clock, ms.
 
     Returns
     -------
-    GroundTruth
+    ndarray, shape (n, 2)
+        Image x (column) and stored-image row, px.
     """
-    path = Path(path)
-    if path.is_dir():
-        path = path / "truth.json"
-    if not path.is_file():
-        raise FlashsyncError(f"{path}: no such ground-truth file; render a scenario first")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as err:
-        raise FlashsyncError(f"{path}: not valid JSON ({err})") from None
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise FlashsyncError(f"{path}: not a flashsync ground-truth file")
-    if data.get("version") != VERSION:
-        raise FlashsyncError(
-            f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})"
-        )
-    cameras = {}
-    for name, c in data["cameras"].items():
-        c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})
-        cameras[name] = CameraTruth(**c)
-    return GroundTruth(data["reference"], cameras, data["flashes"], data["switches"], data["scenario"])
+    ref = truth.cameras[truth.reference]
+    world = (np.asarray(t_global_ms, dtype=float) + ref.r0 * ref.sensor_row_ms) * (
+        1.0 + ref.drift_ppm * 1e-6
+    ) + ref.offset_ms
+    scenario = truth.scenario
+    puck = make_scene(scenario["seed"], scenario["n_players"], scenario["puck_speed_mps"]).puck
+    rink = puck.position(world)
+    image = np.linalg.inv(np.asarray(homography, dtype=float)) @ np.vstack([rink.T, np.ones(len(rink))])
+    return (image[:2] / image[2]).T

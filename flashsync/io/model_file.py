@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from flashsync.atomic import write_text
-from flashsync.errors import FlashsyncError
+from flashsync.errors import ModelFileError
 from flashsync.model import CameraClock, SyncModel
 
 FORMAT = "flashsync.sync"
@@ -39,17 +39,15 @@ def load_model(path: str | Path) -> SyncModel:
     """Read a model written by :func:`save_model`; a clear error for anything else."""
     path = Path(path)
     if not path.is_file():
-        raise FlashsyncError(
-            f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the model with --model"
-        )
+        raise ModelFileError(f"{path}: no such model file; synchronise the videos first")
     try:
         document = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise FlashsyncError(f"{path}: not a flashsync model file ({error})") from None
+        raise ModelFileError(f"{path}: not a flashsync model file ({error})") from None
     if not isinstance(document, dict) or document.get("format") != FORMAT:
-        raise FlashsyncError(f'{path}: not a flashsync model file (no "format": "{FORMAT}")')
+        raise ModelFileError(f'{path}: not a flashsync model file (no "format": "{FORMAT}")')
     if document.get("version") != VERSION:
-        raise FlashsyncError(
+        raise ModelFileError(
             f"{path}: model format version {document.get('version')} is not "
             f"supported (this flashsync reads version {VERSION}); sync again"
         )
@@ -61,7 +59,7 @@ def load_model(path: str | Path) -> SyncModel:
             events=pd.DataFrame.from_records(document["events"]),
         )
     except (KeyError, TypeError, ValueError) as error:
-        raise FlashsyncError(f"{path}: damaged model file ({type(error).__name__}: {error}); sync again") from None
+        raise ModelFileError(f"{path}: damaged model file ({type(error).__name__}: {error}); sync again") from None
 
 
 def _camera_to_dict(camera: CameraClock) -> dict:

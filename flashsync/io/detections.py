@@ -1,4 +1,4 @@
-"""Tracker detections in and out: CSV, Parquet, MOTChallenge, and homography files.
+"""Tracker detections in and out: CSV, Parquet and MOTChallenge files.
 
 A detections table has one row per detection with at least ``camera`` (name = video file
 stem), ``frame`` (0-based decoded frame index) and ``y`` (stored-image row, px, top = 0);
@@ -11,17 +11,16 @@ The format of a file follows its extension: ``.csv`` CSV, ``.parquet`` / ``.pq``
 from __future__ import annotations
 
 import csv
-import json
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
-import numpy as np
 import pandas as pd
 
-from flashsync.errors import FlashsyncError
-from flashsync.tables import write_table
+from flashsync.errors import InputError
+from flashsync.io.files import existing_file, first_line
+from flashsync.io.tables import write_table
 
 REQUIRED_COLUMNS = ("camera", "frame", "y")
 MOT_COLUMNS = ("frame", "id", "bb_left", "bb_top", "bb_width", "bb_height", "conf")
@@ -41,35 +40,35 @@ def detections_format(path: str | Path, input_format: str | None = None) -> str:
     """
     if input_format is not None:
         if input_format not in set(_EXTENSIONS.values()):
-            raise FlashsyncError(f"{path}: unknown detections format {input_format!r}; use csv, parquet or mot")
+            raise InputError(f"{path}: unknown detections format {input_format!r}; use csv, parquet or mot")
         return input_format
     try:
         return _EXTENSIONS[Path(path).suffix.lower()]
     except KeyError:
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: unknown detections file type {Path(path).suffix!r}; name it .csv, .parquet or .txt (MOTChallenge)"
         ) from None
 
 
 def require_columns(columns: Iterable[str], required: Iterable[str], source: str | Path) -> None:
-    """Raise a :class:`FlashsyncError` naming ``source`` if a column name is duplicated or
+    """Raise an :class:`~flashsync.errors.InputError` naming ``source`` if a column name is duplicated or
     a required one is missing."""
     columns = list(columns)
     duplicates = sorted({str(name) for name in columns if columns.count(name) > 1})
     if duplicates:
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: duplicate column names {', '.join(duplicates)}; rename them so that every column name is unique"
         )
     missing = [name for name in required if name not in columns]
     if missing:
-        raise FlashsyncError(
+        raise InputError(
             f"{source}: missing column{'s' if len(missing) > 1 else ''} {', '.join(missing)} "
             f"(it has {', '.join(map(str, columns)) or 'no columns'}); detections need "
             f"{', '.join(REQUIRED_COLUMNS)}: rename the columns or convert the file"
         )
 
 
-def read_detections(path: str | Path, *, camera: str | None = None, input_format: str | None = None) -> pd.DataFrame:
+def load_detections(path: str | Path, *, camera: str | None = None, input_format: str | None = None) -> pd.DataFrame:
     """Read a detections file into a DataFrame (column types inferred).
 
     Parameters
@@ -84,36 +83,34 @@ def read_detections(path: str | Path, *, camera: str | None = None, input_format
     Returns
     -------
     DataFrame
-        The file's columns; for MOTChallenge the columns of :func:`read_mot`.
+        The file's columns; for MOTChallenge the columns of :func:`load_mot`.
 
     Examples
     --------
-    >>> tables = [read_detections(p) for p in ["cam1.txt", "cam2.txt"]]  # doctest: +SKIP
+    >>> tables = [load_detections(p) for p in ["cam1.txt", "cam2.txt"]]  # doctest: +SKIP
     >>> detections = pd.concat(tables, ignore_index=True)                  # doctest: +SKIP
     """
     kind = detections_format(path, input_format)
     if kind == "mot":
-        return read_mot(path, camera=camera)
-    path = _existing(path)
+        return load_mot(path, camera=camera)
+    path = existing_file(path)
     try:
         if kind == "parquet":
             return pd.read_parquet(path)
         return pd.read_csv(path)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
+        raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
 
 
-def write_detections(table: pd.DataFrame, path: str | Path) -> None:
+def save_detections(table: pd.DataFrame, path: str | Path) -> None:
     """Write ``table`` to ``path`` (CSV or Parquet by extension) atomically, without index."""
     kind = detections_format(path)
     if kind == "mot":
-        raise FlashsyncError(
-            f"{path}: detections are written as .csv or .parquet, not .txt; change the output extension"
-        )
+        raise InputError(f"{path}: detections are written as .csv or .parquet, not .txt; change the output extension")
     write_table(table, path)
 
 
-def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
+def load_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     """Read a MOTChallenge file (one camera) as a detections table.
 
     The file has comma-separated ``frame, id, bb_left, bb_top, bb_width, bb_height, conf,
@@ -137,7 +134,7 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
         named by the header, or ``mot_8``, ``mot_9``, ... (1-based position) without one.
         A header name that clashes with the new columns gets a ``mot_`` prefix.
     """
-    path = _existing(path)
+    path = existing_file(path)
     with open(path, "rb") as file:
         first = file.readline().decode("utf-8", errors="replace").strip()
     fields = [field.strip() for field in first.split(",")]
@@ -145,12 +142,12 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     try:
         table = pd.read_csv(path, header=0 if has_header else None, skipinitialspace=True)
     except (OSError, ValueError, pd.errors.ParserError) as error:
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: cannot read it as a MOTChallenge file ({first_line(error)}); check the file"
         ) from None
     if not has_header:
         if table.shape[1] < len(MOT_COLUMNS) - 1:
-            raise FlashsyncError(
+            raise InputError(
                 f"{path}: {table.shape[1]} columns, a MOTChallenge file has at least 6 "
                 f"({', '.join(MOT_COLUMNS[:6])}); check the file or its format"
             )
@@ -159,7 +156,7 @@ def read_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
     require_mot = MOT_COLUMNS[:6]
     missing = [name for name in require_mot if name not in table.columns]
     if missing:
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: MOTChallenge header lacks {', '.join(missing)}; use the "
             f"columns {', '.join(MOT_COLUMNS)} or remove the header line"
         )
@@ -203,11 +200,11 @@ class CsvHeader:
 
 def read_csv_header(path: str | Path) -> CsvHeader:
     """Read the header line of a CSV file; an error for an empty file."""
-    path = _existing(path)
+    path = existing_file(path)
     with open(path, "rb") as file:
         line = file.readline()
     if not line.strip():
-        raise FlashsyncError(
+        raise InputError(
             f"{path}: empty file or empty first line; a detections CSV starts "
             "with a header line such as camera,frame,x,y"
         )
@@ -217,7 +214,7 @@ def read_csv_header(path: str | Path) -> CsvHeader:
     try:
         names = next(csv.reader([text.decode("utf-8")]))
     except UnicodeDecodeError:
-        raise FlashsyncError(f"{path}: the header line is not UTF-8 text; save the file as UTF-8 CSV") from None
+        raise InputError(f"{path}: the header line is not UTF-8 text; save the file as UTF-8 CSV") from None
     return CsvHeader(names=names, raw=raw, eol=eol, size=len(line))
 
 
@@ -239,55 +236,9 @@ def iter_csv_blocks(file: BinaryIO, block_bytes: int, eol: bytes = b"\n") -> Ite
         yield carry + eol
 
 
-def load_homographies(path: str | Path) -> dict[str, np.ndarray]:
-    """Read ``{camera: 3x3 matrix}`` (image px -> plane m) from a JSON file.
-
-    Returns
-    -------
-    dict of str to ndarray of shape (3, 3)
-        Each camera's homography, float64.
-    """
-    path = _existing(path)
-    try:
-        document = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise FlashsyncError(
-            f'{path}: not a JSON file ({first_line(error)}); give {{"camera": [[...], [...], [...]]}} with 3x3 matrices'
-        ) from None
-    if not isinstance(document, dict) or not document:
-        raise FlashsyncError(
-            f"{path}: expected a JSON object {{camera: 3x3 matrix}}; write one 3x3 image->plane homography per camera"
-        )
-    homographies = {}
-    for name, matrix in document.items():
-        try:
-            matrix = np.asarray(matrix, dtype=np.float64)
-        except (TypeError, ValueError):
-            matrix = np.empty(0)
-        if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)) or abs(np.linalg.det(matrix)) < 1e-300:
-            raise FlashsyncError(
-                f"{path}: the homography of camera {name!r} is not an invertible 3x3 matrix of numbers; fix that entry"
-            )
-        homographies[str(name)] = matrix
-    return homographies
-
-
-def _existing(path: str | Path) -> Path:
-    path = Path(path)
-    if not path.is_file():
-        raise FlashsyncError(f"{path}: no such file; check the path")
-    return path
-
-
 def _is_number(text: str) -> bool:
     try:
         float(text)
     except ValueError:
         return False
     return True
-
-
-def first_line(error: Exception) -> str:
-    """The first line of an exception's message (library messages can be long)."""
-    lines = str(error).strip().splitlines()
-    return lines[0] if lines else type(error).__name__

@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 
 from flashsync.atomic import atomic_output
-from flashsync.errors import FlashsyncError
+from flashsync.errors import InputError
 
 FORMATS = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet"}
 
@@ -16,7 +16,7 @@ def table_format(path: str | Path) -> str:
     """``'csv'`` or ``'parquet'`` from the extension, or a one-line error."""
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
-        raise FlashsyncError(f"{path}: unknown table format {suffix or '(none)'}; use .csv or .parquet")
+        raise InputError(f"{path}: unknown table format {suffix or '(none)'}; use .csv or .parquet")
     return FORMATS[suffix]
 
 

@@ -1,0 +1,202 @@
+"""A candidate model (a set of effects) fitted to the measurement, and its score.
+
+The model is linear in its parameters once its frame clocks and readout rows are fixed:
+each edge gives one equation (see :mod:`flashsync.diagnose.effects`), unknowns are the
+flashes' global times, the cameras' shifts, the shared exposure and the effects' columns.
+It is solved by the pipeline's robust fit (:func:`flashsync.robust.cauchy_fit`: Cauchy IRLS
+with a fitted scale, here no smaller than the edge noise the band lengths show), so one bad
+edge neither moves the fit nor names an effect, while a step or a trend shared by many edges
+weighs in full. Each camera's stamps are a second stream: their residuals about the model's
+frame clock (:class:`flashsync.frame_clock.FrameClock` with the parts the model's effects
+switch on) get a Cauchy likelihood of their own.
+
+A model's score is its Bayesian information criterion over both streams::
+
+    BIC = 2 * (negative log-likelihood) + (number of parameters) * ln(number of observations)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flashsync.diagnose.effects import (
+    CATALOGUE,
+    DRIFT,
+    DRIFT_RATE,
+    DROPPED_FRAMES,
+    EXPOSURE,
+    FLIPPED,
+    FRAME_CLOCK,
+    ROW_TIME,
+    CameraEstimate,
+    Features,
+)
+from flashsync.diagnose.measure import Measurement
+from flashsync.frame_clock import FrameClock, fit_frame_clock
+from flashsync.model import readout_rows
+from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
+
+
+@dataclass(frozen=True, order=True)
+class Term:
+    """An effect applied to one camera (index into :attr:`Measurement.cameras`)."""
+
+    effect: str
+    camera: int
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A model fitted to the measurement.
+
+    Attributes
+    ----------
+    measurement : Measurement
+    terms : frozenset of Term
+        The effects switched on.
+    clocks : list of FrameClock
+        Per camera, its frame clock under the model (never smoothed).
+    flipped : list of bool
+        Per camera: reads bottom-up under the model.
+    features : Features
+        Each edge's model time, readout row and kind.
+    coefficients : dict
+        ``(name, camera) -> value`` for ``shift`` (ms), ``exposure`` (ms; camera -1: the
+        shared one) and every effect column (see :mod:`flashsync.diagnose.effects`).
+    residual_ms : ndarray of shape (n_edges,)
+        Measured minus predicted edge times, ms.
+    scale_ms : float
+        Cauchy scale of the edge residuals, ms.
+    bic : float
+        Bayesian information criterion over edges and stamps.
+    """
+
+    measurement: Measurement
+    terms: frozenset[Term]
+    clocks: list[FrameClock]
+    flipped: list[bool]
+    features: Features
+    coefficients: dict[tuple[str, int], float]
+    residual_ms: np.ndarray
+    scale_ms: float
+    bic: float
+
+    @property
+    def reference(self) -> int:
+        return self.measurement.reference
+
+    @property
+    def rms_ms(self) -> float:
+        """RMS of the edge residuals, ms: the gap between model and measurement."""
+        return float(np.sqrt(np.mean(self.residual_ms**2)))
+
+    @property
+    def stamp_rms_ms(self) -> list[float]:
+        """Per camera, RMS of the stamps about the model's frame clock, ms."""
+        return [float(np.sqrt(np.mean(clock.residual_ms**2))) for clock in self.clocks]
+
+    def coefficient(self, name: str, camera: int) -> float:
+        """A parameter of the model; 0 where its effect is off."""
+        return self.coefficients.get((name, camera), 0.0)
+
+    def nominal_row_time_ms(self, camera: int) -> float:
+        """Frame period / image height, ms."""
+        return self.clocks[camera].period_ms / self.measurement.cameras[camera].height
+
+    def exposure_ms(self, camera: int) -> float:
+        """The camera's exposure (shared one plus its own offset), ms."""
+        return self.coefficient(EXPOSURE, -1) + self.coefficient(EXPOSURE, camera)
+
+    def estimates(self) -> list[CameraEstimate]:
+        """Every camera under this model, in plain numbers."""
+        stamp_rms = self.stamp_rms_ms
+        return [
+            CameraEstimate(
+                camera=camera.camera,
+                reference=c == self.reference,
+                flipped=self.flipped[c],
+                frame_period_ms=clock.period_ms,
+                median_step_ms=clock.median_step_ms,
+                missing_frames=clock.missing,
+                stamp_rms_ms=stamp_rms[c],
+                drift_ppm=1e6 * self.coefficient(DRIFT, c),
+                drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c),
+                shift_ms=self.coefficient("shift", c),
+                row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+                nominal_row_time_ms=self.nominal_row_time_ms(c),
+                exposure_ms=self.exposure_ms(c),
+                effects=sorted(t.effect for t in self.terms if t.camera == c),
+            )
+            for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
+        ]
+
+
+def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate | None:
+    """Fit the model with the effects ``terms`` switched on; None when the measurement
+    cannot determine its parameters."""
+    cameras, edges = measurement.cameras, measurement.edges
+    reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
+    flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
+    clocks = [
+        fit_frame_clock(
+            camera.frame_times_ms,
+            count_gaps=Term(DROPPED_FRAMES, c) in terms,
+            least_squares=Term(FRAME_CLOCK, c) in terms,
+            smoothing=False,
+        )
+        for c, camera in enumerate(cameras)
+    ]
+    frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
+    for c, (camera, clock) in enumerate(zip(cameras, clocks)):
+        mine = edges.camera == c
+        frame_ms[mine] = clock.ladder_ms[edges.frame[mine]]
+        q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
+        observed[mine] = frame_ms[mine] + q[mine] * clock.period_ms / camera.height
+        frame_ms[mine] -= 0.5 * (clock.ladder_ms[0] + clock.ladder_ms[-1])
+    features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
+    keys, design = _design(measurement, terms, features)
+    noise = measurement.noise_ms
+    solved = cauchy_fit(design, observed, noise if np.isfinite(noise) else MIN_SCALE_MS)
+    if solved is None:
+        return None
+    parameters, residual, scale = solved
+    stamp_residuals = [clock.residual_ms for clock in clocks]
+    log_likelihood = -cauchy_nll(residual, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
+    n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
+    n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
+    bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
+    return Candidate(
+        measurement,
+        terms,
+        clocks,
+        flipped,
+        features,
+        dict(zip(keys, parameters[: len(keys)].tolist())),
+        residual,
+        scale,
+        float(bic),
+    )
+
+
+def _design(
+    measurement: Measurement, terms: frozenset[Term], features: Features
+) -> tuple[list[tuple[str, int]], np.ndarray]:
+    """Keys of the named columns and the design, shape (n_edges, n_columns): each other
+    camera's shift, the shared exposure, the effects' columns, then one per flash."""
+    keys, columns = [], []
+    for c in range(len(measurement.cameras)):
+        if c != measurement.reference:
+            keys.append(("shift", c))
+            columns.append(-(features.camera == c).astype(np.float64))
+    keys.append((EXPOSURE, -1))
+    columns.append(features.trailing.astype(np.float64))
+    for term in sorted(terms):
+        column = CATALOGUE[term.effect].column
+        if column is not None:
+            keys.append((term.effect, term.camera))
+            columns.append(np.where(features.camera == term.camera, column(features), 0.0))
+    flash = measurement.edges.flash
+    columns += list((flash[None, :] == np.arange(measurement.n_flashes)[:, None]).astype(np.float64))
+    return keys, np.column_stack(columns)
