@@ -12,7 +12,9 @@ import pytest
 from av.video.frame import PictureType
 from decoded import decode, half_rise, row_profile
 
+from flashsync.errors import FlashsyncError
 from flashsync.frame_clock import fit_frame_clock
+from flashsync.io import load_scenario
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 from flashsync.simulation.light import Lighting, ambient_light, flash_remaining, half_light_ms
 from flashsync.simulation.render import camera_view, exposure_end_ms, render_frame
@@ -259,3 +261,25 @@ def test_slowly_changing_drift_of_a_camera_fifteen_minutes_in(tmp_path):
     c = truth.cameras["late"]
     affine = c.alpha * c.frame_times_ms[1] + c.beta_ms + edge * c.row_time_ms
     assert abs(affine - truth.global_time_ms("late", 1, edge)) > 15.0
+
+
+def test_scenario_files_set_the_second_world(tmp_path):
+    path = tmp_path / "second.yaml"
+    path.write_text(
+        "preset: tiny\nflicker_waveform: rectified\nplayer_radius_m: [1.0, 2.0]\n"
+        "flashes:\n  - {world_ms: 500, rise_ms: 0.5, rise: cosine, decay_ms: 0.3}\n"
+        "  - {world_ms: 900, hold_ms: 1.0, decay_ms: 0}\n"
+        "cameras:\n  - {name: a, width: 320, height: 180, fps: 29.97, tone: srgb, black_level: 16, white_level: 300,\n"
+        "     vignetting: 0.3, keyint: 60, bframes: 0, x264_preset: fast, frame_gaps: [[10, 5]],\n"
+        "     stamp_rate_changes: [[30, 1.5]]}\n"
+    )
+    scenario = load_scenario(path)
+    cam = scenario.cameras[0]
+    assert (scenario.flicker_waveform, scenario.player_radius_m) == ("rectified", (1.0, 2.0))
+    assert [f.shape for f in scenario.flashes] == ["cosine rise", "rectangular"]
+    assert (cam.tone, cam.black_level, cam.white_level, cam.vignetting) == ("srgb", 16, 300, 0.3)
+    assert (cam.keyint, cam.bframes, cam.x264_preset) == (60, 0, "fast")
+    assert cam.frame_gaps == ((10, 5),) and cam.stamp_rate_changes == ((30, 1.5),)
+    path.write_text("preset: tiny\nflashes:\n  - {world_ms: 500, decay_ms: 0}\n")
+    with pytest.raises(FlashsyncError, match="flash 0: the pulse has no duration"):
+        load_scenario(path)
