@@ -22,7 +22,7 @@ from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightS
 
 def _build(cls: type, data: object, where: str, source: str):
     """Instantiate dataclass `cls` from dict `data`, refusing unknown keys and values of
-    the wrong type (:func:`_check_types`)."""
+    the wrong type (:func:`~flashsync.io.fields.check_types`)."""
     if not isinstance(data, dict):
         raise InputError(f"{source}: {where} must be a mapping of field names to values")
     names = [f.name for f in dataclasses.fields(cls)]
@@ -40,22 +40,20 @@ def _build(cls: type, data: object, where: str, source: str):
 _RECORDS = ("cameras", "flashes", "switches")
 
 
-#: Fields holding records of their own, checked by their own dataclass.
-_RECORDS = ("cameras", "flashes", "switches")
-
-
 def _camera(data: object, where: str, source: str) -> CameraSpec:
     cam = _build(CameraSpec, data, where, source)
     try:
         return dataclasses.replace(
             cam,
             dropped_frames=tuple(_whole(f) for f in cam.dropped_frames),
+            frame_gaps=tuple((_whole(g[0]), _whole(g[1])) for g in cam.frame_gaps),
+            stamp_rate_changes=tuple((_whole(c[0]), float(c[1])) for c in cam.stamp_rate_changes),
             missed_flashes=tuple(_whole(k) for k in cam.missed_flashes),
-            gain_steps=tuple(tuple(float(v) for v in s) for s in cam.gain_steps),
+            gain_steps=tuple(tuple(float(v) for v in step) for step in cam.gain_steps),
             position_m=tuple(float(v) for v in cam.position_m),
             look_at_m=tuple(float(v) for v in cam.look_at_m),
         )
-    except (TypeError, ValueError) as err:
+    except (TypeError, ValueError, IndexError) as err:
         raise InputError(
             f"{source}: {where}: a list holds a value of the wrong kind ({err}); fix the scenario"
         ) from None
@@ -104,6 +102,7 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
     for key in data:
         if key not in names:
             raise InputError(f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
+    check_types(Scenario, data, "the scenario", source, skip=_RECORDS)
     if "cameras" in data:
         cams = data["cameras"]
         if not isinstance(cams, list):
@@ -115,8 +114,9 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
             if not isinstance(items, list):
                 raise InputError(f"{source}: '{key}' must be a list")
             data[key] = tuple(_build(cls, d, f"{key}[{i}]", source) for i, d in enumerate(items))
+    if "player_radius_m" in data:
+        data["player_radius_m"] = tuple(data["player_radius_m"])
     if base is not None:
-        check_types(Scenario, data, "the scenario", source, skip=_RECORDS)
         scenario = dataclasses.replace(base, **data)
     else:
         if "name" not in data or "cameras" not in data:

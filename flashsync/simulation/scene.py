@@ -6,12 +6,18 @@ Each camera sees the ice through a homography between image pixels (pixel centre
 integer coordinates, x right, y down) and rink metres.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError
+
+if TYPE_CHECKING:
+    from flashsync.simulation.scenario import CameraSpec
 
 RINK_LENGTH_M = 60.0
 RINK_WIDTH_M = 30.0
@@ -25,7 +31,7 @@ _BLUE = (140, 70, 35)
 _TEAM_COLORS = ((40, 35, 120), (110, 60, 25), (225, 225, 225), (30, 30, 30))
 
 
-def _fold(x, lo, hi):
+def _fold(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Reflect `x` into [lo, hi] as a ball bouncing between two walls."""
     span = hi - lo
     y = np.mod(x - lo, 2.0 * span)
@@ -56,7 +62,7 @@ class Puck:
     color: tuple = (12, 12, 12)
     blur_samples: int = 7
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None] / 1000.0
         free = np.asarray(self.start_m) + np.asarray(self.velocity_mps) * w
@@ -96,7 +102,7 @@ class Player:
     color: tuple = _TEAM_COLORS[0]
     blur_samples: int = 1
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None]
         arg = 2.0 * np.pi * w / np.asarray(self.period_ms) + np.asarray(self.phase)
@@ -127,12 +133,12 @@ class Scene:
     puck: Puck
 
     @property
-    def objects(self):
+    def objects(self) -> tuple:
         """Players then the puck, in drawing order."""
         return self.players + (self.puck,)
 
 
-def _smooth_noise(rng, shape, cell_px, amplitude):
+def _smooth_noise(rng: np.random.Generator, shape: tuple, cell_px: int, amplitude: float) -> np.ndarray:
     """Band-limited noise: a coarse random grid upsampled with cubic interpolation."""
     coarse = rng.normal(0.0, amplitude, (shape[0] // cell_px + 2, shape[1] // cell_px + 2))
     return cv2.resize(
@@ -140,7 +146,9 @@ def _smooth_noise(rng, shape, cell_px, amplitude):
     )[: shape[0], : shape[1]]
 
 
-def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
+def make_texture(
+    rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M, margin_m: float = TEXTURE_MARGIN_M
+) -> np.ndarray:
     """Draw the rink: ice with scratches and markings, boards with ads, stands around.
 
     Parameters
@@ -160,10 +168,10 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     h = int(round((RINK_WIDTH_M + 2 * margin_m) * s))
     w = int(round((RINK_LENGTH_M + 2 * margin_m) * s))
 
-    def px(x_m, y_m):
+    def px(x_m: float, y_m: float) -> tuple[int, int]:
         return int(round((x_m + margin_m) * s)), int(round((y_m + margin_m) * s))
 
-    def ln(metres):
+    def ln(metres: float) -> int:
         return max(1, int(round(metres * s)))
 
     # Stands, in 0.5 m seats: sections of seat rows around the rink, half the seats taken.
@@ -256,16 +264,20 @@ def rink_outline_m(points_per_corner: int = 12) -> np.ndarray:
     return np.concatenate([outline, outline[:1]])
 
 
-def make_scene(seed, n_players=8, puck_speed_mps=36.0):
+def make_scene(
+    seed: int, n_players: int = 8, puck_speed_mps: float = 36.0, player_radius_m: tuple[float, float] = (0.4, 0.55)
+) -> Scene:
     """Generate the rink and its objects from a seed.
 
     Parameters
     ----------
     seed : int
     n_players : int
-        Number of skaters.
+        Number of skaters (dark and bright team colours in turn), on paths that cross.
     puck_speed_mps : float
         Puck speed, m/s.
+    player_radius_m : (float, float)
+        Range of the skaters' disc radii, metres (uniform).
 
     Returns
     -------
@@ -283,7 +295,7 @@ def make_scene(seed, n_players=8, puck_speed_mps=36.0):
                 amplitude_m=amp,
                 period_ms=(rng.uniform(9000, 20000), rng.uniform(7000, 16000)),
                 phase=(rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi)),
-                radius_m=rng.uniform(0.4, 0.55),
+                radius_m=rng.uniform(*player_radius_m),
                 color=_TEAM_COLORS[i % len(_TEAM_COLORS)],
             )
         )
@@ -295,7 +307,7 @@ def make_scene(seed, n_players=8, puck_speed_mps=36.0):
     return Scene(texture, TEXTURE_PX_PER_M, TEXTURE_MARGIN_M, tuple(players), puck)
 
 
-def rink_to_image(camera):
+def rink_to_image(camera: CameraSpec) -> np.ndarray:
     """Projection of the ice plane into the image of a pinhole camera above it.
 
     Parameters
@@ -336,7 +348,7 @@ def rink_to_image(camera):
     return k @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ centre])
 
 
-def camera_homography(camera):
+def camera_homography(camera: CameraSpec) -> np.ndarray:
     """Homography from image pixels to rink metres, ``H[2, 2] = 1``.
 
     ``[X, Y, 1] ~ H @ [u, v, 1]``; the inverse of `rink_to_image`, scaled so that the
@@ -346,7 +358,7 @@ def camera_homography(camera):
     return h / h[2, 2]
 
 
-def apply_homography(h, points):
+def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Map points through a homography.
 
     Parameters
@@ -368,7 +380,7 @@ def apply_homography(h, points):
         return np.where(den[..., None] > 0, num / den[..., None], np.nan)
 
 
-def camera_background(scene, homography, width, height, color):
+def camera_background(scene: Scene, homography: np.ndarray, width: int, height: int, color: bool) -> np.ndarray:
     """The static rink as a camera sees it, before lighting.
 
     Parameters
