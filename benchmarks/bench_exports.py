@@ -20,7 +20,6 @@ Nothing here is fitted to the truth it is scored against.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +27,7 @@ import numpy as np
 from flashsync import detect_videos, load_model, synchronize
 from flashsync.demo import VIDEO_SUFFIXES, default_samples
 from flashsync.evaluate import clock_origin_ms, sync_errors, tick_errors_ms
-from flashsync.io import load_detections, load_ground_truth
+from flashsync.io import load_detections, load_ground_truth, load_homographies
 from flashsync.simulation.truth import puck_image_px
 from flashsync.ticks import frame_table, model_ticks_ms
 from tracking_adapter.resample import resample
@@ -70,7 +69,7 @@ def main() -> None:
     print(f"{'all':<8}{'':>8}{'':>9}{every:>9.4f}")
 
     tracks = resample(load_detections(args.folder / "detections.csv"), model, ticks).tracks
-    homographies = json.loads((args.folder / "homographies.json").read_text())
+    homographies = load_homographies(args.folder / "homographies.json")
     print(f"\nresample at {args.rate:g} Hz: interpolated puck position minus the true one, px")
     print(f"{'camera':<8}{'ticks':>8}{'median':>9}{'p95':>9}{'max':>9}")
     interpolated = tracks[tracks["reason"] == ""]

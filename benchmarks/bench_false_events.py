@@ -106,7 +106,8 @@ def flash_free_scenario(case: str, minutes: float) -> Scenario:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=10.0)
-    parser.add_argument("--cases", default=",".join(CASES), help=f"comma-separated, of {', '.join(CASES)}".replace("%", "%%"))
+    names = ", ".join(CASES).replace("%", "%%")  # argparse formats help with %
+    parser.add_argument("--cases", default=",".join(CASES), help=f"comma-separated, of {names}")
     parser.add_argument("--dir", type=Path, help="where to write the clips (default: a temp dir)")
     args = parser.parse_args()
     root = args.dir or Path(tempfile.mkdtemp(prefix="flashsync-quiet-"))

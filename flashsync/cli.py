@@ -8,9 +8,16 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
+import os
+import shutil
+import signal
 import sys
+import threading
+from collections.abc import Iterable
 from pathlib import Path
 
+from flashsync.atomic import check_output, remove_temporaries
 from flashsync.errors import FlashsyncError, InputError, ModelFileError
 
 EXAMPLES = {
@@ -18,7 +25,12 @@ EXAMPLES = {
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
     "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
-    "view": "flashsync view --model sync.json --videos cam1.mp4 cam2.mkv --save sync.rrd",
+    "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
+    "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+    "  flashsync validate restamped.csv --model sync.json --homographies homographies.json --json validation.json\n"
+    "  flashsync view --model sync.json --videos cam1.mp4 cam2.mkv cam3.mp4 --events events.csv \\\n"
+    "      --detections restamped.csv --homographies homographies.json --validation validation.json --save sync.rrd\n"
+    "  rerun sync.rrd        (or: ... --serve, then open the address it prints)",
     "simulate": "flashsync simulate sample -o sim/",
     "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
@@ -44,18 +56,49 @@ OPTIONS = {
 }
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like an interrupt so that outputs are cleaned up."""
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit code (0 ok, 1 bad input, 130 interrupted)."""
+    """Entry point; returns the exit code (0 ok, 1 bad input, 130 interrupted, 143 terminated).
+
+    A bad input or argument is one line on stderr; an interrupt (SIGINT) or SIGTERM leaves
+    every output either as it was or complete, removes unfinished temporary files and says
+    which outputs were written and which not.
+    """
     parser = _parser()
     args = parser.parse_args(argv)
+    _PLAN.clear()
+    previous = _handle_sigterm()
     try:
         return args.run(args) or 0
     except FlashsyncError as error:
-        print(f"flashsync {args.command}: error: {_message(error)}", file=sys.stderr)
+        print(f"flashsync {args.command}: error: {_message(error)}{_PLAN.written_note()}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print(f"flashsync {args.command}: interrupted; no output written", file=sys.stderr)
-        return 130
+    except OSError as error:
+        print(f"flashsync {args.command}: error: {_os_message(error)}{_PLAN.written_note()}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as interrupt:
+        remove_temporaries()
+        _PLAN.undo()
+        print(f"flashsync {args.command}: {_PLAN.interrupted()}", file=sys.stderr)
+        return 143 if isinstance(interrupt, Terminated) else 130
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _handle_sigterm():
+    """Make SIGTERM raise :class:`Terminated` in the main thread; returns the handler before
+    (None where it cannot be set: not the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def terminate(number, frame):
+        raise Terminated()
+
+    return signal.signal(signal.SIGTERM, terminate)
 
 
 def _message(error: FlashsyncError) -> str:
@@ -64,8 +107,100 @@ def _message(error: FlashsyncError) -> str:
     return f"{option} {error}" if option else str(error)
 
 
+def _os_message(error: OSError) -> str:
+    """An operating-system error as one line naming the file."""
+    where = f"{error.filename}: " if error.filename else ""
+    return f"{where}{error.strerror or error}; check the file and its folder"
+
+
+class _Plan:
+    """What a command promised to write or print and what it has done, for an honest line
+    when it is interrupted (every file output is atomic: either as it was or complete)."""
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self) -> None:
+        self.items: list[tuple[str, str]] = []
+        self.done: list[str] = []
+        self.folders: list[Path] = []
+
+    def outputs(self, *items: tuple[str, str]) -> None:
+        """The command's outputs in the order it makes them: ``(name, 'written' or 'printed')``."""
+        self.items = list(items)
+
+    def did(self, name: object) -> None:
+        self.done.append(str(name))
+
+    def new_folder(self, folder: Path) -> None:
+        """A folder this run creates: removed again if the run does not complete."""
+        self.folders.append(folder)
+
+    def undo(self) -> None:
+        """Remove the folders this run created (a run that did not complete)."""
+        for folder in self.folders:
+            shutil.rmtree(folder, ignore_errors=True)
+
+    def written_note(self) -> str:
+        """``'; sync.json was written'`` where outputs were made before an error."""
+        done = [name for name, verb in self.items if name in self.done and verb == "written"]
+        return f"; {', '.join(done)} {'was' if len(done) == 1 else 'were'} written" if done else ""
+
+    def interrupted(self) -> str:
+        """E.g. ``interrupted; sync.json written; the --pairwise table not printed; out.json not written``."""
+        if not any(name in self.done for name, verb in self.items if verb == "written"):
+            self.items = [item for item in self.items if item[1] == "written"] or [("output", "written")]
+            if not self.done:
+                return "interrupted; no output written"
+        parts = []
+        for done in (True, False):
+            for verb in ("written", "printed"):
+                names = [name for name, v in self.items if v == verb and (name in self.done) == done]
+                if names:
+                    parts.append(f"{', '.join(names)} {'' if done else 'not '}{verb}")
+        return "interrupted; " + "; ".join(parts)
+
+
+_PLAN = _Plan()
+
+
+def _files(inputs: dict[str, Iterable[Path]], outputs: dict[str, Path | None], folders: Iterable[str] = ()) -> None:
+    """Check a command's outputs before any work: each can be written (``folders`` name the
+    options whose output is a folder), none is one of the inputs or another output (the
+    same file by path or by inode). Plans them for the interrupt line."""
+    given = [(option, Path(path)) for option, path in outputs.items() if path is not None]
+    for option, path in given:
+        try:
+            check_output(path, folder=option in folders)
+        except InputError as error:
+            raise InputError(f"{option} {error}") from None
+    sources = [(option, Path(path)) for option, paths in inputs.items() for path in paths if path is not None]
+    for index, (option, path) in enumerate(given):
+        for source_option, source in sources:
+            if _same_file(path, source):
+                raise InputError(
+                    f"{option} {path}: is also an input ({source_option} {source}); writing it would destroy "
+                    "that input: give the output another name"
+                )
+        for other_option, other in given[:index]:
+            if _same_file(path, other):
+                raise InputError(
+                    f"{option} {path}: is the same file as {other_option} {other}; give each output its own name"
+                )
+    _PLAN.outputs(*((str(path), "written") for _, path in given))
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether two paths name one file: the same inode where both exist, else the same
+    resolved path."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return a.resolve() == b.resolve()
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="flashsync",
         description="Synchronise rolling-shutter cameras to a fraction of a "
         "millisecond from the bands that flashes leave in their frames.",
@@ -75,6 +210,7 @@ def _parser() -> argparse.ArgumentParser:
     def command(name: str, help_text: str, run) -> argparse.ArgumentParser:
         sub = commands.add_parser(
             name,
+            prog=f"flashsync {name}",
             help=help_text,
             description=help_text,
             epilog=f"example:\n  {EXAMPLES[name]}",
@@ -174,13 +310,30 @@ def _parser() -> argparse.ArgumentParser:
         "videos in sync, trajectories, on one global timeline.",
         _run_view,
     )
+    view.epilog += VIEW_UNITS
     view.add_argument("--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
     _view_inputs(view)
     output = view.add_mutually_exclusive_group(required=True)
     output.add_argument("--save", type=Path, metavar="OUT.rrd", help="write a recording file")
-    output.add_argument("--spawn", action="store_true", help="open the native viewer (needs a display)")
     output.add_argument(
-        "--serve", action="store_true", help="serve the web viewer on http://127.0.0.1:9090 until Ctrl-C"
+        "--spawn", action="store_true", help="open the native viewer (needs a display; it listens on 127.0.0.1)"
+    )
+    output.add_argument(
+        "--serve", action="store_true", help="serve the web viewer (default http://127.0.0.1:9090) until Ctrl-C"
+    )
+    view.add_argument(
+        "--bind",
+        default="127.0.0.1",
+        metavar="ADDRESS",
+        help="IP address --serve listens on (default 127.0.0.1: this machine only; "
+        "0.0.0.0: every IPv4 interface, reachable from other machines)",
+    )
+    view.add_argument("--port", type=int, default=9090, help="HTTP port of --serve's web viewer (default 9090)")
+    view.add_argument(
+        "--grpc-port",
+        type=int,
+        default=9876,
+        help="port --serve streams the recording from, or --spawn's viewer listens on (default 9876)",
     )
 
     simulate = command("simulate", "Render a simulated multi-camera scenario with ground truth.", _run_simulate)
@@ -272,6 +425,14 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a usage error as one line on stderr and exit code 1, like every other
+    bad input (``flashsync sync: error: ...``); ``--help`` shows the usage."""
+
+    def error(self, message: str):
+        self.exit(1, f"{self.prog}: error: {message}; see '{self.prog} --help'\n")
+
+
 def _tick_options(parser: argparse.ArgumentParser, rate_default: str | None) -> None:
     parser.add_argument(
         "--rate",
@@ -294,6 +455,17 @@ def _tick_options(parser: argparse.ArgumentParser, rate_default: str | None) -> 
     )
 
 
+VIEW_UNITS = """
+
+units: the time axis (global_time) is seconds from the start of the recordings, the
+earliest first frame of any camera; the recording's description and the first lines of
+the flash log give that instant's t_global_ms (ms, the reference camera's clock).
+Residuals and their +-1 sigma band are in ms; plane positions and validation errors in
+metres (error arrows are drawn enlarged: the factor is in the plane view's title and on
+its scale bar); image positions in px. The plane view is a top view turned as the first
+camera with a homography sees it."""
+
+
 def _view_inputs(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--videos",
@@ -303,9 +475,22 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
         metavar="VIDEO",
         help="videos to show in sync (camera = file stem)",
     )
-    parser.add_argument("--events", type=Path, help="events table from detect (adds unmatched events)")
+    parser.add_argument("--events", type=Path, help="events table from detect or sync --events (adds unmatched events)")
     parser.add_argument("--detections", type=Path, help="re-stamped detections (restamp output)")
-    parser.add_argument("--homographies", type=Path, help="image->plane homographies JSON (trajectories)")
+    parser.add_argument(
+        "--homographies",
+        type=Path,
+        help='JSON {camera: 3x3 image px -> plane m matrix}, optionally with "plane": '
+        '{"outline_m": [[x, y], ...]}, the plane\'s outline (m)',
+    )
+    parser.add_argument(
+        "--plane",
+        type=float,
+        nargs=4,
+        metavar=("X0", "Y0", "X1", "Y1"),
+        help="the plane's outline as the rectangle with corners (X0, Y0) and (X1, Y1), m (e.g. 0 0 60 30); "
+        "replaces one in --homographies. Without either, no outline is drawn",
+    )
     parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
 
 
@@ -328,12 +513,14 @@ def _detection_options(parser: argparse.ArgumentParser) -> None:
 
 
 def _timestamp_files(values: list[str]) -> dict[str, Path]:
-    """``['cam1=cam1.csv']`` -> ``{'cam1': Path('cam1.csv')}``."""
+    """``['cam1=cam1.csv']`` -> ``{'cam1': Path('cam1.csv')}``; a camera given twice is an error."""
     result = {}
     for text in values:
         camera, _, path = text.partition("=")
         if not camera or not path:
             raise InputError(f"--timestamps {text}: expected CAMERA=FILE.csv")
+        if camera in result and result[camera] != Path(path):
+            raise InputError(f"--timestamps {text}: {camera} is given two timestamp files; give one")
         result[camera] = Path(path)
     return result
 
@@ -354,14 +541,17 @@ def _run_detect(args) -> None:
     from flashsync.pipeline import all_events, detect_videos
     from flashsync.report import detection_notes
 
+    timestamps = _timestamp_files(args.timestamps)
+    _files({"VIDEO": args.videos, "--timestamps": timestamps.values()}, {"-o": args.output})
     detections = detect_videos(
         args.videos,
         args.flipped,
         estimate_readout=False,
         progress=_progress,
-        timestamps=_timestamp_files(args.timestamps),
+        timestamps=timestamps,
     )
     save_events(all_events(detections), args.output)
+    _PLAN.did(args.output)
     for detection in detections:
         for note in detection_notes(detection):
             print(note, file=sys.stderr)
@@ -378,7 +568,7 @@ def _run_sync(args) -> None:
 
     from flashsync.atomic import write_text
     from flashsync.io import events_to_frame, save_events, save_model
-    from flashsync.pipeline import all_events, detect_videos, solve_pairs, synchronize
+    from flashsync.pipeline import all_events, check_anchors, check_row_times, detect_videos, solve_pairs, synchronize
     from flashsync.report import (
         detection_notes,
         pairwise_table,
@@ -388,22 +578,30 @@ def _run_sync(args) -> None:
         sync_table,
     )
 
-    detections = detect_videos(
-        args.videos, args.flipped, progress=_progress, timestamps=_timestamp_files(args.timestamps)
-    )
+    timestamps = _timestamp_files(args.timestamps)
+    options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
+    check_row_times(options["row_times"], [video.stem for video in args.videos])
+    check_anchors(args.anchor)
+    outputs = {"--events": args.events, "-o": args.output, "--json": args.json, "--rrd": args.rrd}
+    _files({"VIDEO": args.videos, "--timestamps": timestamps.values()}, outputs)
+    planned = [(str(path), "written") for path in (args.events, args.output) if path]
+    planned += [("the --pairwise table", "printed")] if args.pairwise else []
+    _PLAN.outputs(*planned, *((str(path), "written") for path in (args.json, args.rrd) if path))
+    detections = detect_videos(args.videos, args.flipped, progress=_progress, timestamps=timestamps)
     for detection in detections:
         for note in detection_notes(detection):
             print(f"flashsync sync: {note}", file=sys.stderr)
     if args.events:
         save_events(all_events(detections), args.events)
-    options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
+        _PLAN.did(args.events)
     model, report = synchronize(detections, args.reference, **options)
     for warning in report.warnings:
         print(f"flashsync sync: warning: {warning}", file=sys.stderr)
     for name in report.flipped_found:
         print(f"flashsync sync: {name} reads bottom-up (mounted upside down)", file=sys.stderr)
     save_model(model, args.output)
-    print(sync_table(model, report))
+    _PLAN.did(args.output)
+    print(sync_table(model, report), flush=True)
     rejected = rejected_events(model)
     for event in rejected.itertuples():
         print(
@@ -422,36 +620,52 @@ def _run_sync(args) -> None:
             )
         )
         print()
-        print(pairwise_text(pairwise))
+        print(pairwise_text(pairwise), flush=True)
+        _PLAN.did("the --pairwise table")
     if args.json:
         write_text(args.json, json.dumps(sync_summary(model, report, pairwise), indent=1))
+        _PLAN.did(args.json)
     if args.rrd:
         import viz
 
         viz.save_recording(args.rrd, model, videos=args.videos, events=events_to_frame(all_events(detections)))
+        _PLAN.did(args.rrd)
         print(f"recording -> {args.rrd}", file=sys.stderr)
     print(f"model -> {args.output}", file=sys.stderr)
 
 
 def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
-    """``['cam1=0.03', ...]`` -> ``{'cam1': 0.03}``; positive milliseconds."""
+    """``['cam1=0.03', ...]`` -> ``{'cam1': 0.03}``: finite, positive milliseconds, each
+    camera once (the same value twice is allowed)."""
     result = {}
     for text in values:
         camera, _, value = text.partition("=")
         try:
-            result[camera] = float(value)
+            number = float(value)
         except ValueError:
-            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296") from None
-        if not result[camera] > 0:
-            raise InputError(f"{option} {text}: the value must be a positive number of ms")
+            number = None
+        if not camera or number is None:
+            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296")
+        if not (math.isfinite(number) and number > 0):
+            raise InputError(f"{option} {text}: the value must be a positive, finite number of ms")
+        if result.get(camera, number) != number:
+            raise InputError(f"{option} {text}: {camera} is given {result[camera]:g} ms too; give one value")
+        result[camera] = number
     return result
+
+
+def _positive_ms(option: str, value: float | None) -> float | None:
+    """An optional duration option: None, or a positive, finite number of ms."""
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(f"{option} {value:g}: the value must be a positive, finite number of ms")
+    return value
 
 
 def _load_model(path: Path):
     """The model file, or an error saying how to make one."""
     from flashsync.io import load_model
 
-    if not path.is_file():
+    if not path.exists():
         raise ModelFileError(
             f"{path}: no such model file; run 'flashsync sync VIDEO...' first or name the model with --model"
         )
@@ -462,15 +676,18 @@ def _run_restamp(args) -> int:
     from tracking_adapter.restamp import format_summary, restamp_file
 
     output = args.output or args.detections.with_suffix(".restamped.csv")
+    exposures = _per_camera_ms("--exposure", args.exposure)
+    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output})
     model = _load_model(args.model)
     summary = restamp_file(
         args.detections,
         output,
         model,
         camera=args.camera,
-        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        exposure_ms=exposures,
         with_std=args.std,
     )
+    _PLAN.did(output)
     print(format_summary(summary), file=sys.stderr)
     if "unknown camera" in summary.failed:
         print(
@@ -489,46 +706,99 @@ def _run_validate(args) -> None:
     from flashsync.io import load_detections, load_homographies, save_validation
     from tracking_adapter.validate import format_report, validate
 
+    exposures = _per_camera_ms("--exposure", args.exposure)
+    max_gap_ms = _positive_ms("--max-gap-ms", args.max_gap_ms)
+    inputs = {"DETECTIONS": args.detections, "--model": [args.model], "--homographies": [args.homographies]}
+    _files(inputs, {"--json": args.json})
     detections = pd.concat([load_detections(path) for path in args.detections], ignore_index=True)
     report = validate(
         detections,
         _load_model(args.model),
         load_homographies(args.homographies),
-        max_gap_ms=args.max_gap_ms,
-        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        max_gap_ms=max_gap_ms,
+        exposure_ms=exposures,
         source=", ".join(map(str, args.detections)),
     )
-    print(format_report(report))
+    print(format_report(report), flush=True)
     if args.json:
         save_validation(report, args.json)
+        _PLAN.did(args.json)
 
 
 def _run_view(args) -> None:
-    import viz
-    from flashsync.io import events_to_frame, load_detections, load_events, load_homographies, load_validation
+    import warnings
 
+    import viz
+    from flashsync.io import (
+        events_to_frame,
+        load_detections,
+        load_events,
+        load_homographies,
+        load_plane_outline,
+        load_validation,
+    )
+
+    inputs = {
+        "--model": [args.model],
+        "--videos": args.videos,
+        **{option: [path] for option, path in _view_files(args).items() if path},
+    }
+    _files(inputs, {"--save": args.save})
     model = _load_model(args.model)
     data = {
         "videos": args.videos or None,
         "events": events_to_frame(load_events(args.events)) if args.events else None,
         "detections": load_detections(args.detections) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
+        "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
         "validation": load_validation(args.validation) if args.validation else None,
     }
-    if args.save:
-        viz.save_recording(args.save, model, **data)
-        print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
-    elif args.spawn:
-        viz.spawn(model, **data)
-    else:
-        viz.serve(model, **data)
+    if args.plane:
+        data["plane_outline_m"] = viz.rectangle_outline(*args.plane)
+    show = warnings.showwarning
+
+    def plane_warning(message, category, *rest, **options):
+        if not issubclass(category, viz.PlaneWarning):
+            return show(message, category, *rest, **options)
+        print(f"flashsync view: warning: {args.homographies}: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", viz.PlaneWarning)
+        warnings.showwarning = plane_warning
+        if args.save:
+            viz.save_recording(args.save, model, **data)
+            _PLAN.did(args.save)
+            print(f"recording -> {args.save} (open it with: rerun {args.save})", file=sys.stderr)
+        elif args.spawn:
+            viz.spawn(model, grpc_port=args.grpc_port, **data)
+        else:
+            viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
+
+
+def _view_files(args) -> dict[str, Path | None]:
+    return {
+        "--events": args.events,
+        "--detections": args.detections,
+        "--homographies": args.homographies,
+        "--validation": args.validation,
+    }
 
 
 def _run_simulate(args) -> None:
     from flashsync.io import load_scenario
     from flashsync.simulation import render_scenario
 
-    truth = render_scenario(load_scenario(args.scenario), args.output)
+    source = Path(args.scenario)
+    _files({"SCENARIO": [source] if source.exists() else []}, {"-o": args.output}, folders=["-o"])
+    scenario = load_scenario(args.scenario)
+    if not args.output.exists():
+        _PLAN.new_folder(args.output)
+    try:
+        truth = render_scenario(scenario, args.output)
+    except BaseException:
+        _PLAN.undo()
+        raise
+    _PLAN.did(args.output)
     print(f"{len(truth.cameras)} cameras rendered -> {args.output}", file=sys.stderr)
 
 
@@ -539,29 +809,34 @@ def _run_diagnose(args) -> None:
     from flashsync.diagnose import diagnose, format_diagnosis
     from flashsync.pipeline import detect_videos
 
+    timestamps = _timestamp_files(args.timestamps)
+    _files({"VIDEO": args.videos, "--timestamps": timestamps.values()}, {"--json": args.json, "--rrd": args.rrd})
     diagnosis = diagnose(
         detect_videos(
             args.videos,
             args.flipped,
             estimate_readout=False,
             progress=_progress,
-            timestamps=_timestamp_files(args.timestamps),
+            timestamps=timestamps,
         ),
         args.reference,
     )
-    print(format_diagnosis(diagnosis))
+    print(format_diagnosis(diagnosis), flush=True)
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))
+        _PLAN.did(args.json)
     if args.rrd:
         import viz
 
         viz.save_diagnosis(args.rrd, diagnosis)
+        _PLAN.did(args.rrd)
         print(f"recording -> {args.rrd}", file=sys.stderr)
 
 
 def _run_demo(args) -> None:
     from flashsync.demo import run_demo
 
+    _files({"--samples": [args.samples] if args.samples else []}, {"-o": args.output, "--rrd": args.rrd}, ["-o"])
     print(run_demo(args.samples, args.output, progress=_progress, recording=args.rrd))
 
 
@@ -570,9 +845,11 @@ def _run_frames(args) -> None:
     from flashsync.ticks import frame_table, model_ticks_ms
 
     table_format(args.output)
+    _files({"--model": [args.model]}, {"-o": args.output})
     model = _load_model(args.model)
     table = frame_table(model, model_ticks_ms(model, args.rate, args.start_ms, args.end_ms))
     write_table(table, args.output)
+    _PLAN.did(args.output)
     shown = table["reason"] == ""
     print(
         f"{table['t_global_ms'].nunique()} ticks x {len(model.cameras)} cameras -> {args.output}: "
@@ -589,23 +866,29 @@ def _run_resample(args) -> None:
     from tracking_adapter.resample import format_resampled, resample
 
     table_format(args.output)
+    exposures = _per_camera_ms("--exposure", args.exposure)
+    max_gap_ms = _positive_ms("--max-gap-ms", args.max_gap_ms)
+    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": args.output})
     model = _load_model(args.model)
     ticks = model_ticks_ms(model, args.rate, args.start_ms, args.end_ms)
     result = resample(
         load_detections(args.detections, camera=args.camera),
         model,
         ticks,
-        max_gap_ms=args.max_gap_ms,
-        exposure_ms=_per_camera_ms("--exposure", args.exposure),
+        max_gap_ms=max_gap_ms,
+        exposure_ms=exposures,
         source=str(args.detections),
     )
     write_table(result.tracks, args.output)
+    _PLAN.did(args.output)
     print(format_resampled(result, str(args.detections), str(args.output)), file=sys.stderr)
 
 
 def _run_montage(args) -> None:
     from flashsync.montage import write_montage
 
+    cell = _cell(args.cell)
+    _files({"VIDEO": args.videos, "--model": [args.model]}, {"-o": args.output})
     summary = write_montage(
         args.videos,
         _load_model(args.model),
@@ -613,9 +896,10 @@ def _run_montage(args) -> None:
         args.rate,
         args.start_ms,
         args.end_ms,
-        cell=_cell(args.cell),
+        cell=cell,
         progress=_progress,
     )
+    _PLAN.did(args.output)
     print(
         f"{summary.frames} frames of {summary.width}x{summary.height} at {summary.rate_hz:g} Hz "
         f"from {summary.start_ms:.1f} ms -> {summary.path}",

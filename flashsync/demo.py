@@ -10,7 +10,15 @@ import numpy as np
 
 from flashsync.errors import InputError
 from flashsync.evaluate import stamp_errors, sync_errors
-from flashsync.io import events_to_frame, load_detections, load_ground_truth, load_homographies, save_events, save_model
+from flashsync.io import (
+    events_to_frame,
+    load_detections,
+    load_ground_truth,
+    load_homographies,
+    load_plane_outline,
+    save_events,
+    save_model,
+)
 from flashsync.pipeline import all_events, detect_videos, synchronize
 from flashsync.report import sync_table
 from tracking_adapter.restamp import format_summary, restamp_file
@@ -82,6 +90,7 @@ def run_demo(
             events=events_to_frame(all_events(detections)),
             detections=load_detections(output / "restamped.csv"),
             homographies=load_homographies(samples / "homographies.json"),
+            plane_outline_m=load_plane_outline(samples / "homographies.json"),
         )
         lines.append(f"recording -> {recording} (open it with: rerun {recording})")
     return "\n".join(lines)

@@ -28,9 +28,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import numba
 import numpy as np
 
+from flashsync.compiled import njit
 from flashsync.errors import NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
@@ -318,7 +318,7 @@ class EventDetector:
         self._recurrence.hold(stripes, first.sign * plateau, found, checked=kind is Band.PULSE)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _relative_change(history, current, min_level, min_step):  # pragma: no cover - compiled
     """One frame's relative change against the baseline, with what the detector needs of it.
 
@@ -380,14 +380,14 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
     return change, agree, noise, peak, lit_start, lit_stop
 
 
-@numba.njit(cache=True, nogil=True, inline="always", error_model="numpy")
+@njit(inline="always")
 def _median5(a, b, c, d, e):  # pragma: no cover - compiled
     """Median of five values by eight comparisons (no sorting)."""
     low, high = max(min(a, b), min(c, d)), min(max(a, b), max(c, d))
     return max(min(e, low), min(max(e, low), high))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _median_in_place(values, n):  # pragma: no cover - compiled
     """Median of ``values[:n]`` by insertion sort (n is small); reorders them."""
     for i in range(1, n):

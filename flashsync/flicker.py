@@ -34,8 +34,9 @@ from collections import deque
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
-import numba
 import numpy as np
+
+from flashsync.compiled import njit
 
 #: Flicker frequencies of 50 Hz and 60 Hz mains, Hz.
 MAINS_FLICKER_HZ = (100.0, 120.0)
@@ -504,7 +505,7 @@ def _identify_hz(phase: np.ndarray, times: np.ndarray) -> float | None:
     return best[0] if scores[best] >= 0.8 and other < 0.5 else None
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _row_log_ratio(profile, reference, min_level):  # pragma: no cover - compiled
     """Per row, the log of the median over blocks of ``profile / reference`` where the
     reference is lit (>= ``min_level``); NaN where fewer than half the blocks are. Shape (height,)."""
@@ -532,7 +533,7 @@ def _row_log_ratio(profile, reference, min_level):  # pragma: no cover - compile
     return out
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compiled
     """Robust fit of ``y ≈ basis @ coef`` (:func:`_basis`) over the finite rows (iteratively
     reweighted least squares, Tukey's biweight at 4.685 robust sigmas), started from
@@ -622,7 +623,7 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
     return coef, scale, gn_num, gn_den, True
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _cholesky_solve(a, b):  # pragma: no cover - compiled
     """``a^-1 b`` for a small symmetric positive definite ``a``; (zeros, False) if it is not."""
     n = b.size
@@ -654,7 +655,7 @@ def _cholesky_solve(a, b):  # pragma: no cover - compiled
     return out, ok
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover - compiled
     """The log flicker to divide out of each row: the frame's fitted pattern ``z(r)``
     (complex: its value and its quadrature) times the row's own complex gain ``G(r)``; and
@@ -701,7 +702,7 @@ def _row_pattern(y, basis, coef, clip, sums, rate, prior):  # pragma: no cover -
     return out, follows
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _update_mean(mean, profile, rate, clip):  # pragma: no cover - compiled
     """``mean += rate * (profile - mean)``, each step clipped to ``clip`` times the mean (a
     flash or a player that passes moves it little)."""

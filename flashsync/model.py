@@ -51,6 +51,10 @@ class CameraClock:
         ends of the recording) and the piecewise-linear correction (ms) at the k interior
         knots, added to the affine map; empty for an affine clock. ``covariance`` is then
         (3 + k, 3 + k), the warp values last.
+    frame_std_ms : ndarray of shape (n_frames,)
+        Standard deviation of each frame time beyond the map's (the frame clock's: stamps
+        kept as they are, a clock's wander, segments of a clock that changed rate), ms;
+        zeros where the frame times are exact up to the map (the default).
     """
 
     name: str
@@ -66,6 +70,11 @@ class CameraClock:
     video: str = ""
     drift_knots_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     drift_warp_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    frame_std_ms: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.frame_std_ms is None:
+            self.frame_std_ms = np.zeros(len(self.frame_times_ms))
 
     @property
     def n_frames(self) -> int:
@@ -97,14 +106,17 @@ class CameraClock:
         return start
 
     def t_global_std_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
-        """Standard deviation (ms) of :meth:`t_global_ms` from the solve's covariance."""
-        t_frame = self.frame_times_ms[np.asarray(frame, dtype=np.int64)]
+        """Standard deviation (ms) of :meth:`t_global_ms`: the solve's covariance and the
+        frame time's own (:attr:`frame_std_ms`, scaled by ``alpha``), independent."""
+        frame = np.asarray(frame, dtype=np.int64)
+        t_frame = self.frame_times_ms[frame]
         q = self.readout_row(row)
         t_frame, q = np.broadcast_arrays(t_frame, q)
         gradient = np.concatenate(
             [np.stack([t_frame, np.ones_like(t_frame), q], axis=-1), hat_basis(self.drift_knots_ms, t_frame)], axis=-1
         )
         variance = np.einsum("...i,ij,...j->...", gradient, self.covariance, gradient)
+        variance = variance + (self.alpha * np.broadcast_to(self.frame_std_ms[frame], variance.shape)) ** 2
         return np.sqrt(np.maximum(variance, 0.0))
 
     def locate(self, t_global_ms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -28,6 +28,7 @@ from av.video.reformatter import VideoReformatter
 
 from flashsync.atomic import atomic_output
 from flashsync.errors import InputError, NotEnoughDataError
+from flashsync.io.files import existing_file
 from flashsync.model import CameraClock, SyncModel
 from flashsync.ticks import AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms, tick_period_ms
 from flashsync.timestamps import median_step_ms, open_video, video_timestamps
@@ -143,8 +144,7 @@ def named_videos(paths: Sequence[str | Path], model: SyncModel) -> dict[str, Pat
             raise InputError(
                 f"{path}: two videos are named {path.stem}; camera names are file stems and must be unique: rename one"
             )
-        if not path.is_file():
-            raise InputError(f"{path}: no such file; check the path")
+        existing_file(path)
         if path.stem not in model.cameras:
             raise InputError(
                 f"{path}: camera {path.stem!r} is not in the model (it has "

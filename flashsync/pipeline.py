@@ -14,6 +14,7 @@ direction of cameras where it is not given, and the joint robust solve.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -85,10 +86,23 @@ def detect_videos(
         if unknown:
             raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(stems)}", parameter=parameter)
     stamps = {camera: load_timestamps(path) for camera, path in timestamps.items()}
+    cancelled = threading.Event()
+
+    def watched(camera: str, total: int) -> Callable[[int], None]:
+        """The progress callback, which also stops a decoding thread once the run is cancelled."""
+        update = progress(camera, total) if progress else None
+
+        def step(frames: int) -> None:
+            if cancelled.is_set():
+                raise _Cancelled()
+            if update is not None:
+                update(frames)
+
+        return step
 
     def detect(path: Path) -> CameraDetection:
         direction = True if path.stem in flipped else (None if estimate_readout else False)
-        detection = detect_video(path, flipped=direction, settings=settings, progress=progress)
+        detection = detect_video(path, flipped=direction, settings=settings, progress=watched)
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
@@ -99,7 +113,16 @@ def detect_videos(
         return detection.retimed(stamps[path.stem])
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
-        return list(pool.map(detect, paths))
+        try:
+            return list(pool.map(detect, paths))
+        except BaseException:  # an error or an interrupt: the other threads stop at their next frame
+            cancelled.set()
+            pool.shutdown(cancel_futures=True)
+            raise
+
+
+class _Cancelled(Exception):
+    """Raised in a decoding thread once :func:`detect_videos` is cancelled."""
 
 
 def all_events(detections: Sequence[CameraDetection]) -> Events:
@@ -116,13 +139,17 @@ class SyncReport:
     ----------
     alignments : accepted pair alignments (camera a, camera b) -> coarse map and matches.
     frame_clocks : per camera, the frame clock found behind its stamps.
+    frame_times : per camera whose stamps change rate, which frame times the flashes chose
+        (:func:`_best_frame_times`).
     flipped_found : cameras found to read bottom-up (upside down).
-    warnings : cameras left out and why.
+    warnings : cameras left out and why; stamps that follow no steady clock or change rate;
+        datasheet times per row the events contradict.
     sigma_ms : robust residual scale of the solve, ms.
     """
 
     alignments: dict[tuple[str, str], PairAlignment] = field(default_factory=dict)
     frame_clocks: dict[str, FrameClock] = field(default_factory=dict)
+    frame_times: dict[str, str] = field(default_factory=dict)
     flipped_found: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
@@ -152,14 +179,119 @@ def synchronize(
             f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
             parameter="reference",
         )
+    check_row_times(row_times or {}, names)
+    check_anchors(anchors)
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
-    best = _best_readout(cameras, undecided, lambda trial: _attempt(trial, reference, row_times, anchors))
-    report.alignments, report.warnings = best.alignments, best.warnings
-    report.flipped_found = [name for name in undecided if best.cameras[name].flipped]
+
+    rate_std = {name: clock.rate_std for name, clock in report.frame_clocks.items()}
+
+    def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
+        return _attempt(trial, reference, row_times, anchors, rate_std)
+
+    best = _best_readout(cameras, undecided, attempt)
+    best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
+    if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
+        best = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
+    report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings
+    report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
-    return best.model(reference), report
+    model = best.model(reference)
+    for name, clock in model.cameras.items():
+        clock.frame_std_ms = frame_std[name]
+    return model, report
+
+
+def check_row_times(row_times: dict[str, float], cameras: Sequence[str]) -> None:
+    """Raise an :class:`~flashsync.errors.InputError` (parameter ``row_times``) for a camera
+    that is not among ``cameras`` or a time per row that is not a positive number of ms."""
+    unknown = sorted(set(row_times) - set(cameras))
+    if unknown:
+        raise InputError(f"{', '.join(unknown)}: no such camera among {', '.join(cameras)}", parameter="row_times")
+    for name, value in row_times.items():
+        if not (isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value) and value > 0):
+            raise InputError(
+                f"{name}={value}: a time per row is a positive number of ms, e.g. {name}=0.0296",
+                parameter="row_times",
+            )
+
+
+def check_anchors(anchors: Sequence[str]) -> None:
+    """Raise an :class:`~flashsync.errors.InputError` (parameter ``anchors``) where anchors
+    name two different events of one camera: the anchored events are one flash, which a
+    camera sees once."""
+    seen: dict[str, str] = {}
+    for text in anchors:
+        camera, _, number = str(text).rpartition(":")
+        if camera in seen and seen[camera] != number:
+            raise InputError(
+                f"{camera}:{seen[camera]} and {text}: the anchors are one flash, which {camera} sees "
+                "once; anchor one event per camera",
+                parameter="anchors",
+            )
+        seen[camera] = number
+
+
+#: The frame times of stamps that change rate taken at the stamps' own rates.
+STAMPS_OWN_RATES = "the stamps' own rate in each segment"
+#: A choice of frame times whose log-likelihood leads the next by less than this is undecided.
+DECIDED_LOG_LIKELIHOOD = 5.0
+
+
+def _best_frame_times(
+    best: _Attempt, report: SyncReport, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> tuple[_Attempt, dict[str, np.ndarray], list[str]]:
+    """Each camera's frame times chosen where its stamps leave a choice, their standard
+    deviations (ms, per frame) and warnings about stamps that follow no steady clock.
+
+    A camera whose stamps change rate may have a sensor that changed rate (the stamps' own
+    rate in each segment) or one that kept its rate while the stamps did not
+    (:meth:`FrameClock.one_rate_alternatives`); the matched flashes choose (the
+    likelihood of :attr:`_Attempt.score`). Where they cannot (no flash tells them apart),
+    the frames where the choices differ carry the difference in their standard deviation.
+    """
+    frame_std = {name: clock.std_ms for name, clock in report.frame_clocks.items()}
+    warnings = []
+    for name, clock in report.frame_clocks.items():
+        video = best.cameras[name].video
+        if not clock.steady:
+            warnings.append(
+                f"{video}: its frame stamps follow no steady clock (variable frame rate); frame times are the "
+                f"stamps as they are, each uncertain by {float(np.median(clock.std_ms)):.2f} ms (in its sigma)"
+            )
+        if not clock.rate_changes:
+            continue
+        frame, before, after = clock.rate_changes[0]
+        change = f"{video}: its frame stamps change rate at frame {frame} ({before:.3f} -> {after:.3f} ms per frame)"
+        choices = [(STAMPS_OWN_RATES, clock.times_ms), *clock.one_rate_alternatives()]
+        # on the wrong frame times too few flashes may match to tie the camera at all
+        tried = [(best.score, choices[0][0], clock.times_ms, best)] if name in best.connected else []
+        for description, times in choices[1:]:
+            trial = dict(best.cameras)
+            trial[name] = trial[name].retimed(times)
+            try:
+                result = attempt(trial)
+            except FlashsyncError:
+                continue
+            if name in result.connected:
+                tried.append((result.score, description, times, result))
+        if not tried:
+            warnings.append(f"{change}; no choice of its frame times ties it to the other cameras")
+            continue
+        tried.sort(key=lambda entry: -entry[0])
+        best, times = tried[0][3], tried[0][2]
+        report.frame_times[name] = tried[0][1]
+        if len(tried) > 1 and tried[0][0] - tried[1][0] < DECIDED_LOG_LIKELIHOOD:
+            spread = np.abs(times - tried[1][2])
+            frame_std[name] = np.hypot(frame_std[name], spread)
+            warnings.append(
+                f"{change}; the flashes cannot tell {tried[0][1]} from {tried[1][1]}: its frame times are "
+                f"uncertain by up to {float(spread.max()):.1f} ms (in its sigma); check its timestamps"
+            )
+        else:
+            warnings.append(f"{change}; the flashes fit {tried[0][1]}")
+    return best, frame_std, warnings
 
 
 def _best_readout(
@@ -314,9 +446,15 @@ class _Attempt:
 
 
 def _attempt(
-    cameras: dict[str, CameraDetection], reference: str, row_times: dict[str, float] | None, anchors: Sequence[str]
+    cameras: dict[str, CameraDetection],
+    reference: str,
+    row_times: dict[str, float] | None,
+    anchors: Sequence[str],
+    rate_std: dict[str, float] | None = None,
 ) -> _Attempt:
-    """Match and solve with the cameras' current readout directions."""
+    """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
+    the relative standard error of its frame clock's rate (it and the reference's widen the
+    prior on its drift)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
     warnings = [
@@ -352,11 +490,56 @@ def _attempt(
         )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     durations = _durations([cameras[name] for name in connected])
-    priors = _row_time_priors([cameras[name] for name in connected], row_times or {})
-    solution = solve_with_drift_model(
-        matches.observations(), len(connected), connected.index(reference), durations=durations, priors=Priors(priors)
-    )
+    chosen = [cameras[name] for name in connected]
+
+    rate_std = rate_std or {}
+    wider = {
+        index: float(np.hypot(rate_std.get(name, 0.0), rate_std.get(reference, 0.0)) * DRIFT_PRIOR_WIDENING)
+        for index, name in enumerate(connected)
+    }
+
+    def solve(given: dict[str, float]) -> Solution:
+        priors = Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
+        return solve_with_drift_model(
+            matches.observations(), len(connected), connected.index(reference), durations=durations, priors=priors
+        )
+
+    given = {name: value for name, value in (row_times or {}).items() if name in connected}
+    solution = solve(given)
+    if given:
+        contradicted = _contradicted_row_times(solve({}), connected, given)
+        for name, (value, std) in contradicted.items():
+            warnings.append(
+                f"{cameras[name].video}: the datasheet time per row {given[name]:g} ms contradicts the events, "
+                f"which give {value:.5f} ± {std:.5f} ms; the events' value is used"
+            )
+        if contradicted:
+            solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
+
+
+#: A camera's drift prior is at least this many times the relative standard error of its and
+#: the reference's frame-clock rates: the drift must take up the rate the stamps give the frames.
+DRIFT_PRIOR_WIDENING = 3.0
+
+#: A datasheet time per row is contradicted by the events when it is this many of their
+#: standard deviations and this fraction of itself away from their own estimate.
+ROW_TIME_SIGMAS = 5.0
+ROW_TIME_TOLERANCE = 0.01
+
+
+def _contradicted_row_times(
+    free: Solution, connected: list[str], given: dict[str, float]
+) -> dict[str, tuple[float, float]]:
+    """The datasheet times per row (ms) that the events alone (``free``: solved with the weak
+    nominal prior) contradict: camera -> (the events' value, its std), ms."""
+    contradicted = {}
+    for name, value in given.items():
+        camera = free.cameras[connected.index(name)]
+        std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
+        if abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
+            contradicted[name] = (camera.row_time_ms, std)
+    return contradicted
 
 
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
@@ -372,7 +555,8 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
 
 
 def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
-    """Exposure time (ms, reference clock) from the camera's bands, or None without any.
+    """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
+    where the bands give no positive duration: a time per row the events could not tell).
 
     A band's half-fall comes one exposure after its half-rise (rows that saw the whole
     flash are the ones whose exposure window holds it), so its duration is the exposure.
@@ -380,7 +564,8 @@ def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: f
     mine = durations.camera == camera
     if not mine.any():
         return None
-    return float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    exposure = float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    return exposure if exposure > 0 else None
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:

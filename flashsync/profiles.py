@@ -125,14 +125,51 @@ def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tu
     with container:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
+        decoded, times = 0, []
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
                     raise InputError(f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)")
-                yield (
-                    float(frame.pts * frame.time_base) * 1000.0,
-                    row_profile(luma_plane(frame), *luma_range(frame)),
-                    bool(frame.key_frame),
-                )
+                time_ms = float(frame.pts * frame.time_base) * 1000.0
+                decoded += 1
+                times = [*times[-1:], time_ms]
+                yield time_ms, row_profile(luma_plane(frame), *luma_range(frame)), bool(frame.key_frame)
         except av.FFmpegError as error:
+            cut = cut_short(container, decoded, times)
+            if cut:
+                raise InputError(f"{path}: {cut} (decoding failed: {error.strerror}); {RECOPY}") from None
             raise InputError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None
+        cut = cut_short(container, decoded, times)
+        if cut:
+            raise InputError(f"{path}: {cut}; {RECOPY}")
+
+
+#: What to do about a video that is cut short.
+RECOPY = "copy the whole file again, or remux the part that is there (ffmpeg -i IN -c copy OUT.mkv) to use it"
+
+
+def cut_short(container: av.container.InputContainer, decoded: int, last_times_ms: list[float]) -> str | None:
+    """What shows a video is cut short, or None: fewer frames decoded than its index lists
+    (an MP4 whose index is at the front), or frames that end well before the duration its
+    header states (a Matroska file). ``last_times_ms``: the last one or two frame times."""
+    stream = container.streams.video[0]
+    listed = stream.frames or 0
+    if listed and decoded < listed - max(2, 0.01 * listed):
+        return f"cut short: {decoded} frames decoded of the {listed} its index lists"
+    if stream.duration and stream.time_base:
+        duration_ms = float(stream.duration * stream.time_base) * 1000.0
+    elif container.duration:
+        duration_ms = container.duration / 1000.0
+    else:
+        return None
+    if not last_times_ms:
+        return None  # nothing decoded: not a matter of length
+    # the header's end is at least its duration (a Matroska duration runs from time 0, an
+    # MP4 stream's from its first frame)
+    step = last_times_ms[-1] - last_times_ms[0] if len(last_times_ms) > 1 else 0.0
+    end = last_times_ms[-1] + step
+    if duration_ms - end > max(3.0 * step, 0.02 * duration_ms):
+        return (
+            f"cut short: its frames end at {end / 1000.0:.2f} s of the {duration_ms / 1000.0:.2f} s its header states"
+        )
+    return None

@@ -17,8 +17,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
+
+from flashsync.compiled import njit
 
 #: Bounds of the ramp's decay length and blur, rows.
 MIN_SCALE, MAX_SCALE = 0.1, 50.0
@@ -86,7 +87,7 @@ def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
     return foot if 0 <= foot < len(values) and values[foot] == 0 else -1
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     """Robust fit of ``y = plateau * ramp(x - start, scale, blur)`` (``rising``) or of
     ``y = plateau * (1 - ramp(...))``; ``p`` = (start, scale, blur, plateau) is the first
@@ -142,14 +143,14 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     return p, False
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _clamp(p):  # pragma: no cover - compiled
     p[1] = min(max(p[1], MIN_SCALE), MAX_SCALE)
     p[2] = min(max(p[2], 0.0), MAX_BLUR)
     return p
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     """Soft-L1 cost of the ramp ``p`` = (start, scale, blur, plateau) against ``y``, plus the
     blur's prior."""
@@ -160,7 +161,7 @@ def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     return total + (f_scale * p[2] / BLUR_PRIOR_STD) ** 2
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _shape(x, p, rising):  # pragma: no cover - compiled
     """The band's level at row ``x`` relative to its plateau, for ``p`` = (start, scale,
     blur, plateau): the ramp rising from 0, or falling from 1."""
@@ -168,7 +169,7 @@ def _shape(x, p, rising):  # pragma: no cover - compiled
     return share if rising else 1.0 - share
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _ramp(z, scale, blur):  # pragma: no cover - compiled
     """Share of the flash's light in a row ``z`` rows past its start: ``1 - exp(-z / scale)``
     (0 before), convolved with a Gaussian of ``blur`` rows. The tail term
@@ -183,7 +184,7 @@ def _ramp(z, scale, blur):  # pragma: no cover - compiled
     return 0.5 * math.erfc(-z / (blur * math.sqrt(2.0))) - tail
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _erfcx(t):  # pragma: no cover - compiled
     """``exp(t^2) erfc(t)`` for t >= 0 (asymptotic series past 25, where erfc underflows)."""
     if t < 25.0:
@@ -192,7 +193,7 @@ def _erfcx(t):  # pragma: no cover - compiled
     return (1.0 - 0.5 * u + 0.75 * u * u) / (t * math.sqrt(math.pi))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@njit
 def _solve_spd(a, b):  # pragma: no cover - compiled
     """``a^-1 b`` for a symmetric positive definite ``a`` by Cholesky; zeros if it is not."""
     n = b.size

@@ -79,6 +79,8 @@ def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
                 "stamp_quantum_ms": clock.quantum_ms,
                 "stamp_noise_ms": clock.stamp_noise_ms,
                 "dropped_frames": clock.dropped,
+                "stamp_rate_changes": [frame for frame, _, _ in clock.rate_changes],
+                "recording_gaps": clock.gaps,
             }
         rows.append(row)
     return pd.DataFrame(rows)
@@ -110,11 +112,16 @@ def sync_table(model: SyncModel, report=None) -> str:
 
 
 def _stamps(row) -> str:
-    """E.g. ``1 ms grid, 0.29 ms, 2 drops`` or ``variable``."""
+    """E.g. ``1 ms grid, ±0.29 ms, 2 drops``, ``fine, ±1.19 ms, 0 drops, 1 gap``, ``rate
+    change at 451`` or ``variable rate``."""
     if not row.stamps_steady:
         return "variable rate"
+    if row.stamp_rate_changes:
+        return "rate change at " + ", ".join(map(str, row.stamp_rate_changes))
     grid = f"{row.stamp_quantum_ms:g} ms grid" if row.stamp_quantum_ms >= 0.05 else "fine"
-    return f"{grid}, ±{row.stamp_noise_ms:.2f} ms, {row.dropped_frames} drop{'s' * (row.dropped_frames != 1)}"
+    text = f"{grid}, ±{row.stamp_noise_ms:.2f} ms, {row.dropped_frames} drop{'s' * (row.dropped_frames != 1)}"
+    gaps = len(row.recording_gaps)
+    return text + (f", {gaps} gap{'s' * (gaps != 1)}" if gaps else "")
 
 
 def rejected_events(model: SyncModel) -> pd.DataFrame:

@@ -21,7 +21,7 @@ one, clock drift within a few tens of ppm) enter as pseudo-observations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sparse
@@ -63,10 +63,13 @@ class Durations:
 @dataclass(frozen=True)
 class Priors:
     """Pseudo-observations: ``row_time`` maps a camera index to (mean, std) of ``T_row`` in
-    ms; ``drift_std`` is the prior std of ``alpha - 1`` for every camera (None: no prior)."""
+    ms; ``drift_std`` is the prior std of ``alpha - 1`` for every camera (None: no prior),
+    ``wider_drift_std`` a larger one for some camera indices (a frame clock whose rate is
+    uncertain)."""
 
     row_time: dict[int, tuple[float, float]]
     drift_std: float | None = 50e-6
+    wider_drift_std: dict[int, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -297,7 +300,8 @@ class _System:
             prior_rows.append((self.param_columns[c, 2], event_sigma_ms / std, mean))
         for c in range(n_cameras):
             if c != reference and priors.drift_std is not None:
-                prior_rows.append((self.param_columns[c, 0], event_sigma_ms / priors.drift_std, 0.0))
+                std = max(priors.drift_std, priors.wider_drift_std.get(c, 0.0))
+                prior_rows.append((self.param_columns[c, 0], event_sigma_ms / std, 0.0))
         for i, (column, weight, mean) in enumerate(prior_rows):
             triplets.add(np.array([self.n_equations + i]), np.array([column]), np.array([weight]))
         rhs.append(np.array([weight * mean for _, weight, mean in prior_rows]))

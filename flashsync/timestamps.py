@@ -8,6 +8,8 @@ shape (n_frames,) in milliseconds, in presentation order.
 
 from __future__ import annotations
 
+import errno
+import os
 from pathlib import Path
 
 import av
@@ -19,7 +21,11 @@ RTP_CLOCK_HZ = 90_000
 _RTP_WRAP = 2**32
 
 
-def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
+#: What to do about bad stamps in a video file.
+REMUX = "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
+
+
+def check_timestamps(times_ms: np.ndarray, source: str, fix: str = REMUX) -> np.ndarray:
     """Return ``times_ms`` as float64 if they are finite and strictly increasing.
 
     Parameters
@@ -28,22 +34,20 @@ def check_timestamps(times_ms: np.ndarray, source: str) -> np.ndarray:
         Frame times in ms, presentation order.
     source : str
         File name used in the error message.
+    fix : str
+        What to do, ending the error message (the default suits a video file).
     """
     times = np.asarray(times_ms, dtype=np.float64)
     if times.ndim != 1 or times.size == 0:
         raise InputError(f"{source}: no frame timestamps found; check that it holds video frames")
     if not np.all(np.isfinite(times)):
-        raise InputError(
-            f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; "
-            "remux the file (ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
-        )
+        raise InputError(f"{source}: {np.count_nonzero(~np.isfinite(times))} frames have no timestamp; {fix}")
     steps = np.diff(times)
     if np.any(steps <= 0):
         bad = int(np.argmax(steps <= 0)) + 1
         raise InputError(
             f"{source}: frame timestamps are not increasing at frame {bad} "
-            f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); remux the file or give the "
-            "timestamps as CSV"
+            f"({times[bad - 1]:.3f} ms then {times[bad]:.3f} ms); {fix}"
         )
     return times
 
@@ -74,13 +78,23 @@ def video_timestamps(path: str | Path) -> np.ndarray:
 
 
 def open_video(path: Path) -> av.container.InputContainer:
-    """Open a video file for reading, or raise a one-line error naming the file."""
+    """Open a video file for reading, or raise a one-line error naming the file: a folder,
+    no such file, no permission to read it, not a video."""
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a video file; give the video's path")
     if not path.is_file():
         raise InputError(f"{path}: no such file; check the path")
+    if not os.access(path, os.R_OK):
+        raise InputError(f"{path}: cannot be read (permission denied); check its permissions")
     try:
         container = av.open(str(path))
     except av.FFmpegError as error:
-        raise InputError(f"{path}: not a video file FFmpeg can open ({error.strerror})") from None
+        if error.errno == errno.EACCES:
+            raise InputError(f"{path}: cannot be read (permission denied); check its permissions") from None
+        raise InputError(
+            f"{path}: not a video file FFmpeg can open ({error.strerror}); if it is one, it may be cut short "
+            "(an MP4 keeps its index at the end): copy the whole file again"
+        ) from None
     if not container.streams.video:
         container.close()
         raise InputError(f"{path}: has no video stream; give a video file")

@@ -57,5 +57,5 @@ def test_an_unknown_edge_kind_is_an_input_error(tmp_path):
     table = pd.read_csv(tmp_path / "events.csv")
     table.loc[1, "edge"] = "middle"
     table.to_csv(tmp_path / "bad.csv", index=False)
-    with pytest.raises(InputError, match="bad.csv: not an events table"):
+    with pytest.raises(InputError, match="bad.csv: row 2, column edge is .middle., expected one of leading, trailing"):
         load_events(tmp_path / "bad.csv")

@@ -4,7 +4,7 @@ import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.io import load_model, save_model
-from flashsync.model import CameraClock, SyncModel
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
 
 
 def camera(flipped=False):
@@ -70,12 +70,15 @@ def test_model_file_round_trip(tmp_path):
             {
                 "flash": [0, 0],
                 "camera": ["cam1", "cam2"],
+                "event": [0, 0],
                 "frame": [1, 2],
                 "row": [10.5, 20.25],
+                "t_frame_ms": [33.4, 40.0],
+                "t_global_ms": [43.9, np.nan],
                 "residual_ms": [0.01, -0.01],
-                "inlier": [True, True],
+                "inlier": [True, False],
             }
-        ),
+        ).astype(MATCHED_EVENT_COLUMNS),
     )
     save_model(model, tmp_path / "sync.json")
     loaded = load_model(tmp_path / "sync.json")
@@ -100,7 +103,10 @@ def test_unknown_camera_is_a_clear_error():
         ("not json", "not a flashsync model file"),
         ('{"format": "other"}', "not a flashsync model file"),
         ('{"format": "flashsync.sync", "version": 99}', "version 99 is not supported"),
-        ('{"format": "flashsync.sync", "version": 1, "reference": "a", "cameras": [{}], "events": []}', "damaged"),
+        (
+            '{"format": "flashsync.sync", "version": 1, "reference": "a", "cameras": [{}], "events": []}',
+            r'cameras\[0\]: "name" is missing',
+        ),
     ],
 )
 def test_bad_model_files(tmp_path, content, message):

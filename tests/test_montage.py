@@ -124,6 +124,9 @@ def test_each_tile_shows_the_frame_covering_the_tick(synced_scenario, montage):
             if moved.sum() < 20:
                 continue
             distance = {f: np.abs(shown[rows][moved] - image_f[moved]).mean() for f, image_f in zip(candidates, stack)}
+            nearest = sorted(distance.values())
+            if nearest[1] - nearest[0] < 3.0:  # a few moving pixels that the encoding blurs: no decision
+                continue
             assert min(distance, key=distance.get) == frame[k], (tile.camera, k, distance)
             checked += 1
         assert checked > 30, tile.camera

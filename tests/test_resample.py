@@ -8,7 +8,7 @@ import pytest
 from cli_run import one_error_line, run
 
 from flashsync.evaluate import clock_origin_ms
-from flashsync.io import load_detections, load_ground_truth, load_model
+from flashsync.io import load_detections, load_ground_truth, load_homographies, load_model
 from flashsync.simulation.truth import puck_image_px
 from flashsync.ticks import model_ticks_ms
 from tracking_adapter.interpolate import interpolate_track
@@ -18,7 +18,7 @@ from tracking_adapter.resample import TRACK_COLUMNS, resample
 def true_puck_px(folder, model, tracks):
     """Where the simulated puck is in each row's camera image at the row's tick, px."""
     truth = load_ground_truth(folder / "truth.json")
-    homographies = json.loads((folder / "homographies.json").read_text())
+    homographies = load_homographies(folder / "homographies.json")
     instants = tracks["t_global_ms"].to_numpy() - clock_origin_ms(model, truth)
     image = np.full((len(tracks), 2), np.nan)
     for name, homography in homographies.items():

@@ -85,7 +85,7 @@ def test_csv_to_csv_keeps_every_byte_and_adds_times(tmp_path, model):
     assert (summary.rows, summary.stamped, summary.failed) == (4, 4, {})
 
 
-def test_crlf_blank_lines_no_final_newline_and_tiny_blocks(tmp_path, model):
+def test_crlf_blank_lines_kept_no_final_newline_and_tiny_blocks(tmp_path, model):
     text = CSV_TEXT.replace("\n", "\r\n").replace("cam2,3,", "\r\ncam2,3,").rstrip("\r\n")
     source = write(tmp_path / "dets.csv", text)
     restamp_file(source, tmp_path / "big.csv", model)
@@ -94,7 +94,7 @@ def test_crlf_blank_lines_no_final_newline_and_tiny_blocks(tmp_path, model):
     assert out == (tmp_path / "big.csv").read_bytes()
     lines = out.decode().split("\r\n")
     kept = [line.rsplit(",", 3)[0] for line in lines[:-1]]
-    assert kept == [line for line in text.split("\r\n") if line]
+    assert kept == text.split("\r\n")  # byte for byte: the blank line too
     assert "\n" not in out.decode().replace("\r\n", "")
 
 

@@ -5,9 +5,9 @@ import dataclasses
 import math
 from fractions import Fraction
 
-import av
 import numpy as np
 import pytest
+from decoded import decode, half_rise, row_profile
 
 from flashsync.errors import FlashsyncError
 from flashsync.io import load_ground_truth, load_scenario
@@ -57,30 +57,6 @@ def rendered(tmp_path_factory):
     sc = dataclasses.replace(sc, cameras=(cam1,) + sc.cameras[1:])
     out = tmp_path_factory.mktemp("tiny")
     return sc, render_scenario(sc, out), out
-
-
-def decode(path):
-    """Grey frames (float) and stamps (ms) of a video file."""
-    with av.open(str(path)) as container:
-        stream = container.streams.video[0]
-        frames = list(container.decode(stream))
-        return (
-            np.stack([f.to_ndarray(format="gray").astype(float) for f in frames]),
-            np.array([f.pts * 1000.0 * float(stream.time_base) for f in frames]),
-            stream.time_base,
-        )
-
-
-def row_profile(lit, dark):
-    """Relative brightening of each row: median over columns of lit / dark - 1."""
-    ratio = np.where(dark > 20, lit / np.maximum(dark, 1.0), np.nan)
-    return np.nanmedian(ratio, axis=1) - 1.0
-
-
-def half_rise(profile, plateau):
-    """First fractional index where `profile` crosses half of `plateau`."""
-    i = int(np.argmax(profile >= plateau / 2))
-    return i - 1 + (plateau / 2 - profile[i - 1]) / (profile[i] - profile[i - 1])
 
 
 def flash_at_row(camera, q_tau):

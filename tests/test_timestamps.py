@@ -55,8 +55,12 @@ def test_csv_timestamps_in_ms(tmp_path):
     "content, message",
     [
         ("frame,when\n0,1\n", "no timestamp column"),
-        ("t_ms\n0\nabc\n5\n", "1 frames have no timestamp"),
-        ("t_ms\n0\n40\n40\n", "not increasing at frame 2"),
+        ("t_ms\n0\nabc\n5\n", "row 2, column t_ms is 'abc', expected a finite number of ms; fix the CSV"),
+        ("t_ms\n0\n\n5\n", "row 2, column t_ms is '', expected a finite number"),
+        ("t_ms\n0\ninf\n5\n", "row 2, column t_ms is 'inf'"),
+        ("rtp\n0\n3003.5\n", "row 2, column rtp is '3003.5', expected a whole 90 kHz RTP stamp"),
+        ("t_ms\n", "no rows; fix the CSV"),
+        ("t_ms\n0\n40\n40\n", "not increasing at frame 2 .* fix the CSV: one row per decoded frame"),
     ],
 )
 def test_bad_timestamp_csv(tmp_path, content, message):

@@ -186,3 +186,19 @@ def test_report_text(tiny):
         assert float(numbers[1]) == pytest.approx(pair.stats["subframe"].median_m, abs=5e-4)
         assert float(numbers[4]) == pytest.approx(pair.stats["frame"].median_m, abs=5e-4)
         assert len(numbers) == 10
+
+
+def test_points_beyond_a_homographys_horizon_are_left_out_and_far_ones_fit_the_table(two_cameras):
+    """Camera b's homography has its horizon at row 50: its detections above are behind the
+    camera and left out with a reason; those just below map 10 km away, and the table's
+    columns still line up."""
+    detections, homographies = straight_track(two_cameras, {"a": 90.0, "b": 10.0})
+    homographies["b"] = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.01, -0.5]])  # w = 0.01 y - 0.5
+    rows = np.where(np.arange(60) % 2 == 0, 40.0, 50.01)
+    detections.loc[detections["camera"] == "b", "y"] = rows
+    report = validate(detections, two_cameras, homographies)
+    assert report.not_used == {"beyond the horizon of its camera's homography": 30}
+    lines = format_report(report).splitlines()
+    table = [line for line in lines if line.startswith(("a -> b", "b -> a"))]
+    assert any("e+" in line for line in table)  # metres past 10 km in three digits
+    assert len({len(line) for line in table}) == 1 and "beyond the horizon" in lines[-1]

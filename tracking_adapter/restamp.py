@@ -21,6 +21,7 @@ the image's extent in pixel-centre coordinates.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +37,7 @@ from flashsync.atomic import atomic_output
 from flashsync.errors import InputError
 from flashsync.io.detections import (
     REQUIRED_COLUMNS,
+    check_required_types,
     detections_format,
     iter_csv_blocks,
     load_mot,
@@ -57,6 +59,7 @@ REASONS = (
     "y missing",
     "y not a number",
     "y outside the image rows",
+    "no finite time from the model",
 )
 NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "restamp_error")
 _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
@@ -126,9 +129,9 @@ def restamp(
     require_columns(names, REQUIRED_COLUMNS, source)
     _check_free(names, source)
     exposures = _exposures(model, exposure_ms)
-    columns, reasons = _stamp(
-        [_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS], model, exposures, with_std
-    )
+    arrays = [_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS]
+    check_required_types({"camera": arrays[0].type}, source)
+    columns, reasons = _stamp(arrays, model, exposures, with_std)
     columns["restamp_error"] = pd.array(np.array([None, *REASONS], dtype=object)[reasons], dtype="str")
     return detections.assign(**{name: pd.Series(values, index=detections.index) for name, values in columns.items()})
 
@@ -233,30 +236,56 @@ def _restamp_csv_text(
     with open(in_path, "rb") as source, atomic_output(out_path) as temporary, open(temporary, "wb") as output:
         source.seek(header.size)
         output.write(header.raw + b"," + ",".join(names).encode())
+        line_number = 1  # the header's
         for block in iter_csv_blocks(source, block_bytes, header.eol):
-            lines = _lines(block, header.eol, in_path)
+            lines, filled = _lines(block, header.eol, in_path)
             try:
                 table = pacsv.read_csv(pa.BufferReader(block), **options)
             except pa.ArrowInvalid as error:
+                if "UTF8" in str(error):
+                    raise InputError(
+                        f"{in_path}: line {line_number + _first_not_utf8(block)} is not UTF-8 text; save the file "
+                        "as UTF-8 CSV"
+                    ) from None
                 raise InputError(
                     f"{in_path}: {first_line(error)}; every row needs the header's {len(header.names)} columns"
                 ) from None
-            if table.num_rows != len(lines):
+            if table.num_rows != int(filled.sum()):
                 raise InputError(f"{in_path}: a quoted value spans several lines; remove the line breaks inside values")
             columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std)
             _count(reasons, summary)
             texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string()) for name in names[:-1]]
             texts.append(_reason_texts(reasons))
             joined = pc.binary_join_element_wise(
-                lines, *(text.cast(pa.binary()) for text in texts), b",", null_handling="replace", null_replacement=b""
+                lines.filter(pa.array(filled)),
+                *(text.cast(pa.binary()) for text in texts),
+                b",",
+                null_handling="replace",
+                null_replacement=b"",
             )
-            end = np.frombuffer(joined.buffers()[1], dtype=np.int32)[len(joined)]
-            output.write(memoryview(joined.buffers()[2])[:end])
+            if not filled.all():  # blank lines are kept as they are
+                order = np.where(filled, np.cumsum(filled) - 1, len(joined) + np.cumsum(~filled) - 1)
+                joined = pa.concat_arrays([joined, lines.filter(pa.array(~filled))]).take(pa.array(order))
+            end = np.frombuffer(joined.buffers()[1], dtype=np.int32)[joined.offset + len(joined)]
+            start = np.frombuffer(joined.buffers()[1], dtype=np.int32)[joined.offset]
+            output.write(memoryview(joined.buffers()[2])[start:end])
+            line_number += len(filled)
         output.write(header.eol)
 
 
-def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
-    """The non-empty lines of ``block`` as ``eol + line`` (line endings moved to the front)."""
+def _first_not_utf8(block: bytes) -> int:
+    """1-based number of the first line of ``block`` that is not UTF-8 text (0 if none)."""
+    for number, line in enumerate(block.split(b"\n"), start=1):
+        try:
+            line.decode("utf-8")
+        except UnicodeDecodeError:
+            return number
+    return 0
+
+
+def _lines(block: bytes, eol: bytes, path: Path) -> tuple[pa.BinaryArray, np.ndarray]:
+    """Every line of ``block`` as ``eol + line`` (line endings moved to the front), and a
+    mask of those that are not blank (the rows; a CSV reader skips blank lines)."""
     data = np.frombuffer(block, dtype=np.uint8)
     ends = np.flatnonzero(data == ord("\n"))
     carriage = data[ends - 1] == ord("\r")
@@ -267,8 +296,7 @@ def _lines(block: bytes, eol: bytes, path: Path) -> pa.BinaryArray:
     offsets = np.concatenate([[0], ends + 1]).astype(np.int32)
     buffer = pa.py_buffer(eol + block[: -len(eol)])
     lines = pa.Array.from_buffers(pa.binary(), len(ends), [None, pa.py_buffer(offsets), buffer])
-    filled = np.diff(offsets) > len(eol)
-    return lines if filled.all() else lines.filter(pa.array(filled))
+    return lines, np.diff(offsets) > len(eol)
 
 
 def _restamp_batches(
@@ -285,7 +313,11 @@ def _restamp_batches(
 ) -> None:
     schema, batches = _read_batches(in_path, kind, camera, block_bytes)
     require_columns(schema.names, REQUIRED_COLUMNS, in_path)
+    check_required_types(dict(zip(schema.names, schema.types)), in_path)
     _check_free(schema.names, in_path)
+    nested = [i for i, kind in enumerate(schema.types) if out_kind == "csv" and pa.types.is_nested(kind)]
+    for i in nested:  # CSV holds no lists: they are written as JSON text
+        schema = schema.set(i, pa.field(schema.names[i], pa.string()))
     names = _new_columns(exposures, with_std)
     for name in names:
         schema = schema.append(pa.field(name, pa.string() if name == "restamp_error" else pa.float64()))
@@ -299,9 +331,8 @@ def _restamp_batches(
                     )
                     _count(reasons, summary)
                     new = [pa.array(columns[name], from_pandas=True) for name in names[:-1]]
-                    writer.write_batch(
-                        pa.RecordBatch.from_arrays([*batch.columns, *new, _reason_texts(reasons)], schema=schema)
-                    )
+                    old = [_json_texts(column) if i in nested else column for i, column in enumerate(batch.columns)]
+                    writer.write_batch(pa.RecordBatch.from_arrays([*old, *new, _reason_texts(reasons)], schema=schema))
             except pa.ArrowInvalid as error:
                 raise InputError(f"{in_path}: {first_line(error)}; fix the file") from None
 
@@ -371,11 +402,17 @@ def _stamp(
         if clock is None or not len(rows):
             continue
         frames = frame[rows].astype(np.int64)
-        columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
-        if "t_global_std_ms" in columns:
-            columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
+        with np.errstate(over="ignore", invalid="ignore"):  # a time that overflows gets a reason below
+            columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
+            if "t_global_std_ms" in columns:
+                columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
         if "t_center_ms" in columns and exposures[clock.name] is not None:
             columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposures[clock.name] / 2
+    computed = [columns[name] for name in ("t_global_ms", "t_global_std_ms") if name in columns]
+    infinite = ~np.all([np.isfinite(values) for values in computed], axis=0)
+    reasons[infinite & (reasons == 0)] = len(REASONS)
+    for values in columns.values():
+        values[reasons != 0] = np.nan
     return columns, reasons
 
 
@@ -395,6 +432,9 @@ def _to_float(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, np.ndarray
     the values that are present but not numbers."""
     array = _plain(array)
     kind = array.type
+    if pa.types.is_boolean(kind) or pa.types.is_nested(kind):  # true/false, lists: not frame numbers nor rows
+        present = np.asarray(array.is_valid().to_numpy(zero_copy_only=False), dtype=bool)
+        return np.full(len(array), np.nan), present
     if pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind):
         return (array.cast(pa.float64()).to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool))
     try:
@@ -422,6 +462,11 @@ def _series_to_arrow(series: pd.Series) -> pa.Array:
         return pa.array(series, from_pandas=True)
     except (pa.ArrowInvalid, pa.ArrowTypeError):  # mixed Python objects
         return pa.array(series.astype("str"), from_pandas=True)
+
+
+def _json_texts(array: pa.Array) -> pa.Array:
+    """Lists and records as JSON text (empty where missing): how a CSV holds them."""
+    return pa.array([None if value is None else json.dumps(value) for value in array.to_pylist()], pa.string())
 
 
 def _reason_texts(reasons: np.ndarray) -> pa.Array:

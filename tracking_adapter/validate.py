@@ -110,7 +110,8 @@ class ValidationReport:
         ``"t_center_ms"`` (mid-exposure) or ``"t_global_ms"`` (end of exposure).
     not_used : dict of str to int
         Detections left out, by reason (the restamp reasons, ``x missing or not a number``,
-        ``object id missing``, ``camera without homography``).
+        ``object id missing``, ``camera without homography``, ``beyond the horizon of its camera's
+        homography``).
     triples : DataFrame
         Every triple of the sub-frame model (:data:`TRIPLE_COLUMNS`): B's detection at its
         instant (ms) and plane position (m), A's interpolated position there, the distance.
@@ -149,6 +150,29 @@ def image_to_plane(x: np.ndarray, y: np.ndarray, homography: np.ndarray) -> np.n
     """
     points = homography @ np.vstack([x, y, np.ones(len(x))])
     return (points[:2] / points[2]).T
+
+
+def beyond_horizon(x: np.ndarray, y: np.ndarray, homography: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Image points beyond the horizon of a homography: on the other side of its horizon line
+    from the image's bottom centre (which shows the ground), or on it; there the plane
+    position is behind the camera or at infinity.
+
+    Parameters
+    ----------
+    x, y : arrays of shape (n,)
+        Image column and stored-image row, px.
+    homography : array of shape (3, 3)
+        Image px -> plane m.
+    width, height : int
+        Image size, px.
+
+    Returns
+    -------
+    bool ndarray of shape (n,)
+    """
+    w = homography[2] @ np.vstack([x, y, np.ones(len(x))])
+    ground = homography[2] @ np.array([(width - 1) / 2.0, height - 1.0, 1.0])
+    return ~(w * np.sign(ground) > 1e-12 * np.abs(ground))
 
 
 def validate(
@@ -205,6 +229,14 @@ def validate(
     ):
         _add(not_used, reason, int(np.count_nonzero(usable & bad)))
         usable &= ~bad
+    y_all = pd.to_numeric(stamped["y"], errors="coerce").to_numpy(dtype=np.float64)
+    beyond = np.zeros(len(usable), dtype=bool)
+    for name in set(cameras[usable]):
+        mine = usable & (cameras == name)
+        clock = model.camera(name)
+        beyond[mine] = beyond_horizon(x[mine], y_all[mine], np.asarray(homographies[name]), clock.width, clock.height)
+    _add(not_used, "beyond the horizon of its camera's homography", int(np.count_nonzero(beyond)))
+    usable &= ~beyond
 
     instant = (
         "t_center_ms"
@@ -348,4 +380,8 @@ def _add(counts: dict[str, int], reason: str, count: int) -> None:
 
 
 def _number(value: float | None) -> str:
-    return "-" if value is None else f"{value:.3f}"
+    """A distance in m for the table: three decimals, or three digits where that would not
+    fit its column (10 km and more)."""
+    if value is None:
+        return "-"
+    return f"{value:.3f}" if abs(value) < 1e4 else f"{value:.3g}"

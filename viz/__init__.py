@@ -1,9 +1,10 @@
 """Rerun visualisation of a flashsync synchronisation.
 
 Events, residuals, videos in sync, trajectories in the plane and validation errors in
-one Rerun recording on the reference clock (timeline ``global_time``). Only this package
-imports Rerun. See :mod:`viz.recording` for the entity paths and :mod:`viz.timeline` for
-the timelines.
+one Rerun recording on one timeline, ``global_time``: the global clock from the start of
+the recordings. Only this package imports Rerun. See :mod:`viz.recording` for the entity
+paths, :mod:`viz.timeline` for the timelines, :mod:`viz.blueprint` for the default layout
+and :mod:`viz.plane` for the plane view.
 
 Examples
 --------
@@ -16,25 +17,18 @@ Examples
 
 from viz.blueprint import sync_blueprint
 from viz.diagnosis import log_diagnosis, save_diagnosis
-from viz.recording import (
-    APPLICATION_ID,
-    GRPC_PORT,
-    RINK_M,
-    WEB_PORT,
-    log_sync,
-    save_recording,
-    serve,
-    spawn,
-    viewer_url,
-)
+from viz.plane import PlaneWarning, rectangle_outline
+from viz.recording import APPLICATION_ID, BIND, GRPC_PORT, WEB_PORT, log_sync, save_recording, serve, spawn, viewer_url
 
 __all__ = [
     "APPLICATION_ID",
+    "BIND",
     "GRPC_PORT",
-    "RINK_M",
+    "PlaneWarning",
     "WEB_PORT",
     "log_diagnosis",
     "log_sync",
+    "rectangle_outline",
     "save_diagnosis",
     "save_recording",
     "serve",

@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import rerun as rr
 
-from viz.timeline import global_time_column
+from viz.timeline import Timeline
 
 
 def log_series(
     recording: rr.RecordingStream,
+    timeline: Timeline,
     entity: str,
     style: rr.SeriesPoints | rr.SeriesLines,
     t_global_ms: np.ndarray,
@@ -21,12 +22,13 @@ def log_series(
     Parameters
     ----------
     recording : RecordingStream
+    timeline : Timeline
     entity : str
         Entity path of the series.
     style : SeriesPoints or SeriesLines
         Colour, marker or width, and legend name.
     t_global_ms : float array of shape (n,)
-        Instants on the reference clock, ms.
+        Instants on the global clock, ms.
     values : float array of shape (n,)
         The scalars, in the unit of the series.
     *indexes : TimeColumn
@@ -35,6 +37,6 @@ def log_series(
     recording.log(entity, style, static=True)
     recording.send_columns(
         entity,
-        indexes=[global_time_column(t_global_ms), *indexes],
+        indexes=[timeline.column(t_global_ms), *indexes],
         columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=np.float64)),
     )

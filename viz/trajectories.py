@@ -1,13 +1,16 @@
 """Tracked objects: on each camera's frames, and in the common plane at their global times.
 
-The plane is the rink in metres (``z = 0`` the ice, ``z`` up). An image detection
-``(x, y)`` (px) is projected into it through its camera's homography (image px -> plane
-m, :func:`tracking_adapter.validate.image_to_plane`). Each camera's observations of an
+An image detection ``(x, y)`` (px) is projected into the plane (metres, see
+:mod:`viz.plane`) through its camera's homography (image px -> plane m,
+:func:`tracking_adapter.validate.image_to_plane`). Each camera's observations of an
 object are a point series in the camera's colour at the detection's time: ``t_center_ms``
 (mid-exposure, what a blurred centroid corresponds to) where the table has it, else
 ``t_global_ms`` (end of exposure of the detection's row). With good synchronisation the
-cameras' points of a moving object lie on one curve; the blueprint's 3D view shows the
-last second of them.
+cameras' points of a moving object lie on one curve; the blueprint's plane view shows the
+last :data:`viz.blueprint.TRAIL_S` seconds of them.
+
+Detections without an object id column are one object named :data:`NO_OBJECT`, as in
+``flashsync validate``.
 """
 
 from __future__ import annotations
@@ -22,13 +25,13 @@ from flashsync.io.detections import require_columns
 from flashsync.model import CameraClock, SyncModel
 from tracking_adapter.validate import OBJECT_COLUMNS, image_to_plane
 from viz.palette import Color, camera_colors
-from viz.timeline import frame_batches, frame_timeline, global_time_column
+from viz.plane import PLANE
+from viz.timeline import Timeline, frame_timeline
 from viz.video import PIXEL_CENTRE, camera_entity
 
-PLANE = "plane"
-RINK_ENTITY = f"{PLANE}/rink"
-RINK_CORNER_RADIUS_M = 8.5
-_NO_OBJECT = "detections"
+NO_OBJECT = "object"
+POINT_RADIUS_UI = 4.0
+"""Radius of a plane observation, ui points (the same at any zoom)."""
 
 
 def entity_part(name: object) -> str:
@@ -38,7 +41,7 @@ def entity_part(name: object) -> str:
 
 def observation_entity(camera: str, obj: object) -> str:
     """Entity path of ``camera``'s plane observations of object ``obj``."""
-    return f"{PLANE}/{entity_part(camera)}/{entity_part(obj)}"
+    return f"{PLANE}/observations/{entity_part(camera)}/{entity_part(obj)}"
 
 
 def detections_entity(camera: str) -> str:
@@ -51,14 +54,14 @@ def stamped(detections: pd.DataFrame) -> pd.DataFrame:
 
     Rows without a finite ``t_global_ms``, ``x`` or ``y`` (restamp says why in
     ``restamp_error``) are left out. ``object`` is the object id column (``object`` or
-    ``id``, as in :mod:`tracking_adapter.validate`), or one object for all rows without
-    one; ``t_plane_ms`` is ``t_center_ms`` where finite, else ``t_global_ms``.
+    ``id``, as in :mod:`tracking_adapter.validate`), or :data:`NO_OBJECT` for all rows
+    without one; ``t_plane_ms`` is ``t_center_ms`` where finite, else ``t_global_ms``.
     """
     require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"), "restamped detections")
     numbers = detections[["x", "y", "t_global_ms"]].apply(pd.to_numeric, errors="coerce")
     table = detections[np.isfinite(numbers).all(axis=1)]
     id_column = next((name for name in OBJECT_COLUMNS if name in table), None)
-    objects = table[id_column] if id_column else _NO_OBJECT
+    objects = table[id_column] if id_column else NO_OBJECT
     center = (
         pd.to_numeric(table["t_center_ms"], errors="coerce")
         if "t_center_ms" in table
@@ -71,8 +74,27 @@ def stamped(detections: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def project(detections: pd.DataFrame, homographies: Mapping[str, np.ndarray]) -> pd.DataFrame:
+    """The :func:`stamped` detections of cameras with a homography, with their plane position.
+
+    Returns
+    -------
+    DataFrame
+        Those rows, in their order, plus ``plane_x, plane_y`` (m).
+    """
+    rows = detections[detections["camera"].isin(list(homographies))]
+    plane = np.full((len(rows), 2), np.nan)
+    for name, index in rows.groupby("camera", sort=False).indices.items():
+        plane[index] = image_to_plane(
+            rows["x"].to_numpy(dtype=np.float64)[index],
+            rows["y"].to_numpy(dtype=np.float64)[index],
+            np.asarray(homographies[name]),
+        )
+    return rows.assign(plane_x=plane[:, 0], plane_y=plane[:, 1])
+
+
 def log_frame_detections(
-    recording: rr.RecordingStream, camera: CameraClock, detections: pd.DataFrame, color: Color
+    recording: rr.RecordingStream, timeline: Timeline, camera: CameraClock, detections: pd.DataFrame, color: Color
 ) -> None:
     """Draw ``camera``'s detections on the frames that hold them, labelled by object.
 
@@ -82,6 +104,7 @@ def log_frame_detections(
     Parameters
     ----------
     recording : RecordingStream
+    timeline : Timeline
     camera : CameraClock
     detections : DataFrame
         This camera's rows of :func:`stamped`; ``x, y`` in px.
@@ -90,7 +113,7 @@ def log_frame_detections(
     """
     if detections.empty:
         return
-    indexes, order, lengths = frame_batches(camera, detections["frame"].to_numpy())
+    indexes, order, lengths = timeline.frame_batches(camera, detections["frame"].to_numpy())
     ordered = detections.iloc[order]
     positions = ordered[["x", "y"]].to_numpy(dtype=np.float64) + PIXEL_CENTRE
     columns = rr.Points2D.columns(
@@ -100,64 +123,31 @@ def log_frame_detections(
 
 
 def log_observations(
-    recording: rr.RecordingStream, model: SyncModel, detections: pd.DataFrame, homographies: Mapping[str, np.ndarray]
+    recording: rr.RecordingStream, timeline: Timeline, model: SyncModel, projected: pd.DataFrame
 ) -> None:
     """Log each camera's detections of each object in the plane, at ``t_plane_ms``.
 
     Parameters
     ----------
     recording : RecordingStream
+    timeline : Timeline
     model : SyncModel
         Gives the cameras' colours.
-    detections : DataFrame
-        :func:`stamped` restamped detections.
-    homographies : mapping of camera name to ndarray of shape (3, 3)
-        Image px -> plane m; cameras without one are left out.
+    projected : DataFrame
+        :func:`project`'s table.
     """
     colors = camera_colors(model.cameras)
-    for (name, obj), track in detections.groupby(["camera", "object"], sort=False):
-        if name not in homographies:
-            continue
-        plane = image_to_plane(
-            track["x"].to_numpy(dtype=np.float64), track["y"].to_numpy(dtype=np.float64), np.asarray(homographies[name])
-        )
-        points = np.column_stack([plane, np.zeros(len(plane))])
+    for (name, obj), track in projected.groupby(["camera", "object"], sort=False):
+        points = track[["plane_x", "plane_y"]].to_numpy(dtype=np.float64)
         recording.send_columns(
             observation_entity(name, obj),
             indexes=[
-                global_time_column(track["t_plane_ms"].to_numpy()),
+                timeline.column(track["t_plane_ms"].to_numpy()),
                 rr.TimeColumn(frame_timeline(name), sequence=track["frame"].to_numpy()),
             ],
-            columns=rr.Points3D.columns(
-                positions=points, colors=[colors[name]] * len(points), radii=[0.15] * len(points)
+            columns=rr.Points2D.columns(
+                positions=points,
+                colors=[colors[name]] * len(points),
+                radii=[rr.Radius.ui_points(POINT_RADIUS_UI)] * len(points),
             ),
         )
-
-
-def log_plane(recording: rr.RecordingStream, rink_m: tuple[float, float] | None) -> None:
-    """Set up the plane (static): ``z`` up, and the rink outline if ``rink_m`` is given.
-
-    The outline is a rectangle from (0, 0) to ``rink_m`` (length, width; m) with corners
-    rounded to :data:`RINK_CORNER_RADIUS_M`, and the centre line.
-    """
-    recording.log(PLANE, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    if rink_m is None:
-        return
-    length, width = rink_m
-    radius = min(RINK_CORNER_RADIUS_M, length / 2, width / 2)
-    arc = np.linspace(0.0, np.pi / 2, 12)
-    corners = [
-        ((length - radius, width - radius), 0.0),
-        ((radius, width - radius), np.pi / 2),
-        ((radius, radius), np.pi),
-        ((length - radius, radius), 1.5 * np.pi),
-    ]
-    outline = np.concatenate(
-        [
-            np.stack([cx + radius * np.cos(start + arc), cy + radius * np.sin(start + arc)], axis=1)
-            for (cx, cy), start in corners
-        ]
-    )
-    outline = np.concatenate([outline, outline[:1]])
-    strips = [np.column_stack([outline, np.zeros(len(outline))]), [[length / 2, 0.0, 0.0], [length / 2, width, 0.0]]]
-    recording.log(RINK_ENTITY, rr.LineStrips3D(strips, colors=(120, 160, 200), radii=0.05), static=True)

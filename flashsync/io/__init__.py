@@ -9,7 +9,8 @@ module               file                                    functions
 ``detections``       tracker detections: CSV, Parquet, MOT   :func:`load_detections`,
                                                              :func:`save_detections`, :func:`load_mot`
 ``timestamps``       a camera's frame times as CSV           :func:`load_timestamps`
-``homographies``     image -> plane homographies, JSON       :func:`load_homographies`
+``homographies``     image -> plane homographies, JSON       :func:`load_homographies`,
+                     (and the plane's outline)               :func:`load_plane_outline`
 ``validation``       ``validate --json``                     :func:`load_validation`,
                                                              :func:`save_validation`
 ``scenario``         simulator scenario, YAML or JSON        :func:`load_scenario`
@@ -24,7 +25,7 @@ Writers are atomic (:mod:`flashsync.atomic`).
 
 from flashsync.io.detections import load_detections, load_mot, save_detections
 from flashsync.io.events import events_from_frame, events_to_frame, load_events, save_events
-from flashsync.io.homographies import load_homographies
+from flashsync.io.homographies import load_homographies, load_plane_outline
 from flashsync.io.model_file import load_model, save_model
 from flashsync.io.scenario import load_scenario
 from flashsync.io.tables import write_table
@@ -41,6 +42,7 @@ __all__ = [
     "load_homographies",
     "load_model",
     "load_mot",
+    "load_plane_outline",
     "load_scenario",
     "load_timestamps",
     "load_validation",

@@ -17,6 +17,8 @@ from pathlib import Path
 from typing import BinaryIO
 
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 
 from flashsync.errors import InputError
 from flashsync.io.files import existing_file, first_line
@@ -68,6 +70,25 @@ def require_columns(columns: Iterable[str], required: Iterable[str], source: str
         )
 
 
+def check_required_types(types: dict[str, pa.DataType], source: str | Path) -> None:
+    """Raise an :class:`~flashsync.errors.InputError` naming ``source`` if a required column
+    holds what cannot be a camera name, a frame or a row in any row: true/false values in
+    ``frame`` or ``y`` (they would read as 1 and 0), or lists and records in any of them.
+    ``types`` maps column names to Arrow types (other columns may hold anything)."""
+    for name in REQUIRED_COLUMNS:
+        kind = types.get(name)
+        if kind is None:
+            continue
+        nested = pa.types.is_nested(kind)
+        if nested or (name != "camera" and pa.types.is_boolean(kind)):
+            held = "lists or records" if nested else "true/false values"
+            wanted = "camera names" if name == "camera" else "numbers"
+            raise InputError(
+                f"{source}: column {name} holds {held} ({kind}), expected {wanted}; "
+                "write plain values in the required columns camera, frame, y"
+            )
+
+
 def load_detections(path: str | Path, *, camera: str | None = None, input_format: str | None = None) -> pd.DataFrame:
     """Read a detections file into a DataFrame (column types inferred).
 
@@ -96,10 +117,16 @@ def load_detections(path: str | Path, *, camera: str | None = None, input_format
     path = existing_file(path)
     try:
         if kind == "parquet":
+            schema = pq.read_schema(path)
+            check_required_types(dict(zip(schema.names, schema.types)), path)
             return pd.read_parquet(path)
-        return pd.read_csv(path)
-    except (OSError, ValueError, pd.errors.ParserError) as error:
+        table = pd.read_csv(path)
+    except UnicodeDecodeError as error:
+        raise InputError(f"{path}: not UTF-8 text (byte {error.start}); save the file as UTF-8 CSV") from None
+    except (OSError, ValueError, pd.errors.ParserError, pa.ArrowException) as error:
         raise InputError(f"{path}: cannot read it as {kind} ({first_line(error)}); check the file") from None
+    check_required_types({name: pa.bool_() for name in table.columns if pd.api.types.is_bool_dtype(table[name])}, path)
+    return table
 
 
 def save_detections(table: pd.DataFrame, path: str | Path) -> None:

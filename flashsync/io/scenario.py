@@ -15,33 +15,55 @@ from pathlib import Path
 import yaml
 
 from flashsync.errors import InputError
+from flashsync.io.fields import check_types, describe, is_number
+from flashsync.io.files import existing_file
 from flashsync.simulation.scenario import PRESETS, CameraSpec, FlashSpec, LightSwitch, Scenario, check_scenario, preset
 
 
 def _build(cls: type, data: object, where: str, source: str):
-    """Instantiate dataclass `cls` from dict `data`, refusing unknown keys."""
+    """Instantiate dataclass `cls` from dict `data`, refusing unknown keys and values of
+    the wrong type (:func:`~flashsync.io.fields.check_types`)."""
     if not isinstance(data, dict):
         raise InputError(f"{source}: {where} must be a mapping of field names to values")
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
             raise InputError(f"{source}: unknown key '{key}' in {where}; valid keys: {', '.join(names)}")
+    check_types(cls, data, where, source, skip=_RECORDS)
     try:
         return cls(**data)
     except TypeError as err:
         raise InputError(f"{source}: {where}: {err}") from None
 
 
+#: Fields holding records of their own, checked by their own dataclass.
+_RECORDS = ("cameras", "flashes", "switches")
+
+
 def _camera(data: object, where: str, source: str) -> CameraSpec:
     cam = _build(CameraSpec, data, where, source)
-    return dataclasses.replace(
-        cam,
-        dropped_frames=tuple(int(f) for f in cam.dropped_frames),
-        missed_flashes=tuple(int(k) for k in cam.missed_flashes),
-        gain_steps=tuple(tuple(float(v) for v in s) for s in cam.gain_steps),
-        position_m=tuple(float(v) for v in cam.position_m),
-        look_at_m=tuple(float(v) for v in cam.look_at_m),
-    )
+    try:
+        return dataclasses.replace(
+            cam,
+            dropped_frames=tuple(_whole(f) for f in cam.dropped_frames),
+            frame_gaps=tuple((_whole(g[0]), _whole(g[1])) for g in cam.frame_gaps),
+            stamp_rate_changes=tuple((_whole(c[0]), float(c[1])) for c in cam.stamp_rate_changes),
+            missed_flashes=tuple(_whole(k) for k in cam.missed_flashes),
+            gain_steps=tuple(tuple(float(v) for v in step) for step in cam.gain_steps),
+            position_m=tuple(float(v) for v in cam.position_m),
+            look_at_m=tuple(float(v) for v in cam.look_at_m),
+        )
+    except (TypeError, ValueError, IndexError) as err:
+        raise InputError(
+            f"{source}: {where}: a list holds a value of the wrong kind ({err}); fix the scenario"
+        ) from None
+
+
+def _whole(value: object) -> int:
+    """A whole number (a frame or flash index), else a ValueError."""
+    if not is_number(value) or value != int(value):
+        raise ValueError(f"{value!r} is not a whole number")
+    return int(value)
 
 
 def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
@@ -71,12 +93,16 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
     data = dict(data)
     base = None
     if "preset" in data:
-        base = preset(data.pop("preset"))
+        name = data.pop("preset")
+        if not isinstance(name, str) or name not in PRESETS:
+            raise InputError(f"{source}: 'preset' is {describe(name)}, expected one of {', '.join(PRESETS)}")
+        base = preset(name)
         data.setdefault("name", base.name)
     names = [f.name for f in dataclasses.fields(Scenario)]
     for key in data:
         if key not in names:
             raise InputError(f"{source}: unknown key '{key}' in the scenario; valid keys: preset, {', '.join(names)}")
+    check_types(Scenario, data, "the scenario", source, skip=_RECORDS)
     if "cameras" in data:
         cams = data["cameras"]
         if not isinstance(cams, list):
@@ -88,6 +114,8 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
             if not isinstance(items, list):
                 raise InputError(f"{source}: '{key}' must be a list")
             data[key] = tuple(_build(cls, d, f"{key}[{i}]", source) for i, d in enumerate(items))
+    if "player_radius_m" in data:
+        data["player_radius_m"] = tuple(data["player_radius_m"])
     if base is not None:
         scenario = dataclasses.replace(base, **data)
     else:
@@ -96,8 +124,8 @@ def scenario_from_dict(data: object, source: str = "<dict>") -> Scenario:
         scenario = _build(Scenario, data, "the scenario", source)
     try:
         check_scenario(scenario, source)
-    except TypeError as err:
-        raise InputError(f"{source}: a value has the wrong type ({err})") from None
+    except (TypeError, ValueError, IndexError) as err:
+        raise InputError(f"{source}: a value has the wrong type or shape ({err}); fix the scenario") from None
     return scenario
 
 
@@ -125,12 +153,16 @@ def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     if str(path) in PRESETS and not path.is_file():
         return preset(str(path))
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"{path}: no such scenario file, nor a preset ({', '.join(PRESETS)})")
     suffix = path.suffix.lower()
     if suffix not in (".yaml", ".yml", ".json"):
         raise InputError(f"{path}: unknown scenario format '{suffix}'; use .yaml, .yml or .json")
-    text = path.read_text(encoding="utf-8")
+    path = existing_file(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise InputError(f"{path}: not UTF-8 text (byte {err.start}); save the scenario as UTF-8") from None
     try:
         data = json.loads(text) if suffix == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as err:

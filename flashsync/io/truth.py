@@ -11,6 +11,7 @@ from pathlib import Path
 
 from flashsync.atomic import write_text
 from flashsync.errors import InputError
+from flashsync.io.fields import Fields, check_types, describe, is_number
 from flashsync.simulation.truth import CameraTruth, GroundTruth
 
 FORMAT = "flashsync-truth"
@@ -46,14 +47,29 @@ def load_ground_truth(path: str | Path) -> GroundTruth:
         raise InputError(f"{path}: no such ground-truth file; render a scenario first")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as err:
-        raise InputError(f"{path}: not valid JSON ({err})") from None
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
+    except (UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise InputError(f"{path}: not valid JSON ({err}); render the scenario again") from None
+    fix = "render the scenario again"
+    top = Fields(data, str(path), fix=fix)
+    if data.get("format") != FORMAT:
         raise InputError(f"{path}: not a flashsync ground-truth file")
-    if data.get("version") != VERSION:
-        raise InputError(f"{path}: ground-truth version {data.get('version')} is not supported (expected {VERSION})")
-    cameras = {}
-    for name, c in data["cameras"].items():
-        c = dict(c, flashes_seen={int(k): v for k, v in c["flashes_seen"].items()})
-        cameras[name] = CameraTruth(**c)
-    return GroundTruth(data["reference"], cameras, data["flashes"], data["switches"], data["scenario"])
+    version = data.get("version")
+    if not is_number(version) or isinstance(version, float) or version != VERSION:
+        top.fail("version", f"is {describe(version)}, expected the number {VERSION}")
+    cameras = Fields(top.value("cameras"), str(path), "cameras", fix=fix)
+    truths = {}
+    for name in cameras.data:
+        entry = Fields(cameras.value(name), str(path), f"camera {name!r}", fix=fix)
+        check_types(CameraTruth, entry.data, entry.where, str(path), fix=fix)
+        for key in ("frame_times_ms", "stamps_ms"):
+            entry.numbers(key, increasing=True)
+        seen = Fields(entry.value("flashes_seen"), str(path), f"camera {name!r} flashes_seen", fix=fix)
+        try:
+            c = dict(entry.data, flashes_seen={int(k): [int(f) for f in v] for k, v in seen.data.items()})
+            truths[name] = CameraTruth(**c)
+        except (TypeError, ValueError) as err:
+            raise InputError(f"{path}: camera {name!r}: {err}; {fix}") from None
+    reference = top.text("reference")
+    if reference not in truths:
+        top.fail("reference", f"is {reference!r}, which is not among the cameras")
+    return GroundTruth(reference, truths, top.value("flashes"), top.value("switches"), top.value("scenario"))

@@ -11,7 +11,8 @@ import pandas as pd
 
 from flashsync.atomic import write_text
 from flashsync.errors import InputError
-from flashsync.io.files import existing_file
+from flashsync.io.fields import Fields
+from flashsync.io.files import existing_file, first_line
 
 if TYPE_CHECKING:
     from tracking_adapter.validate import ValidationReport
@@ -24,13 +25,27 @@ def save_validation(report: ValidationReport, path: str | Path) -> None:
 
 def load_validation(path: str | Path) -> pd.DataFrame:
     """The triples of a validation JSON file: B's detection, A's interpolated position and
-    the distance (columns :data:`tracking_adapter.validate.TRIPLE_COLUMNS`)."""
+    the distance (columns :data:`tracking_adapter.validate.TRIPLE_COLUMNS`), every value
+    checked: camera names as text, finite times, positions and distances."""
     path = existing_file(path)
     try:
-        triples = json.loads(path.read_text())["triples"]
-    except (OSError, ValueError, KeyError, TypeError) as error:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise InputError(
-            f"{path}: not the JSON of a validation report ({type(error).__name__}: "
-            f"{error}); give the JSON a validation saved"
+            f"{path}: not the JSON of a validation report ({first_line(error)}); give the JSON a validation saved"
         ) from None
-    return pd.DataFrame.from_records(triples)
+    fix = "give the JSON that flashsync validate --json saved"
+    records = []
+    for triple in Fields(document, str(path), fix=fix).objects("triples", "triples[{}]"):
+        record = {name: triple.text(name) for name in ("camera_a", "camera_b")}
+        value = triple.value("object")
+        if not isinstance(value, (str, int, float)) or isinstance(value, bool):
+            triple.fail("object", "is not an object id (text or a number)")
+        record["object"] = value
+        record |= {name: triple.number(name) for name in _NUMBERS}
+        records.append(record)
+    return pd.DataFrame.from_records(records, columns=["camera_a", "camera_b", "object", *_NUMBERS])
+
+
+#: The numbers of a triple: B's instant (ms), B's and A's plane positions and their distance (m).
+_NUMBERS = ("t_global_ms", "x_b", "y_b", "x_a", "y_a", "error_m")

@@ -1,5 +1,8 @@
 """Writing simulated frames as H.264 video with chosen container stamps, atomically."""
 
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
 from fractions import Fraction
 from pathlib import Path
 
@@ -8,18 +11,36 @@ import numpy as np
 
 from flashsync.atomic import atomic_output
 from flashsync.errors import FlashsyncError
+from flashsync.simulation.scenario import CameraSpec
 
 MP4_TIME_BASE = Fraction(1, 90000)
 MKV_TIME_BASE = Fraction(1, 1000)
 _FORMATS = {".mp4": "mp4", ".mkv": "matroska"}
 
 
-def container_stamps(camera, t_true_ms, rng):
+def stamp_clock_ms(camera: CameraSpec, t_true_ms: np.ndarray) -> np.ndarray:
+    """Camera times as the muxer stamps them: the true time, except that after each of
+    ``camera.stamp_rate_changes`` ``(sensor frame, factor)`` the stamps advance ``factor``
+    times as fast (cumulative), from that frame's true time on; ms, shape of `t_true_ms`."""
+    t = np.asarray(t_true_ms, dtype=float)
+    stamp, rate = t.copy(), 1.0
+    for frame, factor in sorted(camera.stamp_rate_changes):
+        since = np.maximum(t - (camera.start_ms + frame * camera.frame_period_ms), 0.0)
+        stamp += rate * (factor - 1.0) * since
+        rate *= factor
+    return stamp
+
+
+def container_stamps(
+    camera: CameraSpec, t_true_ms: np.ndarray, rng: np.random.Generator
+) -> tuple[np.ndarray, Fraction]:
     """Container timestamps a camera reports for its frames.
 
-    The stamp is the true camera time plus Gaussian jitter (``camera.jitter_ms``),
-    rounded to ``camera.quantize_ms`` if set, then to the container's time base (1 ms
-    for MKV, 1/90 ms for MP4). Stamps are kept strictly increasing and non-negative.
+    The stamp is the true camera time (through `stamp_clock_ms`, which changes its rate
+    where the camera has ``stamp_rate_changes``) plus Gaussian jitter
+    (``camera.jitter_ms``), rounded to ``camera.quantize_ms`` if set, then to the
+    container's time base (1 ms for MKV, 1/90 ms for MP4). Stamps are kept strictly
+    increasing and non-negative.
 
     Parameters
     ----------
@@ -37,7 +58,7 @@ def container_stamps(camera, t_true_ms, rng):
         Seconds per unit.
     """
     time_base = MKV_TIME_BASE if camera.container == "mkv" else MP4_TIME_BASE
-    stamp = np.asarray(t_true_ms, dtype=float) + camera.jitter_ms * rng.standard_normal(len(t_true_ms))
+    stamp = stamp_clock_ms(camera, t_true_ms) + camera.jitter_ms * rng.standard_normal(len(t_true_ms))
     if camera.quantize_ms:
         stamp = np.round(stamp / camera.quantize_ms) * camera.quantize_ms
     pts = np.round(stamp / 1000.0 / float(time_base)).astype(np.int64)
@@ -45,7 +66,30 @@ def container_stamps(camera, t_true_ms, rng):
     return pts, time_base
 
 
-def write_video(path, frames, pts, time_base, crf=23, fps=None):
+def x264_options(
+    crf: int = 23, keyint: int | None = None, bframes: int | None = None, preset: str | None = None
+) -> dict[str, str]:
+    """libx264 options for PyAV's ``stream.options``: x264's defaults where None."""
+    options = {"crf": str(crf)}
+    if preset is not None:
+        options["preset"] = preset
+    params = [f"{name}={value}" for name, value in (("keyint", keyint), ("bframes", bframes)) if value is not None]
+    if params:
+        options["x264-params"] = ":".join(params)
+    return options
+
+
+def write_video(
+    path: str | Path,
+    frames: Iterable[np.ndarray],
+    pts: Sequence[int],
+    time_base: Fraction,
+    crf: int = 23,
+    fps: float | None = None,
+    keyint: int | None = None,
+    bframes: int | None = None,
+    preset: str | None = None,
+) -> int:
     """Encode frames with libx264 (yuv420p) and explicit presentation stamps.
 
     Parameters
@@ -62,6 +106,10 @@ def write_video(path, frames, pts, time_base, crf=23, fps=None):
         x264 constant rate factor.
     fps : float, optional
         Nominal frame rate written as metadata.
+    keyint, bframes : int, optional
+        Longest GOP and most consecutive B-frames; x264's defaults (250, 3) if None.
+    preset : str, optional
+        x264 speed preset; ``medium`` if None.
 
     Returns
     -------
@@ -90,7 +138,7 @@ def write_video(path, frames, pts, time_base, crf=23, fps=None):
                     stream.pix_fmt = "yuv420p"
                     stream.time_base = time_base
                     stream.codec_context.time_base = time_base
-                    stream.options = {"crf": str(crf)}
+                    stream.options = x264_options(crf, keyint, bframes, preset)
                 frame = av.VideoFrame.from_ndarray(image, format="gray" if image.ndim == 2 else "bgr24")
                 frame.pts = stamp
                 frame.time_base = time_base

@@ -6,14 +6,18 @@ Readout row ``q`` of a frame with camera time ``t_f`` ends its exposure at
 row sees the flashes, switches and flicker of its own window. Stored-image row
 ``r = q``, or ``r = height - 1 - q`` for a camera mounted upside down.
 
-The value of a pixel is ``reflectance * gain(f) * (ambient(row) + flash_gain * flash(row))``
-plus Gaussian noise, rounded and clipped to 0..255: flashes scale the scene
-(multiplicatively), they do not add a constant.
+The linear light of a pixel is ``reflectance * shading * gain(f) * (ambient(row) +
+flash_gain * flash(row))`` plus Gaussian noise: flashes scale the scene (multiplicatively),
+they do not add a constant. The camera's response (`sensor`) maps it to DN, which are
+rounded and clipped to 0..255; by default that is the identity.
 """
+
+from __future__ import annotations
 
 import csv
 import io
 import json
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,33 +25,23 @@ import numpy as np
 
 from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
-from flashsync.simulation.scenario import CameraSpec, check_scenario
-from flashsync.simulation.scene import apply_homography, camera_background, camera_homography, make_scene, rink_to_image
-from flashsync.simulation.truth import camera_truth, ground_truth
+from flashsync.simulation.light import Lighting, ambient_light, flash_light
+from flashsync.simulation.scenario import CameraSpec, FlashSpec, Scenario, check_scenario
+from flashsync.simulation.scene import (
+    Player,
+    Puck,
+    Scene,
+    apply_homography,
+    camera_background,
+    camera_homography,
+    make_scene,
+    rink_outline_m,
+    rink_to_image,
+)
+from flashsync.simulation.sensor import sensor_response, shading
+from flashsync.simulation.truth import GroundTruth, camera_truth, ground_truth
 
 _FLASH_SEEN = 0.02  # a frame "sees" a flash when some row gets this fraction of its strength
-
-
-@dataclass(frozen=True)
-class Lighting:
-    """Scene lighting in world time.
-
-    Attributes
-    ----------
-    flashes : tuple of FlashSpec
-    switches : tuple of LightSwitch
-    flicker_depth : float
-        Modulation depth m of ``1 + m sin(2 pi flicker_hz w / 1000 + flicker_phase)``.
-    flicker_hz : float
-    flicker_phase : float
-        Radians.
-    """
-
-    flashes: tuple = ()
-    switches: tuple = ()
-    flicker_depth: float = 0.0
-    flicker_hz: float = 100.0
-    flicker_phase: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -63,28 +57,31 @@ class CameraView:
         Rink metres -> image px (third coordinate: depth, positive in front).
     background : ndarray, float32, shape (height, width[, 3])
         Reflectance of the rink in this view, DN.
+    shading : ndarray, float32, shape (height, width), or None
+        Vignetting factor of each pixel (`sensor.shading`); None without vignetting.
     """
 
     camera: CameraSpec
     homography: np.ndarray
     to_image: np.ndarray
     background: np.ndarray
+    shading: np.ndarray | None = None
 
 
-def camera_view(scene, camera, color=False):
+def camera_view(scene: Scene, camera: CameraSpec, color: bool = False) -> CameraView:
     """Prepare the static view of `camera` on `scene` (see `CameraView`)."""
     h = camera_homography(camera)
     background = camera_background(scene, h, camera.width, camera.height, color)
-    return CameraView(camera, h, rink_to_image(camera), background)
+    return CameraView(camera, h, rink_to_image(camera), background, shading(camera))
 
 
-def readout_index(camera, rows):
+def readout_index(camera: CameraSpec, rows: float | np.ndarray) -> np.ndarray:
     """Readout index ``q`` (0 = read first) of stored-image rows `rows` (float or array)."""
     rows = np.asarray(rows, dtype=float)
     return camera.height - 1 - rows if camera.flipped else rows
 
 
-def exposure_end_ms(camera, t_frame_ms, rows=None):
+def exposure_end_ms(camera: CameraSpec, t_frame_ms: float | np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
     """Camera time at which stored-image rows end their exposure.
 
     Parameters
@@ -107,63 +104,7 @@ def exposure_end_ms(camera, t_frame_ms, rows=None):
     return t + (camera.r0 + q) * camera.row_time_ms
 
 
-def flash_light(start_w, end_w, flash):
-    """Flash light integrated over exposure windows.
-
-    Parameters
-    ----------
-    start_w, end_w : ndarray
-        World times of the start and end of the windows, ms.
-    flash : FlashSpec
-
-    Returns
-    -------
-    ndarray
-        ``integral of A exp(-(w - tau) / d) over [start_w, end_w] ∩ [tau, inf)``, with
-        ``A d = strength``: 0 before the flash, ``strength`` for a window holding all of it.
-    """
-    tau, d = flash.world_ms, flash.decay_ms
-    a = np.maximum(start_w, tau)
-    lit = end_w > tau
-    light = flash.strength * (np.exp(-(a - tau) / d) - np.exp(-(np.maximum(end_w, tau) - tau) / d))
-    return np.where(lit, light, 0.0)
-
-
-def ambient_light(start_w, end_w, lighting):
-    """Mean scene illumination over exposure windows (1 without switches or flicker).
-
-    Parameters
-    ----------
-    start_w, end_w : ndarray
-        World times of the start and end of the windows, ms.
-    lighting : Lighting
-
-    Returns
-    -------
-    ndarray
-        ``mean over the window of S(w) (1 + m sin(omega w + phase))`` where ``S`` is the
-        product of the factors of the switches before ``w``.
-    """
-    omega = 2.0 * np.pi * lighting.flicker_hz / 1000.0
-    m, phase = lighting.flicker_depth, lighting.flicker_phase
-
-    def integral(x, y):
-        return (y - x) - (m / omega) * (np.cos(omega * y + phase) - np.cos(omega * x + phase))
-
-    switches = sorted(lighting.switches, key=lambda s: s.world_ms)
-    edges = [-np.inf] + [s.world_ms for s in switches] + [np.inf]
-    total = np.zeros(np.broadcast(start_w, end_w).shape)
-    level = 1.0
-    for k in range(len(edges) - 1):
-        if k > 0:
-            level *= switches[k - 1].factor
-        x = np.clip(start_w, edges[k], edges[k + 1])
-        y = np.clip(end_w, edges[k], edges[k + 1])
-        total += level * integral(x, y)
-    return total / (end_w - start_w)
-
-
-def row_light(camera, t_frame_ms, lighting):
+def row_light(camera: CameraSpec, t_frame_ms: float, lighting: Lighting) -> np.ndarray:
     """Illumination factor of each stored-image row of a frame.
 
     Parameters
@@ -187,13 +128,15 @@ def row_light(camera, t_frame_ms, lighting):
     return light
 
 
-def frame_gain(camera, t_frame_ms):
+def frame_gain(camera: CameraSpec, t_frame_ms: float) -> float:
     """Auto-exposure gain of a frame: product of the steps before its start (world time)."""
     w = camera.world_ms(t_frame_ms)
     return float(np.prod([f for at, f in camera.gain_steps if at < w]))
 
 
-def _draw_object(refl, view, obj, t_frame_ms, color):
+def _draw_object(
+    refl: np.ndarray, view: CameraView, obj: Player | Puck, t_frame_ms: float, color: np.ndarray | np.float32
+) -> None:
     """Composite a moving disc into `refl` in place, each row at its own exposure times."""
     cam = view.camera
     height, width = refl.shape[:2]
@@ -228,13 +171,20 @@ def _draw_object(refl, view, obj, t_frame_ms, color):
     patch += alpha * (color - patch)
 
 
-def _object_color(obj, color):
+def _object_color(obj: Player | Puck, color: bool) -> np.ndarray | np.float32:
     """Object reflectance as BGR (3,) or grey scalar."""
     bgr = np.asarray(obj.color, dtype=np.float32)
     return bgr if color else np.float32(bgr @ [0.114, 0.587, 0.299])
 
 
-def render_frame(view, scene, t_frame_ms, lighting, rng=None, objects=True):
+def render_frame(
+    view: CameraView,
+    scene: Scene,
+    t_frame_ms: float,
+    lighting: Lighting,
+    rng: np.random.Generator | None = None,
+    objects: bool = True,
+) -> np.ndarray:
     """Render one rolling-shutter frame.
 
     Parameters
@@ -246,8 +196,8 @@ def render_frame(view, scene, t_frame_ms, lighting, rng=None, objects=True):
     lighting : Lighting
         Lighting this camera sees.
     rng : numpy.random.Generator, optional
-        Source of sensor noise (``camera.noise_std``, DN, the same on every channel of
-        a pixel); no noise without it.
+        Source of sensor noise (``camera.noise_std``, DN of linear light, the same on
+        every channel of a pixel); no noise without it.
     objects : bool
         Draw players and puck.
 
@@ -264,15 +214,18 @@ def render_frame(view, scene, t_frame_ms, lighting, rng=None, objects=True):
             _draw_object(refl, view, obj, t_frame_ms, _object_color(obj, color))
     light = (row_light(cam, t_frame_ms, lighting) * frame_gain(cam, t_frame_ms)).astype(np.float32)
     img = refl * light.reshape((-1,) + (1,) * (refl.ndim - 1))
+    if view.shading is not None:
+        img *= view.shading[..., None] if color else view.shading
     if rng is not None and cam.noise_std > 0:
         noise = rng.standard_normal(img.shape[:2], dtype=np.float32)
         noise *= cam.noise_std
         img += noise[..., None] if color else noise
+    img = sensor_response(img, cam)
     np.rint(img, out=img)
     return np.clip(img, 0, 255, out=img).astype(np.uint8)
 
 
-def puck_track(view, puck, t_frame_ms):
+def puck_track(view: CameraView, puck: Puck, t_frame_ms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Image position of the puck's blurred centroid in frames, with rolling-shutter skew.
 
     The puck is seen by the row it lies in, at that row's mid-exposure time; the row is
@@ -304,7 +257,7 @@ def puck_track(view, puck, t_frame_ms):
     return xy, visible
 
 
-def flash_frames(camera, t_frame_ms, flash):
+def flash_frames(camera: CameraSpec, t_frame_ms: np.ndarray, flash: FlashSpec) -> np.ndarray:
     """Which frames show a flash.
 
     Parameters
@@ -324,29 +277,31 @@ def flash_frames(camera, t_frame_ms, flash):
     return light.max(axis=1) >= _FLASH_SEEN * flash.strength
 
 
-def camera_rng(scenario, index, purpose):
+def camera_rng(scenario: Scenario, index: int, purpose: int) -> np.random.Generator:
     """Random generator of camera `index` for one purpose (0 noise, 1 drops, 2 misses, 3 jitter)."""
     return np.random.default_rng([scenario.seed, index, purpose])
 
 
-def kept_frames(scenario, index):
-    """Sensor frame indices that camera `index` writes (its drops removed), shape (F,)."""
+def kept_frames(scenario: Scenario, index: int) -> np.ndarray:
+    """Sensor frame indices that camera `index` writes (its drops and gaps removed), shape (F,)."""
     cam = scenario.cameras[index]
     n = scenario.frame_count(cam)
     keep = np.ones(n, dtype=bool)
     keep[[f for f in cam.dropped_frames if 0 <= f < n]] = False
+    for first, count in cam.frame_gaps:
+        keep[max(first, 0) : max(first + count, 0)] = False
     keep[1:-1] &= camera_rng(scenario, index, 1).random(max(n - 2, 0)) >= cam.drop_fraction
     return np.flatnonzero(keep)
 
 
-def missed_flashes(scenario, index):
+def missed_flashes(scenario: Scenario, index: int) -> list[int]:
     """Indices of the scenario's flashes that camera `index` does not see."""
     cam = scenario.cameras[index]
     draw = camera_rng(scenario, index, 2).random(len(scenario.flashes))
     return sorted(set(cam.missed_flashes) | set(np.flatnonzero(draw < cam.miss_probability).tolist()))
 
 
-def camera_lighting(scenario, index):
+def camera_lighting(scenario: Scenario, index: int) -> Lighting:
     """`Lighting` seen by camera `index`: the scenario's, without its missed flashes."""
     missed = missed_flashes(scenario, index)
     return Lighting(
@@ -355,10 +310,13 @@ def camera_lighting(scenario, index):
         flicker_depth=scenario.flicker_depth,
         flicker_hz=scenario.flicker_hz,
         flicker_phase=scenario.flicker_phase,
+        flicker_waveform=scenario.flicker_waveform,
     )
 
 
-def _reporting(frames, name, total, progress):
+def _reporting(
+    frames: Iterable[np.ndarray], name: str, total: int, progress: Callable[[str, int, int], None] | None
+) -> Iterator[np.ndarray]:
     """Yield from `frames`, calling ``progress(name, done, total)`` after each."""
     for done, frame in enumerate(frames, start=1):
         yield frame
@@ -366,13 +324,16 @@ def _reporting(frames, name, total, progress):
             progress(name, done, total)
 
 
-def render_scenario(scenario, out_dir, progress=None):
+def render_scenario(
+    scenario: Scenario, out_dir: str | Path, progress: Callable[[str, int, int], None] | None = None
+) -> GroundTruth:
     """Render every camera of a scenario to video files, with ground truth.
 
     Writes ``<camera>.mp4`` or ``<camera>.mkv`` per camera, ``truth.json``,
     ``detections.csv`` (columns ``camera,frame,x,y,object``: the puck's centroid in each
     frame where it is in view, px) and ``homographies.json`` (``{camera: 3x3 image px ->
-    rink metres}``) into `out_dir`, each atomically.
+    rink metres}`` and ``"plane": {"outline_m": [[x, y], ...]}``, the edge of the ice)
+    into `out_dir`, each atomically.
 
     Parameters
     ----------
@@ -394,7 +355,7 @@ def render_scenario(scenario, out_dir, progress=None):
     check_scenario(scenario, f"scenario '{scenario.name}'")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    scene = make_scene(scenario.seed, scenario.n_players, scenario.puck_speed_mps)
+    scene = make_scene(scenario.seed, scenario.n_players, scenario.puck_speed_mps, scenario.player_radius_m)
     cameras, homographies, detections = [], {}, []
     for i, cam in enumerate(scenario.cameras):
         view = camera_view(scene, cam, scenario.color)
@@ -405,7 +366,17 @@ def render_scenario(scenario, out_dir, progress=None):
         pts, time_base = container_stamps(cam, t_true, camera_rng(scenario, i, 3))
         path = out / f"{cam.name}.{cam.container}"
         images = (render_frame(view, scene, t, lighting, rng) for t in t_true)
-        write_video(path, _reporting(images, cam.name, len(frames), progress), pts, time_base, crf=cam.crf, fps=cam.fps)
+        write_video(
+            path,
+            _reporting(images, cam.name, len(frames), progress),
+            pts,
+            time_base,
+            crf=cam.crf,
+            fps=cam.fps,
+            keyint=cam.keyint,
+            bframes=cam.bframes,
+            preset=cam.x264_preset,
+        )
         homographies[cam.name] = view.homography.tolist()
         xy, visible = puck_track(view, scene.puck, t_true)
         detections += [
@@ -427,6 +398,7 @@ def render_scenario(scenario, out_dir, progress=None):
     writer.writerow(["camera", "frame", "x", "y", "object"])
     writer.writerows(detections)
     write_text(out / "detections.csv", buf.getvalue())
+    homographies["plane"] = {"outline_m": rink_outline_m().round(4).tolist()}
     write_text(out / "homographies.json", json.dumps(homographies, indent=1))
     truth.save(out / "truth.json")
     return truth

@@ -16,7 +16,13 @@ with ``drift_c = drift_ppm * 1e-6`` and ``drift_rate_c = drift_rate_ppm_per_s * 
 (per ms). Frame ``f`` of camera ``c`` starts its readout at camera time
 ``start_ms + f * 1000 / fps``; readout row ``q`` ends its exposure at
 ``t_f + (r0 + q) * T_row`` with ``T_row = 1000 / fps / (r0 + height + r1)``.
+
+Every option beyond the first presets (pulse shapes, sensor response, encoder settings,
+flicker waveform, player sizes, stamp faults) is off by default: a scenario that does not
+set them renders exactly as before they existed.
 """
+
+from __future__ import annotations
 
 import dataclasses
 import json
@@ -29,10 +35,16 @@ from flashsync.errors import FlashsyncError
 from flashsync.simulation.scene import rink_to_image
 
 CONTAINERS = ("mp4", "mkv")
+RISES = ("linear", "cosine")
+TONES = ("linear", "srgb", "gamma")
+FLICKER_WAVEFORMS = ("sine", "rectified")
+X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
 
-def clock_world_ms(t_ms, offset_ms, drift_ppm, drift_rate_ppm_per_s=0.0):
+def clock_world_ms(
+    t_ms: float | np.ndarray, offset_ms: float, drift_ppm: float, drift_rate_ppm_per_s: float = 0.0
+) -> np.ndarray:
     """Map camera time onto world time.
 
     Parameters
@@ -58,22 +70,46 @@ def clock_world_ms(t_ms, offset_ms, drift_ppm, drift_rate_ppm_per_s=0.0):
 
 @dataclass(frozen=True)
 class FlashSpec:
-    """One flash: ``I(w) = A exp(-(w - world_ms) / decay_ms)`` for ``w >= world_ms``.
+    """One flash pulse, fired at ``world_ms``.
+
+    By default ``I(w) = A exp(-(w - world_ms) / decay_ms)`` for ``w >= world_ms`` (an
+    instant rise). In general the pulse rises over ``rise_ms`` to its peak (linearly, or
+    as a raised cosine ``(1 - cos(pi x / rise_ms)) / 2``), holds it for ``hold_ms`` and
+    decays exponentially with ``decay_ms`` (0: it switches off at once). A xenon flash
+    tube: a linear rise of a few tens of microseconds and a decay of 0.1–1.3 ms (0.3–3 ms
+    to a tenth); an LED strobe: a rectangle, ``hold_ms`` 0.1–2 and ``decay_ms`` 0.
 
     Attributes
     ----------
     world_ms : float
-        Firing instant, world time, ms.
+        Firing instant (start of the rise), world time, ms.
     strength : float
-        ``A * decay_ms``: the relative brightening of a row whose exposure holds the
+        Integral of the pulse: the relative brightening of a row whose exposure holds the
         whole flash, for a camera of flash gain 1 (0.5 makes such rows 1.5x brighter).
     decay_ms : float
-        Decay time constant, ms.
+        Decay time constant, ms (>= 0).
+    rise_ms : float
+        Duration of the rise, ms (>= 0; 0: instant).
+    rise : {'linear', 'cosine'}
+        Shape of the rise.
+    hold_ms : float
+        Time at the peak between rise and decay, ms (>= 0).
     """
 
     world_ms: float
     strength: float = 0.5
     decay_ms: float = 0.5
+    rise_ms: float = 0.0
+    rise: str = "linear"
+    hold_ms: float = 0.0
+
+    @property
+    def shape(self) -> str:
+        """A name for the pulse shape: ``exponential``, ``rectangular``, ``linear rise``,
+        ``cosine rise`` (with a hold or decay after it)."""
+        if self.rise_ms == 0:
+            return "rectangular" if self.decay_ms == 0 else "exponential"
+        return f"{self.rise} rise"
 
 
 @dataclass(frozen=True)
@@ -127,6 +163,12 @@ class CameraSpec:
         Standard deviation of Gaussian noise added to each stamp, ms.
     dropped_frames : tuple of int
         Sensor frame indices that are not written.
+    frame_gaps : tuple of (int, int)
+        Runs ``(first sensor frame, count)`` of frames not written (recording gaps).
+    stamp_rate_changes : tuple of (int, float)
+        ``(sensor frame, factor)``: from that frame's time on, the stamps advance
+        ``factor`` times as fast as the camera's clock (a muxer bug; cumulative). The
+        sensor keeps its rate.
     drop_fraction : float
         Fraction of further frames dropped at random.
     n_frames : int or None
@@ -137,6 +179,21 @@ class CameraSpec:
         Sensor noise, DN.
     crf : int
         x264 constant rate factor (0 lossless .. 51 worst).
+    keyint : int or None
+        Longest GOP (frames between key frames); None: x264's default (250).
+    bframes : int or None
+        Most consecutive B-frames; None: x264's default (3, placed adaptively); 0: none.
+    x264_preset : str or None
+        x264 speed preset (``ultrafast`` .. ``veryslow``); None: ``medium``.
+    tone : {'linear', 'srgb', 'gamma'}
+        Tone curve applied to linear light before quantisation (see `sensor`).
+    black_level : float
+        Stored value of no light (pedestal), DN.
+    white_level : float
+        Linear light that saturates the sensor, DN of reflectance at illumination 1
+        (255: the default camera; lower values clip bright rows and flashes).
+    vignetting : float
+        Relative loss of light in the image corners, ``1 - vignetting * rho**2``.
     gain_steps : tuple of (float, float)
         Auto-exposure steps ``(world_ms, factor)``: frames starting after the instant
         are multiplied by the factor (cumulative).
@@ -168,11 +225,20 @@ class CameraSpec:
     quantize_ms: float | None = None
     jitter_ms: float = 0.0
     dropped_frames: tuple = ()
+    frame_gaps: tuple = ()
+    stamp_rate_changes: tuple = ()
     drop_fraction: float = 0.0
     n_frames: int | None = None
     flash_gain: float = 1.0
     noise_std: float = 1.0
     crf: int = 23
+    keyint: int | None = None
+    bframes: int | None = None
+    x264_preset: str | None = None
+    tone: str = "linear"
+    black_level: float = 0.0
+    white_level: float = 255.0
+    vignetting: float = 0.0
     gain_steps: tuple = ()
     missed_flashes: tuple = ()
     miss_probability: float = 0.0
@@ -181,21 +247,21 @@ class CameraSpec:
     hfov_deg: float = 70.0
 
     @property
-    def rows_total(self):
+    def rows_total(self) -> int:
         """``R = r0 + height + r1``, rows."""
         return self.r0 + self.height + self.r1
 
     @property
-    def frame_period_ms(self):
+    def frame_period_ms(self) -> float:
         """Frame period, ms of camera time."""
         return 1000.0 / self.fps
 
     @property
-    def row_time_ms(self):
+    def row_time_ms(self) -> float:
         """Readout time of one row ``T_row``, ms of camera time."""
         return self.frame_period_ms / self.rows_total
 
-    def world_ms(self, t_ms):
+    def world_ms(self, t_ms: float | np.ndarray) -> np.ndarray:
         """World time (ms) of camera time `t_ms` (ms); see `clock_world_ms`."""
         return clock_world_ms(t_ms, self.offset_ms, self.drift_ppm, self.drift_rate_ppm_per_s)
 
@@ -219,13 +285,19 @@ class Scenario:
     switches : tuple of LightSwitch
         Steps of the scene illumination, world time.
     flicker_depth : float
-        Mains flicker modulation depth m (0 = off): illumination ``1 + m sin(...)``.
+        Mains flicker modulation depth m (0 = off): illumination ``1 + m g(...)``, the
+        waveform ``g`` of mean 0 and peak-to-peak 2 (see `light`).
     flicker_hz : float
         Flicker frequency, Hz (100 or 120: twice the mains frequency).
     flicker_phase : float
         Flicker phase at world time 0, radians.
+    flicker_waveform : {'sine', 'rectified'}
+        ``sine``, or the rectified sine of a lamp on full-wave rectified mains (a DC part
+        and cusps at the mains' zero crossings).
     n_players : int
         Number of players skating on the rink.
+    player_radius_m : (float, float)
+        Range of the players' disc radii, metres (drawn uniformly).
     puck_speed_mps : float
         Puck speed, m/s.
     color : bool
@@ -242,23 +314,25 @@ class Scenario:
     flicker_depth: float = 0.0
     flicker_hz: float = 100.0
     flicker_phase: float = 0.0
+    flicker_waveform: str = "sine"
     n_players: int = 8
+    player_radius_m: tuple = (0.4, 0.55)
     puck_speed_mps: float = 36.0
     color: bool = False
     seed: int = 0
 
-    def frame_count(self, camera):
+    def frame_count(self, camera: CameraSpec) -> int:
         """Number of sensor frames of `camera` (before drops)."""
         if camera.n_frames is not None:
             return camera.n_frames
         return int(self.duration_ms * camera.fps / 1000.0)
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         """Plain dict (lists, numbers, strings) with the field names as keys."""
         return json.loads(json.dumps(dataclasses.asdict(self)))
 
 
-def check_scenario(scenario, source):
+def check_scenario(scenario: Scenario, source: str) -> None:
     """Raise `FlashsyncError` naming `source` if `scenario` cannot be rendered.
 
     Parameters
@@ -269,7 +343,7 @@ def check_scenario(scenario, source):
         What to name in the message (a file or ``scenario 'tiny'``).
     """
 
-    def require(ok, what):
+    def require(ok: bool, what: str) -> None:
         if not ok:
             raise FlashsyncError(f"{source}: {what}")
 
@@ -280,8 +354,21 @@ def check_scenario(scenario, source):
     require(scenario.n_players >= 0, "n_players must be >= 0")
     require(scenario.flicker_hz > 0, "flicker_hz must be positive")
     require(0 <= scenario.flicker_depth < 1, "flicker_depth must be in [0, 1)")
+    require(scenario.flicker_waveform in FLICKER_WAVEFORMS, f"flicker_waveform must be one of {FLICKER_WAVEFORMS}")
+    radius = scenario.player_radius_m
+    require(
+        len(radius) == 2 and 0 < radius[0] <= radius[1], "player_radius_m must be [min, max] metres with 0 < min <= max"
+    )
     for k, fl in enumerate(scenario.flashes):
-        require(fl.decay_ms > 0 and fl.strength >= 0, f"flash {k}: decay_ms must be > 0 and strength >= 0")
+        require(
+            fl.decay_ms >= 0 and fl.rise_ms >= 0 and fl.hold_ms >= 0 and fl.strength >= 0,
+            f"flash {k}: decay_ms, rise_ms, hold_ms and strength must be >= 0",
+        )
+        require(
+            fl.decay_ms + fl.rise_ms + fl.hold_ms > 0,
+            f"flash {k}: the pulse has no duration; give decay_ms, rise_ms or hold_ms",
+        )
+        require(fl.rise in RISES, f"flash {k}: rise must be one of {RISES}")
     for k, sw in enumerate(scenario.switches):
         require(sw.factor > 0, f"switch {k}: factor must be positive")
     ref = scenario.cameras[0]
@@ -314,6 +401,26 @@ def check_scenario(scenario, source):
         require(c.n_frames is None or c.n_frames > 0, f"{where}: n_frames must be positive")
         require(scenario.frame_count(c) > 0, f"{where}: records no frame; raise duration_ms")
         require(0 <= c.crf <= 51, f"{where}: crf must be in 0..51")
+        require(c.keyint is None or c.keyint >= 1, f"{where}: keyint must be >= 1")
+        require(c.bframes is None or 0 <= c.bframes <= 16, f"{where}: bframes must be in 0..16")
+        require(
+            c.x264_preset is None or c.x264_preset in X264_PRESETS,
+            f"{where}: x264_preset must be one of {', '.join(X264_PRESETS)}",
+        )
+        require(c.tone in TONES, f"{where}: tone must be one of {TONES}")
+        require(
+            0 <= c.black_level < 255 and c.white_level > 0,
+            f"{where}: black_level must be in [0, 255) and white_level positive",
+        )
+        require(0 <= c.vignetting < 1, f"{where}: vignetting must be in [0, 1)")
+        require(
+            all(len(g) == 2 and g[1] >= 1 for g in c.frame_gaps),
+            f"{where}: frame_gaps must be pairs [first sensor frame, count >= 1]",
+        )
+        require(
+            all(len(s) == 2 and s[1] > 0 for s in c.stamp_rate_changes),
+            f"{where}: stamp_rate_changes must be pairs [sensor frame, factor > 0]",
+        )
         require(
             all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
             f"{where}: missed_flashes must be indices of flashes (0..{len(scenario.flashes) - 1})",
@@ -347,7 +454,7 @@ def _flash_schedule(rng, start_ms, stop_ms, count, min_gap_ms, strengths=(0.35, 
     )
 
 
-def _tiny(duration_ms=2400.0):
+def _tiny(duration_ms: float = 2400.0) -> Scenario:
     rng = np.random.default_rng(11)
     cams = (
         CameraSpec(
@@ -385,7 +492,7 @@ def _tiny(duration_ms=2400.0):
     return Scenario("tiny", cams, duration_ms=duration_ms, flashes=flashes, n_players=4, seed=1)
 
 
-def _sample(duration_ms=8000.0):
+def _sample(duration_ms: float = 8000.0) -> Scenario:
     rng = np.random.default_rng(2024)
     cams = (
         CameraSpec(
@@ -466,7 +573,7 @@ def _sample(duration_ms=8000.0):
     return Scenario("sample", cams, duration_ms=duration_ms, flashes=flashes, n_players=10, color=True, seed=7)
 
 
-def _paper(duration_ms=60000.0):
+def _paper(duration_ms: float = 60000.0) -> Scenario:
     rng = np.random.default_rng(2017)
     common = dict(fps=25.0, crf=23, noise_std=1.5, drop_fraction=0.003)
     cams = (
@@ -552,7 +659,7 @@ _PRESETS = {"sample": _sample, "tiny": _tiny, "paper": _paper}
 PRESETS = tuple(_PRESETS)
 
 
-def preset(name, **overrides):
+def preset(name: str, **overrides) -> Scenario:
     """A named scenario.
 
     Parameters

@@ -6,15 +6,22 @@ Each camera sees the ice through a homography between image pixels (pixel centre
 integer coordinates, x right, y down) and rink metres.
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError
 
+if TYPE_CHECKING:
+    from flashsync.simulation.scenario import CameraSpec
+
 RINK_LENGTH_M = 60.0
 RINK_WIDTH_M = 30.0
+RINK_CORNER_RADIUS_M = 8.5
 TEXTURE_PX_PER_M = 20.0
 TEXTURE_MARGIN_M = 20.0
 _FAR = 28.0  # reflectance of the unlit upper stands beyond the texture, DN
@@ -24,7 +31,7 @@ _BLUE = (140, 70, 35)
 _TEAM_COLORS = ((40, 35, 120), (110, 60, 25), (225, 225, 225), (30, 30, 30))
 
 
-def _fold(x, lo, hi):
+def _fold(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Reflect `x` into [lo, hi] as a ball bouncing between two walls."""
     span = hi - lo
     y = np.mod(x - lo, 2.0 * span)
@@ -55,7 +62,7 @@ class Puck:
     color: tuple = (12, 12, 12)
     blur_samples: int = 7
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None] / 1000.0
         free = np.asarray(self.start_m) + np.asarray(self.velocity_mps) * w
@@ -95,7 +102,7 @@ class Player:
     color: tuple = _TEAM_COLORS[0]
     blur_samples: int = 1
 
-    def position(self, w_ms):
+    def position(self, w_ms: np.ndarray) -> np.ndarray:
         """Position (metres) at world times `w_ms` (ms), shape ``w_ms.shape + (2,)``."""
         w = np.asarray(w_ms, dtype=float)[..., None]
         arg = 2.0 * np.pi * w / np.asarray(self.period_ms) + np.asarray(self.phase)
@@ -126,12 +133,12 @@ class Scene:
     puck: Puck
 
     @property
-    def objects(self):
+    def objects(self) -> tuple:
         """Players then the puck, in drawing order."""
         return self.players + (self.puck,)
 
 
-def _smooth_noise(rng, shape, cell_px, amplitude):
+def _smooth_noise(rng: np.random.Generator, shape: tuple, cell_px: int, amplitude: float) -> np.ndarray:
     """Band-limited noise: a coarse random grid upsampled with cubic interpolation."""
     coarse = rng.normal(0.0, amplitude, (shape[0] // cell_px + 2, shape[1] // cell_px + 2))
     return cv2.resize(
@@ -139,7 +146,9 @@ def _smooth_noise(rng, shape, cell_px, amplitude):
     )[: shape[0], : shape[1]]
 
 
-def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
+def make_texture(
+    rng: np.random.Generator, px_per_m: float = TEXTURE_PX_PER_M, margin_m: float = TEXTURE_MARGIN_M
+) -> np.ndarray:
     """Draw the rink: ice with scratches and markings, boards with ads, stands around.
 
     Parameters
@@ -159,10 +168,10 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     h = int(round((RINK_WIDTH_M + 2 * margin_m) * s))
     w = int(round((RINK_LENGTH_M + 2 * margin_m) * s))
 
-    def px(x_m, y_m):
+    def px(x_m: float, y_m: float) -> tuple[int, int]:
         return int(round((x_m + margin_m) * s)), int(round((y_m + margin_m) * s))
 
-    def ln(metres):
+    def ln(metres: float) -> int:
         return max(1, int(round(metres * s)))
 
     # Stands, in 0.5 m seats: sections of seat rows around the rink, half the seats taken.
@@ -179,7 +188,7 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     img = cv2.resize(seats, (w, h), interpolation=cv2.INTER_NEAREST)
 
     # Boards with advertising panels, then the ice inside the rounded rectangle.
-    corner = ln(8.5)
+    corner = ln(RINK_CORNER_RADIUS_M)
     x0, y0 = px(-1.2, -1.2)
     x1, y1 = px(RINK_LENGTH_M + 1.2, RINK_WIDTH_M + 1.2)
     cv2.rectangle(img, (x0, y0), (x1, y1), (60, 60, 60), -1)
@@ -233,16 +242,42 @@ def make_texture(rng, px_per_m=TEXTURE_PX_PER_M, margin_m=TEXTURE_MARGIN_M):
     return cv2.GaussianBlur(img, (0, 0), 0.7)
 
 
-def make_scene(seed, n_players=8, puck_speed_mps=36.0):
+def rink_outline_m(points_per_corner: int = 12) -> np.ndarray:
+    """The edge of the ice: a 60 x 30 m rectangle from the origin with rounded corners.
+
+    Returns
+    -------
+    ndarray, shape (4 * points_per_corner + 1, 2)
+        Closed polyline (first point repeated last), rink metres.
+    """
+    r = RINK_CORNER_RADIUS_M
+    arc = np.linspace(0.0, np.pi / 2, points_per_corner)
+    corners = (
+        ((RINK_LENGTH_M - r, RINK_WIDTH_M - r), 0.0),
+        ((r, RINK_WIDTH_M - r), np.pi / 2),
+        ((r, r), np.pi),
+        ((RINK_LENGTH_M - r, r), 1.5 * np.pi),
+    )
+    outline = np.concatenate(
+        [np.stack([cx + r * np.cos(start + arc), cy + r * np.sin(start + arc)], axis=1) for (cx, cy), start in corners]
+    )
+    return np.concatenate([outline, outline[:1]])
+
+
+def make_scene(
+    seed: int, n_players: int = 8, puck_speed_mps: float = 36.0, player_radius_m: tuple[float, float] = (0.4, 0.55)
+) -> Scene:
     """Generate the rink and its objects from a seed.
 
     Parameters
     ----------
     seed : int
     n_players : int
-        Number of skaters.
+        Number of skaters (dark and bright team colours in turn), on paths that cross.
     puck_speed_mps : float
         Puck speed, m/s.
+    player_radius_m : (float, float)
+        Range of the skaters' disc radii, metres (uniform).
 
     Returns
     -------
@@ -260,7 +295,7 @@ def make_scene(seed, n_players=8, puck_speed_mps=36.0):
                 amplitude_m=amp,
                 period_ms=(rng.uniform(9000, 20000), rng.uniform(7000, 16000)),
                 phase=(rng.uniform(0, 2 * np.pi), rng.uniform(0, 2 * np.pi)),
-                radius_m=rng.uniform(0.4, 0.55),
+                radius_m=rng.uniform(*player_radius_m),
                 color=_TEAM_COLORS[i % len(_TEAM_COLORS)],
             )
         )
@@ -272,7 +307,7 @@ def make_scene(seed, n_players=8, puck_speed_mps=36.0):
     return Scene(texture, TEXTURE_PX_PER_M, TEXTURE_MARGIN_M, tuple(players), puck)
 
 
-def rink_to_image(camera):
+def rink_to_image(camera: CameraSpec) -> np.ndarray:
     """Projection of the ice plane into the image of a pinhole camera above it.
 
     Parameters
@@ -313,7 +348,7 @@ def rink_to_image(camera):
     return k @ np.column_stack([rot[:, 0], rot[:, 1], -rot @ centre])
 
 
-def camera_homography(camera):
+def camera_homography(camera: CameraSpec) -> np.ndarray:
     """Homography from image pixels to rink metres, ``H[2, 2] = 1``.
 
     ``[X, Y, 1] ~ H @ [u, v, 1]``; the inverse of `rink_to_image`, scaled so that the
@@ -323,7 +358,7 @@ def camera_homography(camera):
     return h / h[2, 2]
 
 
-def apply_homography(h, points):
+def apply_homography(h: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Map points through a homography.
 
     Parameters
@@ -345,7 +380,7 @@ def apply_homography(h, points):
         return np.where(den[..., None] > 0, num / den[..., None], np.nan)
 
 
-def camera_background(scene, homography, width, height, color):
+def camera_background(scene: Scene, homography: np.ndarray, width: int, height: int, color: bool) -> np.ndarray:
     """The static rink as a camera sees it, before lighting.
 
     Parameters

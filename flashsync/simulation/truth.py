@@ -14,12 +14,16 @@ where ``t_f`` is the true camera time of frame ``f`` and ``q`` the readout row
 (``q = height - 1 - row`` for a flipped camera).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from flashsync.errors import FlashsyncError
-from flashsync.simulation.scenario import clock_world_ms
+from flashsync.simulation.light import half_light_ms
+from flashsync.simulation.scenario import CameraSpec, Scenario, clock_world_ms
 from flashsync.simulation.scene import make_scene
 
 
@@ -72,16 +76,16 @@ class CameraTruth:
     flashes_seen: dict = field(default_factory=dict)
 
     @property
-    def sensor_row_ms(self):
+    def sensor_row_ms(self) -> float:
         """Readout time of one row, ms of camera time."""
         return 1000.0 / self.fps / (self.r0 + self.height + self.r1)
 
-    def world_ms(self, t_ms):
+    def world_ms(self, t_ms: float | np.ndarray) -> np.ndarray:
         """World time (ms) of camera time `t_ms` (ms)."""
         return clock_world_ms(t_ms, self.offset_ms, self.drift_ppm, self.drift_rate_ppm_per_s)
 
 
-def _params(ref, cam):
+def _params(ref: CameraSpec, cam: CameraSpec) -> tuple[float, float, float]:
     """alpha, beta_ms, row_time_ms of `cam` relative to `ref` (CameraSpec, drift_rate ignored)."""
     k_ref = 1.0 + ref.drift_ppm * 1e-6
     k = 1.0 + cam.drift_ppm * 1e-6
@@ -91,7 +95,15 @@ def _params(ref, cam):
     return alpha, beta, row
 
 
-def camera_truth(camera, file, frame_index, frame_times_ms, stamps_ms, flashes_seen, reference):
+def camera_truth(
+    camera: CameraSpec,
+    file: str,
+    frame_index: np.ndarray,
+    frame_times_ms: np.ndarray,
+    stamps_ms: np.ndarray,
+    flashes_seen: dict,
+    reference: CameraSpec,
+) -> CameraTruth:
     """Collect a camera's truth record (see `CameraTruth`).
 
     Parameters
@@ -149,7 +161,8 @@ class GroundTruth:
     flashes : list of dict
         Per flash: ``world_ms``, ``global_ms`` (the firing instant on the global clock),
         ``half_rise_global_ms`` (when its light reaches half its full integral, the
-        instant a half-rise band edge marks), ``strength``, ``decay_ms``, ``seen_by``
+        instant a half-rise band edge marks, for any pulse shape), ``strength``, the
+        pulse shape (``decay_ms``, ``rise_ms``, ``rise``, ``hold_ms``), ``seen_by``
         (camera names).
     switches : list of dict
         Per light switch: ``world_ms``, ``global_ms``, ``factor``.
@@ -163,19 +176,19 @@ class GroundTruth:
     switches: list
     scenario: dict
 
-    def _camera(self, name):
+    def _camera(self, name: str) -> CameraTruth:
         if name not in self.cameras:
             raise FlashsyncError(f"no camera '{name}' in the ground truth; cameras: {', '.join(self.cameras)}")
         return self.cameras[name]
 
-    def global_from_world_ms(self, w_ms):
+    def global_from_world_ms(self, w_ms: float | np.ndarray) -> np.ndarray:
         """Global time (ms) of world times `w_ms` (ms)."""
         ref = self.cameras[self.reference]
         return (np.asarray(w_ms, dtype=float) - ref.offset_ms) / (
             1.0 + ref.drift_ppm * 1e-6
         ) - ref.r0 * ref.sensor_row_ms
 
-    def global_time_ms(self, camera, frame, row):
+    def global_time_ms(self, camera: str, frame: int | np.ndarray, row: float | np.ndarray) -> np.ndarray:
         """Global time of the end of exposure of stored-image rows.
 
         Computed from the world time of the true frame time, so it holds with clock
@@ -204,14 +217,14 @@ class GroundTruth:
         t = np.asarray(cam.frame_times_ms)[np.asarray(frame)] + (cam.r0 + q) * cam.sensor_row_ms
         return self.global_from_world_ms(cam.world_ms(t))
 
-    def save(self, path):
+    def save(self, path: str | Path) -> None:
         """Write ``truth.json`` atomically (:func:`flashsync.io.truth.save_ground_truth`)."""
         from flashsync.io.truth import save_ground_truth  # it reads these records: imported late
 
         save_ground_truth(self, path)
 
 
-def ground_truth(scenario, cameras):
+def ground_truth(scenario: Scenario, cameras: list[CameraTruth]) -> GroundTruth:
     """Assemble the `GroundTruth` of a rendered scenario.
 
     Parameters
@@ -231,9 +244,12 @@ def ground_truth(scenario, cameras):
             {
                 "world_ms": fl.world_ms,
                 "global_ms": float(partial.global_from_world_ms(fl.world_ms)),
-                "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + fl.decay_ms * np.log(2.0))),
+                "half_rise_global_ms": float(partial.global_from_world_ms(fl.world_ms + half_light_ms(fl))),
                 "strength": fl.strength,
                 "decay_ms": fl.decay_ms,
+                "rise_ms": fl.rise_ms,
+                "rise": fl.rise,
+                "hold_ms": fl.hold_ms,
                 "seen_by": [c.name for c in cameras if c.flashes_seen.get(k)],
             }
         )
@@ -244,7 +260,7 @@ def ground_truth(scenario, cameras):
     return GroundTruth(partial.reference, partial.cameras, flashes, switches, partial.scenario)
 
 
-def puck_image_px(truth, homography, t_global_ms):
+def puck_image_px(truth: GroundTruth, homography: np.ndarray, t_global_ms: np.ndarray) -> np.ndarray:
     """Where the scenario's puck is in a camera's image at instants of the true global
     clock: its rink position then, through the inverse of the camera's image -> rink
     homography (``homographies.json``).

@@ -1,0 +1,327 @@
+"""flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
+
+Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12]
+     python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
+
+Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
+into a temporary folder (removed afterwards) and run as a new user would, with no options,
+exactly as ``flashsync sync`` does: ``detect_videos(videos)`` (both ways up) then
+``synchronize(detections)``. Every camera is measured against the truth over all frames and
+every 8th row (`flashsync.evaluate.camera_accuracy`): sync error (RMS, max), exposure
+error, time-per-row error, and the calibration of the predicted sigma (RMS of error/sigma
+and the share of probes within 2 sigma, per camera and pairwise). Detection is checked too:
+events on frames that show no flash are false, flashes seen with no event are missed.
+
+Prints one line per rig, then the distribution over rigs and cameras, then every failure
+(an exception is a result: it is counted and shown, the run goes on).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from flashsync import CameraDetection, detect_videos, synchronize
+from flashsync.evaluate import camera_accuracy
+from flashsync.simulation import render_scenario
+from flashsync.simulation.rigs import RECIPES, random_rig, recipe
+from flashsync.simulation.truth import CameraTruth
+
+#: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
+TARGET_RMS_MS, TARGET_MAX_MS, TARGET_EXPOSURE_MS = 0.03, 0.1, 0.1
+
+
+def detection_counts(detection: CameraDetection, truth_camera: CameraTruth) -> dict:
+    """False events (no flash on any of their frames) and missed flashes (seen by the
+    camera, no event on their frames) of one camera's detection, in its reading in use."""
+    flash_frames = {k: set(frames) for k, frames in truth_camera.flashes_seen.items() if frames}
+    lit = set().union(*flash_frames.values())
+    events = detection.events
+    frames_of: dict[int, set[int]] = {}
+    for event, frame in zip(events.event.tolist(), events.frame.tolist()):
+        frames_of.setdefault(event, set()).add(frame)
+    false = sum(1 for frames in frames_of.values() if not frames & lit)
+    found = set().union(*frames_of.values())
+    missed = sum(1 for frames in flash_frames.values() if not frames & found)
+    return {
+        "events": len(frames_of),
+        "false_events": false,
+        "flashes_seen": len(flash_frames),
+        "missed_flashes": missed,
+    }
+
+
+def describe(scenario) -> dict:
+    """What a rig is, for its line and for grouping: size range, rates, pulse, flicker."""
+    heights = [c.height for c in scenario.cameras]
+    rates = sorted({round(c.fps, 2) for c in scenario.cameras})
+    pulse = scenario.flashes[0].shape if scenario.flashes else "none"
+    flicker = (
+        f"{100 * scenario.flicker_depth:.1f}% {scenario.flicker_hz:.0f} Hz {scenario.flicker_waveform}"
+        if scenario.flicker_depth
+        else "no flicker"
+    )
+    return {
+        "rig": scenario.name,
+        "cameras": len(scenario.cameras),
+        "rows": f"{min(heights)}-{max(heights)}",
+        "rates": "/".join(f"{r:g}" for r in rates),
+        "equal_rate": len(rates) == 1,
+        "pulse": pulse,
+        "flicker": flicker,
+        "flashes": len(scenario.flashes),
+    }
+
+
+def shared_flashes(truth) -> dict[str, int]:
+    """Per camera: flashes it saw that at least one other camera saw too."""
+    seen = {name: {k for k, frames in c.flashes_seen.items() if frames} for name, c in truth.cameras.items()}
+    return {name: len({k for k in mine if any(k in seen[o] for o in seen if o != name)}) for name, mine in seen.items()}
+
+
+def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
+    """Render, detect, sync and measure one rig; returns its summary and per-camera table."""
+    info = describe(scenario)
+    stage = "render"
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="flashsync-rig-") as tmp:
+        folder = keep / scenario.name if keep else Path(tmp)
+        try:
+            truth = render_scenario(scenario, folder)
+            info["render_s"] = time.perf_counter() - start
+            stage = "detect"
+            videos = [folder / truth.cameras[c.name].file for c in scenario.cameras]
+            detections = detect_videos(videos)
+            stage = "sync"
+            model, report = synchronize(detections)
+            stage = "evaluate"
+            table = camera_accuracy(model, truth)
+        except Exception as error:  # noqa: BLE001 - every failure is a result
+            info.update(failure=f"{stage}: {type(error).__name__}: {error}", traceback=traceback.format_exc(limit=-3))
+            if stage in ("sync", "evaluate"):
+                counts = [
+                    detection_counts(d.read_flipped(spec.flipped) if d.undecided else d, truth.cameras[d.camera])
+                    for d, spec in zip(detections, scenario.cameras)
+                ]
+                info["false_events"] = sum(c["false_events"] for c in counts)
+                info["missed_flashes"] = sum(c["missed_flashes"] for c in counts)
+            info["total_s"] = time.perf_counter() - start
+            return info, pd.DataFrame()
+    info["total_s"] = time.perf_counter() - start
+    shared = shared_flashes(truth)
+    by_name = {d.camera: d for d in detections}
+    counts = []
+    for spec in scenario.cameras:
+        detection = by_name[spec.name]
+        if detection.undecided and spec.name in model.cameras:
+            detection = detection.read_flipped(model.cameras[spec.name].flipped)
+        counts.append(detection_counts(detection, truth.cameras[spec.name]))
+    extra = pd.DataFrame(counts).assign(
+        rig=scenario.name,
+        height=[c.height for c in scenario.cameras],
+        fps=[c.fps for c in scenario.cameras],
+        exposure_ms=[c.exposure_ms for c in scenario.cameras],
+        true_flipped=[c.flipped for c in scenario.cameras],
+        equal_rate=info["equal_rate"],
+        shared_flashes=[shared[c.name] for c in scenario.cameras],
+    )
+    table = pd.concat([table.reset_index(drop=True), extra], axis=1)
+    table["flip_ok"] = [
+        bool(model.cameras[n].flipped == f) if n in model.cameras else False
+        for n, f in zip(table["camera"], table["true_flipped"])
+    ]
+    solved = table[table["solved"]]
+    info.update(
+        rms_ms=float(np.sqrt(np.mean(solved["rms_ms"] ** 2))),
+        max_ms=float(solved["max_ms"].max()),
+        left_out=int((~table["solved"]).sum()),
+        false_events=int(table["false_events"].sum()),
+        missed_flashes=int(table["missed_flashes"].sum()),
+        warnings=len(report.warnings),
+        wrong_flip=int((~table["flip_ok"] & table["solved"]).sum()),
+    )
+    return info, table
+
+
+def rig_line(info: dict, table: pd.DataFrame) -> str:
+    head = (
+        f"{info['rig']:<20} {info['cameras']:>2} cams {info['rows']:>9} rows {info['rates']:<22} "
+        f"{info['pulse']:<12} {info['flicker']:<22}"
+    )
+    if "failure" in info:
+        return f"{head} FAILED {info['failure'][:110]}"
+    solved = table[table["solved"]]
+    z = solved["z_rms"].dropna()
+    return (
+        f"{head} RMS {info['rms_ms']:.3f} max {info['max_ms']:.3f} ms | exp err "
+        f"{solved['exposure_error_ms'].abs().max():.2f} ms | T_row {solved['row_time_error_pct'].abs().max():.2f} % | "
+        f"z {z.max() if len(z) else float('nan'):.1f} pair-in-2σ {100 * solved['pair_within_2sigma'].min():.0f} % | "
+        f"false {info['false_events']} missed {info['missed_flashes']} out {info['left_out']} "
+        f"flip {info['wrong_flip']} | {info['total_s']:.0f} s ({info['render_s']:.0f} render)"
+    )
+
+
+def distribution(values: pd.Series, unit: str = "", scale: float = 1.0) -> str:
+    v = values.dropna().to_numpy(dtype=float) * scale
+    if v.size == 0:
+        return "no values"
+    p10, p50, p90 = np.percentile(v, [10, 50, 90])
+    return (
+        f"n {v.size:>4}  p10 {p10:8.3f}  median {p50:8.3f}  p90 {p90:8.3f}  max {v.max():8.3f}  "
+        f"mean {v.mean():+8.3f} {unit}"
+    )
+
+
+def camera_block(cameras: pd.DataFrame) -> list[str]:
+    """Distribution lines of the accuracy of solved cameras."""
+    others = cameras[~cameras["reference"]]
+    lines = [
+        f"  sync RMS ms              {distribution(cameras['rms_ms'], 'ms')}",
+        f"  sync max ms              {distribution(cameras['max_ms'], 'ms')}",
+    ]
+    for label, part in (
+        ("exposure <= 6 ms, err ms", cameras[cameras["exposure_ms"] <= 6.0]),
+        ("exposure > 6 ms, err ms", cameras[cameras["exposure_ms"] > 6.0]),
+    ):
+        lines.append(f"  {label:<25}{distribution(part['exposure_error_ms'], 'ms')}")
+    for label, part in (
+        ("|T_row error| %, equal", cameras[cameras["equal_rate"]]),
+        ("|T_row error| %, mixed", cameras[~cameras["equal_rate"]]),
+    ):
+        lines.append(f"  {label:<25}{distribution(part['row_time_error_pct'].abs(), '%')}")
+    lines += [
+        f"  error/σ RMS (non-ref)    {distribution(others['z_rms'])}",
+        f"  within 2σ % (non-ref)    {distribution(others['within_2sigma'], '%', 100)}",
+        f"  pair error/σ RMS         {distribution(cameras['pair_z_rms'])}",
+        f"  pair within 2σ %         {distribution(cameras['pair_within_2sigma'], '%', 100)}",
+        f"  predicted σ RMS ms       {distribution(cameras['sigma_rms_ms'], 'ms')}",
+    ]
+    target = cameras[(cameras["shared_flashes"] >= 8) & (cameras["height"] >= 360)]
+    if len(target):
+        meets = (
+            (target["rms_ms"] <= TARGET_RMS_MS)
+            & (target["max_ms"] <= TARGET_MAX_MS)
+            & (target["exposure_error_ms"].abs() <= TARGET_EXPOSURE_MS)
+        )
+        lines += [
+            f"  >= 8 shared flashes and >= 360 rows: {len(target)} cameras, {int(meets.sum())} meet RMS <= "
+            f"{TARGET_RMS_MS} ms, max <= {TARGET_MAX_MS} ms and exposure within {TARGET_EXPOSURE_MS} ms",
+            f"    sync RMS ms            {distribution(target['rms_ms'], 'ms')}",
+            f"    sync max ms            {distribution(target['max_ms'], 'ms')}",
+        ]
+    return lines
+
+
+def summary(infos: list[dict], tables: pd.DataFrame) -> str:
+    """The distribution over rigs and cameras (exposures split at 6 ms, time per row by
+    equal and mixed frame rates), over all solved cameras and over the rigs whose readout
+    directions all came out right (a wrong one makes every other number of its rig moot)."""
+    ok = [i for i in infos if "failure" not in i]
+    lines = [
+        f"rigs: {len(infos)}, solved {len(ok)}, failed {len(infos) - len(ok)}; cameras: "
+        f"{sum(i['cameras'] for i in infos)}, solved {int(tables['solved'].sum()) if len(tables) else 0}"
+    ]
+    if not len(tables):
+        return "\n".join(lines)
+    solved = tables[tables["solved"]]
+    wrong = solved[~solved["flip_ok"].astype(bool)]
+    clean = solved[~solved["rig"].isin(wrong["rig"])]
+    lines += [
+        f"readout direction wrong: {len(wrong)} cameras in {wrong['rig'].nunique()} rigs; cameras left out: "
+        f"{int((~tables['solved']).sum())}",
+        "over rigs (all cameras of a rig pooled):",
+        f"  sync RMS ms              {distribution(pd.Series([i['rms_ms'] for i in ok]), 'ms')}",
+        f"  sync max ms              {distribution(pd.Series([i['max_ms'] for i in ok]), 'ms')}",
+        f"all solved cameras ({len(solved)}):",
+        *camera_block(solved),
+        f"cameras of the {clean['rig'].nunique()} rigs with every readout direction right ({len(clean)}):",
+        *camera_block(clean),
+        "detection, every camera:",
+        f"  false events             {distribution(tables['false_events'])}",
+        f"  missed flashes           {distribution(tables['missed_flashes'])}",
+    ]
+    return "\n".join(lines)
+
+
+def parse_seeds(text: str) -> list[int]:
+    first, _, last = text.partition(":")
+    return list(range(int(first), int(last))) if last else [int(first)]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--seeds", help="random rigs A:B (seeds A..B-1) or one seed; default 0:20 unless --recipes is given"
+    )
+    parser.add_argument("--max-height", type=int, default=540, help="largest image height of random rigs")
+    parser.add_argument("--duration-s", type=float, default=12.0, help="length of random rigs, s")
+    parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
+    parser.add_argument(
+        "--recipe-duration-s",
+        type=float,
+        help="length of recipe rigs, s (default: each recipe's own, 15 min for long-pair)",
+    )
+    parser.add_argument("--recipe-seed", type=int, default=0)
+    parser.add_argument("--keep", type=Path, help="keep the rendered rigs in this folder")
+    parser.add_argument("--json", type=Path, help="write every rig and camera result here")
+    parser.add_argument(
+        "--summarise",
+        type=Path,
+        metavar="JSON",
+        help="print the lines and summary of a --json file of an earlier run, render nothing",
+    )
+    args = parser.parse_args()
+    if args.summarise:
+        saved = json.loads(args.summarise.read_text())
+        cameras = pd.DataFrame(saved["cameras"])
+        for info in saved["rigs"]:
+            print(rig_line(info, cameras[cameras["rig"] == info["rig"]] if len(cameras) else cameras))
+        print()
+        print(summary(saved["rigs"], cameras))
+        return
+    scenarios = []
+    if args.recipes:
+        names = list(RECIPES) if args.recipes == "all" else args.recipes.split(",")
+        duration_ms = args.recipe_duration_s * 1000.0 if args.recipe_duration_s else None
+        scenarios += [recipe(n, args.recipe_seed, duration_ms) for n in names]
+    if args.seeds or not args.recipes:
+        scenarios += [
+            random_rig(s, max_height=args.max_height, duration_ms=args.duration_s * 1000.0)
+            for s in parse_seeds(args.seeds or "0:20")
+        ]
+    infos, tables = [], []
+    for scenario in scenarios:
+        info, table = run_rig(scenario, args.keep)
+        infos.append(info)
+        tables.append(table)
+        print(rig_line(info, table), flush=True)
+    all_tables = (
+        pd.concat([t for t in tables if len(t)], ignore_index=True) if any(len(t) for t in tables) else pd.DataFrame()
+    )
+    print()
+    print(summary(infos, all_tables))
+    failures = [i for i in infos if "failure" in i]
+    if failures:
+        print(f"\nfailures ({len(failures)}):")
+        for info in failures:
+            extra = (
+                f" (false events {info['false_events']}, missed flashes {info['missed_flashes']})"
+                if "false_events" in info
+                else ""
+            )
+            print(f"  {info['rig']}: {info['failure']}{extra}")
+    if args.json:
+        args.json.write_text(
+            json.dumps({"rigs": infos, "cameras": all_tables.to_dict(orient="records")}, indent=1, default=str)
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,559 @@
+"""Hostile inputs to every command, as a table: each case prepares its files, runs the command
+and expects an exit code, one error line holding some words, and no output or temporary file
+left behind (inputs unchanged)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from cli_run import one_error_line
+
+from flashsync.cli import main
+
+
+def _model(folder: Path, change=None, name: str = "bad.json") -> Path:
+    """The synced scenario's model, changed by ``change(document)``, written to ``folder``."""
+    document = json.loads((SYNCED / "sync.json").read_text())
+    if change:
+        change(document)
+    (folder / name).write_text(json.dumps(document))
+    return folder / name
+
+
+def _camera(document: dict, index: int = 1) -> dict:
+    return document["cameras"][index]
+
+
+def _set(field: str, value, index: int = 1):
+    return lambda document: _camera(document, index).__setitem__(field, value)
+
+
+def _detections(folder: Path, name: str = "d.csv") -> Path:
+    pd.DataFrame({"camera": ["r", "f"], "frame": [3, 4], "x": [10.0, 20.0], "y": [12.5, 30.0]}).to_csv(
+        folder / name, index=False
+    )
+    return folder / name
+
+
+def _parquet(folder: Path, **columns) -> Path:
+    table = {"camera": ["r", "f"], "frame": [3, 4], "y": [12.5, 30.0]} | columns
+    pd.DataFrame(table).to_parquet(folder / "d.parquet")
+    return folder / "d.parquet"
+
+
+def _restamp_with_model(change, *options):
+    def prepare(tmp):
+        return ["restamp", _detections(tmp), "--model", _model(tmp, change), "-o", tmp / "out" / "o.csv", *options]
+
+    return prepare
+
+
+def _copy(tmp: Path, name: str) -> Path:
+    (tmp / name).write_bytes((SYNCED / name).read_bytes())
+    return tmp / name
+
+
+def _truncated(tmp: Path, name: str, keep: float) -> Path:
+    data = (SYNCED / name).read_bytes()
+    (tmp / f"cut{Path(name).suffix}").write_bytes(data[: int(len(data) * keep)])
+    return tmp / f"cut{Path(name).suffix}"
+
+
+def _fast_start_cut(tmp: Path) -> Path:
+    """s.mp4 remuxed with its index at the front, cut at a packet boundary two thirds in."""
+    import av
+
+    with (
+        av.open(str(SYNCED / "s.mp4")) as source,
+        av.open(str(tmp / "fast.mp4"), "w", options={"movflags": "faststart"}) as out,
+    ):
+        stream = out.add_stream_from_template(source.streams.video[0])
+        for packet in source.demux(source.streams.video[0]):
+            if packet.dts is not None:
+                packet.stream = stream
+                out.mux(packet)
+    with av.open(str(tmp / "fast.mp4")) as container:
+        positions = [p.pos for p in container.demux(video=0) if p.pos is not None and p.pos > 0]
+    data = (tmp / "fast.mp4").read_bytes()
+    (tmp / "cut.mp4").write_bytes(data[: positions[len(positions) * 2 // 3]])
+    return tmp / "cut.mp4"
+
+
+def _homographies(tmp: Path, change) -> Path:
+    document = json.loads((SYNCED / "homographies.json").read_text())
+    change(document)
+    (tmp / "h.json").write_text(json.dumps(document))
+    return tmp / "h.json"
+
+
+def _validate(tmp, *options, homographies=None):
+    return [
+        "validate",
+        _detections(tmp),
+        "--model",
+        SYNCED / "sync.json",
+        "--homographies",
+        homographies or SYNCED / "homographies.json",
+        *options,
+    ]
+
+
+def _nonfinite_std(document):
+    _camera(document)["frame_std_ms"] = [math.nan] * len(_camera(document)["frame_times_ms"])
+
+
+def _reversed_times(document):
+    _camera(document)["frame_times_ms"] = _camera(document)["frame_times_ms"][::-1]
+
+
+def _duplicate(document):
+    document["cameras"].append(document["cameras"][1])
+
+
+def _knots(document):
+    _camera(document)["drift_knots_ms"] = [0.0, 100.0, 200.0]
+
+
+def _event_camera(document):
+    document["events"][0]["camera"] = "nobody"
+
+
+#: (id, prepare(tmp) -> argv, exit code, words of the error line)
+CASES = [
+    # outputs that would overwrite an input or each other, or cannot be written
+    (
+        "sync -o an input video",
+        lambda t: ["sync", _copy(t, "r.mp4"), _copy(t, "f.mkv"), "-o", t / "r.mp4"],
+        1,
+        ["-o", "r.mp4", "is also an input (VIDEO"],
+    ),
+    (
+        "sync --json the same as -o",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "-o", t / "x.json", "--json", t / "x.json"],
+        1,
+        ["--json", "is the same file as -o"],
+    ),
+    (
+        "sync --events the same as --rrd",
+        lambda t: [
+            "sync",
+            SYNCED / "r.mp4",
+            SYNCED / "f.mkv",
+            "-o",
+            t / "s.json",
+            "--events",
+            t / "e.csv",
+            "--rrd",
+            t / "e.csv",
+        ],
+        1,
+        ["--rrd", "same file as --events"],
+    ),
+    (
+        "restamp -o its detections",
+        lambda t: ["restamp", _detections(t), "--model", SYNCED / "sync.json", "-o", t / "d.csv"],
+        1,
+        ["-o", "is also an input (DETECTIONS"],
+    ),
+    (
+        "restamp -o a hard link to its detections",
+        lambda t: ["restamp", _detections(t), "--model", SYNCED / "sync.json", "-o", _link(t / "d.csv", t / "l.csv")],
+        1,
+        ["-o", "l.csv", "is also an input"],
+    ),
+    (
+        "restamp -o the model",
+        lambda t: ["restamp", _detections(t), "--model", _model(t), "-o", t / "bad.json"],
+        1,
+        ["is also an input (--model"],
+    ),
+    (
+        "validate --json its homographies",
+        lambda t: _validate(t, "--json", _copy(t, "homographies.json"), homographies=t / "homographies.json"),
+        1,
+        ["--json", "is also an input (--homographies"],
+    ),
+    (
+        "-o an existing folder",
+        lambda t: ["restamp", _detections(t), "--model", SYNCED / "sync.json", "-o", _folder(t / "out" / "dir")],
+        1,
+        ["-o", "is a folder"],
+    ),
+    (
+        "-o inside a file",
+        lambda t: [
+            "frames",
+            "--model",
+            SYNCED / "sync.json",
+            "--rate",
+            "10",
+            "-o",
+            _file(t / "out" / "plain") / "f.csv",
+        ],
+        1,
+        ["-o", "plain is a file"],
+    ),
+    (
+        "sync -o inside a file, before any decoding",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "-o", _file(t / "out" / "plain") / "s.json"],
+        1,
+        ["-o", "is a file and not a folder"],
+    ),
+    ("simulate -o a file", lambda t: ["simulate", "tiny", "-o", _file(t / "out" / "x")], 1, ["-o", "is a file"]),
+    # model files that would give wrong numbers
+    ("model alpha NaN", _restamp_with_model(_set("alpha", math.nan)), 1, ["bad.json", "'f'", '"alpha"', "NaN"]),
+    ("model beta_ms inf", _restamp_with_model(_set("beta_ms", math.inf)), 1, ['"beta_ms"', "Infinity"]),
+    (
+        "model frame time NaN",
+        _restamp_with_model(lambda d: _camera(d)["frame_times_ms"].__setitem__(5, math.nan)),
+        1,
+        ['"frame_times_ms" [5]', "NaN"],
+    ),
+    ("model exposure NaN", _restamp_with_model(_set("exposure_ms", math.nan)), 1, ['"exposure_ms"', "finite"]),
+    ("model exposure as text", _restamp_with_model(_set("exposure_ms", "8")), 1, ['"exposure_ms"', 'text "8"']),
+    (
+        "model flipped as text",
+        _restamp_with_model(_set("flipped", "false")),
+        1,
+        ['"flipped" is the text "false"', "true or false"],
+    ),
+    (
+        "model version as text",
+        _restamp_with_model(lambda d: d.__setitem__("version", "1")),
+        1,
+        ['"version" is the text "1"', "the number 1"],
+    ),
+    ("model version 2", _restamp_with_model(lambda d: d.__setitem__("version", 2)), 1, ["version 2 is not supported"]),
+    ("model frame times reversed", _restamp_with_model(_reversed_times), 1, ['"frame_times_ms" is not increasing']),
+    (
+        "model reference not there",
+        _restamp_with_model(lambda d: d.__setitem__("reference", "z")),
+        1,
+        ['"reference"', "not among the cameras"],
+    ),
+    (
+        "model reference alpha not 1",
+        _restamp_with_model(_set("alpha", 1.5, index=0)),
+        1,
+        ["reference", "alpha 1, beta_ms 0"],
+    ),
+    ("model camera twice", _restamp_with_model(_duplicate), 1, ["names f twice"]),
+    ("model knots without warp", _restamp_with_model(_knots), 1, ['"drift_warp_ms" has 0 values, expected 1']),
+    (
+        "model 2x2 covariance with --std",
+        _restamp_with_model(_set("covariance", [[1, 0], [0, 1]]), "--std"),
+        1,
+        ['"covariance"', "3 rows of 3"],
+    ),
+    ("model frame std NaN", _restamp_with_model(_nonfinite_std), 1, ['"frame_std_ms" [0]']),
+    ("model event of an unknown camera", _restamp_with_model(_event_camera), 1, ["events[0]", "nobody"]),
+    (
+        "model a folder",
+        lambda t: ["restamp", _detections(t), "--model", _folder(t / "m"), "-o", t / "out" / "o.csv"],
+        1,
+        ["m: is a folder"],
+    ),
+    # options
+    (
+        "--row-time of an unknown camera",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "-o", t / "out" / "s.json", "--row-time", "z=0.03"],
+        1,
+        ["--row-time z", "no such camera"],
+    ),
+    (
+        "--row-time inf",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "--row-time", "r=inf"],
+        1,
+        ["--row-time r=inf", "finite"],
+    ),
+    (
+        "--row-time nan",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "--row-time", "r=nan"],
+        1,
+        ["--row-time r=nan"],
+    ),
+    (
+        "--row-time twice",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "--row-time", "r=0.1", "--row-time", "r=0.2"],
+        1,
+        ["--row-time r=0.2", "give one value"],
+    ),
+    (
+        "contradictory --anchor",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "--anchor", "r:0", "--anchor", "f:1", "--anchor", "r:2"],
+        1,
+        ["--anchor", "r:0 and r:2", "one event"],
+    ),
+    (
+        "--exposure inf",
+        lambda t: [
+            "restamp",
+            _detections(t),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.csv",
+            "--exposure",
+            "r=inf",
+        ],
+        1,
+        ["--exposure r=inf"],
+    ),
+    (
+        "--exposure of an unknown camera",
+        lambda t: [
+            "restamp",
+            _detections(t),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.csv",
+            "--exposure",
+            "z=4",
+        ],
+        1,
+        ["--exposure z"],
+    ),
+    ("validate --max-gap-ms -5", lambda t: _validate(t, "--max-gap-ms", "-5"), 1, ["--max-gap-ms -5", "positive"]),
+    ("validate --max-gap-ms nan", lambda t: _validate(t, "--max-gap-ms", "nan"), 1, ["--max-gap-ms nan"]),
+    (
+        "resample --max-gap-ms 0",
+        lambda t: [
+            "resample",
+            _detections(t),
+            "--model",
+            SYNCED / "sync.json",
+            "--rate",
+            "10",
+            "--max-gap-ms",
+            "0",
+            "-o",
+            t / "out" / "r.csv",
+        ],
+        1,
+        ["--max-gap-ms 0"],
+    ),
+    (
+        "frames --rate nan",
+        lambda t: ["frames", "--model", SYNCED / "sync.json", "--rate", "nan", "-o", t / "out" / "f.csv"],
+        1,
+        ["--rate nan"],
+    ),
+    (
+        "an option that is not a number",
+        lambda t: ["frames", "--model", SYNCED / "sync.json", "--rate", "fast"],
+        1,
+        ["flashsync frames: error", "--rate", "invalid float"],
+    ),
+    (
+        "--timestamps of one camera twice",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "--timestamps", "r=a.csv", "--timestamps", "r=b.csv"],
+        1,
+        ["two timestamp files"],
+    ),
+    # detections
+    (
+        "parquet true/false in y",
+        lambda t: ["restamp", _parquet(t, y=[True, False]), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv"],
+        1,
+        ["column y holds true/false values"],
+    ),
+    (
+        "parquet true/false in frame, read whole",
+        lambda t: [
+            "resample",
+            _parquet(t, frame=[True, False]),
+            "--model",
+            SYNCED / "sync.json",
+            "--rate",
+            "10",
+            "-o",
+            t / "out" / "r.csv",
+        ],
+        1,
+        ["column frame holds true/false"],
+    ),
+    (
+        "parquet lists in y",
+        lambda t: [
+            "restamp",
+            _parquet(t, y=[[1.0, 2.0], [3.0]]),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.parquet",
+        ],
+        1,
+        ["column y holds lists or records"],
+    ),
+    (
+        "CSV not UTF-8 in a camera name",
+        lambda t: [
+            "restamp",
+            _bytes(t / "l.csv", b"camera,frame,y\nr,1,2\n\xe9r,2,3\n"),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.csv",
+        ],
+        1,
+        ["l.csv: line 3 is not UTF-8", "save the file as UTF-8"],
+    ),
+    (
+        "detections a folder",
+        lambda t: ["restamp", _folder(t / "d.csv"), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv"],
+        1,
+        ["d.csv: is a folder"],
+    ),
+    # timestamps, homographies, scenario, videos
+    (
+        "timestamps not increasing",
+        lambda t: [
+            "detect",
+            SYNCED / "r.mp4",
+            "--timestamps",
+            _flat_stamps(t),
+            "-o",
+            t / "out" / "e.csv",
+        ],
+        1,
+        ["ts.csv", "not increasing", "fix the CSV"],
+    ),
+    (
+        "homography of text numbers",
+        lambda t: _validate(
+            t, homographies=_homographies(t, lambda d: d.__setitem__("r", [["1", 0, 0], [0, 1, 0], [0, 0, 1]]))
+        ),
+        1,
+        ['"r" [0][0] is the text "1"'],
+    ),
+    (
+        "scenario seed as text",
+        lambda t: ["simulate", _bytes(t / "s.yaml", b"preset: tiny\nseed: abc\n"), "-o", t / "out" / "sim"],
+        1,
+        ["s.yaml", "'seed' is the text \"abc\""],
+    ),
+    (
+        "video a folder",
+        lambda t: ["detect", _folder(t / "v.mp4"), "-o", t / "out" / "e.csv"],
+        1,
+        ["v.mp4: is a folder"],
+    ),
+    (
+        "MKV cut short",
+        lambda t: ["detect", _truncated(t, "f.mkv", 0.5), "-o", t / "out" / "e.csv"],
+        1,
+        ["cut.mkv: cut short", "header states"],
+    ),
+    (
+        "MP4 with its index at the front cut short",
+        lambda t: ["detect", _fast_start_cut(t), "-o", t / "out" / "e.csv"],
+        1,
+        ["cut.mp4: cut short", "its index lists"],
+    ),
+]
+
+#: The synced scenario's folder (``synced_scenario``), set by :func:`synced` for the cases.
+SYNCED: Path
+
+
+@pytest.fixture(autouse=True)
+def synced(synced_scenario):
+    global SYNCED
+    SYNCED = synced_scenario
+
+
+def _flat_stamps(tmp: Path) -> str:
+    """``r=FILE``: a timestamps CSV whose times do not increase."""
+    path = _bytes(tmp / "ts.csv", b"t_ms" + b"\n0" * 76)
+    return f"r={path}"
+
+
+def _link(target: Path, link: Path) -> Path:
+    os.link(target, link)
+    return link
+
+
+def _folder(path: Path) -> Path:
+    path.mkdir(parents=True)
+    return path
+
+
+def _file(path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("x")
+    return path
+
+
+def _bytes(path: Path, data: bytes) -> Path:
+    path.write_bytes(data)
+    return path
+
+
+def _digest(folder: Path) -> dict[str, str]:
+    """Every file and folder under ``folder`` (hidden ones too) and a hash of each file."""
+    return {
+        str(path.relative_to(folder)): hashlib.sha1(path.read_bytes()).hexdigest() if path.is_file() else "folder"
+        for path in folder.rglob("*")
+    }
+
+
+@pytest.mark.parametrize("prepare, code, words", [pytest.param(*case[1:], id=case[0]) for case in CASES])
+def test_bad_input(synced_scenario, tmp_path, capsys, monkeypatch, prepare, code, words):
+    before_synced = _digest(synced_scenario)
+    monkeypatch.chdir(tmp_path)
+    argv = [str(arg) for arg in prepare(tmp_path)]
+    before = _digest(tmp_path)
+    try:
+        result = main(argv)
+    except SystemExit as exit_:  # argparse
+        result = exit_.code
+    err = capsys.readouterr().err
+    assert result == code, err
+    one_error_line(err, *words)
+    assert _digest(tmp_path) == before, "an input changed or an output was left"
+    assert _digest(synced_scenario) == before_synced
+    assert not [p for p in tmp_path.rglob(".*") if p.is_file()], "a temporary file was left"
+
+
+def test_a_parquet_list_column_is_written_to_csv_as_json(synced_scenario, tmp_path, capsys):
+    source = _parquet_with_boxes(tmp_path)
+    assert (
+        main(["restamp", str(source), "--model", str(synced_scenario / "sync.json"), "-o", str(tmp_path / "o.csv")])
+        == 0
+    )
+    out = pd.read_csv(tmp_path / "o.csv")
+    assert [json.loads(text) for text in out["bbox"]] == [[1.0, 2.0, 3.0, 4.0], [5.0, 6.0, 7.0, 8.0]]
+    assert out["t_global_ms"].notna().all()
+
+
+def _parquet_with_boxes(folder: Path) -> Path:
+    table = pd.DataFrame({"camera": ["r", "f"], "frame": [3, 4], "y": [12.5, 30.0]})
+    table["bbox"] = [np.array([1.0, 2.0, 3.0, 4.0]), np.array([5.0, 6.0, 7.0, 8.0])]
+    table.to_parquet(folder / "boxes.parquet")
+    return folder / "boxes.parquet"
+
+
+def test_restamp_strict_fails_where_the_model_gives_no_finite_time(synced_scenario, tmp_path, capsys):
+    """A model whose numbers overflow stamps nothing for that camera, says why, and --strict fails."""
+    from flashsync.io import load_model, save_model
+
+    model = load_model(synced_scenario / "sync.json")
+    model.cameras["f"].alpha = 1e308
+    save_model(model, tmp_path / "huge.json")
+    detections = _detections(tmp_path)
+    code = main(
+        ["restamp", str(detections), "--model", str(tmp_path / "huge.json"), "-o", str(tmp_path / "o.csv"), "--strict"]
+    )
+    err = capsys.readouterr().err
+    assert code == 1 and "1 no finite time from the model" in err
+    out = pd.read_csv(tmp_path / "o.csv")
+    assert np.isfinite(out["t_global_ms"][0]) and np.isnan(out["t_global_ms"][1])
+    assert "inf" not in (tmp_path / "o.csv").read_text()

@@ -1,0 +1,90 @@
+"""The random-rig generator: seeded, within its documented distributions, renderable; and
+the named recipes of the issues' rigs."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from flashsync.errors import FlashsyncError
+from flashsync.simulation import render_scenario
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, RATES, RECIPES, random_rig, recipe
+
+
+def test_same_seed_same_rig_and_other_seeds_differ():
+    assert random_rig(7, max_height=540) == random_rig(7, max_height=540)
+    assert random_rig(7, max_height=540) != random_rig(8, max_height=540)
+
+
+def test_rigs_stay_within_their_distributions():
+    rigs = [random_rig(seed, max_height=540, duration_ms=12_000.0) for seed in range(40)]
+    cameras = [c for rig in rigs for c in rig.cameras]
+    assert all(2 <= len(rig.cameras) <= 12 for rig in rigs)
+    assert max(len(rig.cameras) for rig in rigs) >= 10 and min(len(rig.cameras) for rig in rigs) <= 3
+    assert all(c.height <= 540 for c in cameras) and {c.height for c in cameras} == {180, 270, 360, 540}
+    assert {c.fps for c in cameras} == set(RATES)
+    assert all(0.5 <= c.exposure_ms <= min(16.0, 0.95 * c.frame_period_ms) for c in cameras)
+    assert all(abs(c.drift_ppm) <= 50 and 18 <= c.crf <= 30 for c in cameras)
+    assert all(rig.cameras[0].drift_rate_ppm_per_s == 0 for rig in rigs)
+    assert any(c.drift_rate_ppm_per_s != 0 for c in cameras)
+    assert 0.1 < np.mean([c.flipped for c in cameras]) < 0.3
+    assert Counter(c.tone for c in cameras).keys() == {"linear", "srgb", "gamma"}
+    assert {c.container for c in cameras} == {"mp4", "mkv"} and any(c.quantize_ms for c in cameras)
+    assert any(c.jitter_ms > 0 for c in cameras) and any(c.drop_fraction > 0 for c in cameras)
+    assert {c.bframes for c in cameras} == {None, 0, 2} and {c.keyint for c in cameras} == {None, 60, 600}
+    assert all(0 <= c.miss_probability <= 0.3 for c in cameras)
+    assert {rig.flashes[0].shape for rig in rigs} == {"exponential", "rectangular", "linear rise", "cosine rise"}
+    for rig in rigs:
+        instants = np.array([f.world_ms for f in rig.flashes])
+        assert 6 <= len(instants) <= 16 and np.all(np.diff(instants) >= 400.0 - 1e-3)
+        assert instants[0] >= 0.08 * rig.duration_ms - 1e-3 and instants[-1] <= 0.92 * rig.duration_ms + 1e-3
+    flicker = [rig for rig in rigs if rig.flicker_depth > 0]
+    assert 10 < len(flicker) < 30 and all(0.005 <= rig.flicker_depth <= 0.1 for rig in flicker)
+    assert {rig.flicker_hz for rig in flicker} == {100.0, 120.0}
+    assert {rig.flicker_waveform for rig in flicker} == {"sine", "rectified"}
+    assert any(rig.player_radius_m[1] > 2 for rig in rigs) and max(rig.n_players for rig in rigs) >= 25
+
+
+def test_a_small_random_rig_renders(tmp_path):
+    rig = random_rig(3, max_height=180, duration_ms=1500.0, cameras=(2, 2))
+    truth = render_scenario(rig, tmp_path)
+    assert list(truth.cameras) == ["cam1", "cam2"]
+    assert all((tmp_path / c.file).stat().st_size > 0 for c in truth.cameras.values())
+    assert any(c.flashes_seen for c in truth.cameras.values())
+
+
+def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
+    rigs = {name: recipe(name, seed=1, duration_ms=10_000.0) for name in RECIPES}
+    four = rigs["four-ms-drops"].cameras
+    assert [(c.width, c.height, c.fps, c.container) for c in four] == [(960, 540, 25.0, "mkv")] * 2 + [
+        (640, 360, 25.0, "mkv")
+    ] * 2
+    assert all(c.drop_fraction > 0 for c in four) and [c.exposure_ms for c in four[:2]] == [6.0, 6.0]
+    assert [c.fps for c in rigs["three-rates-flipped"].cameras] == [25.0, 30.0, 50.0]
+    assert [c.flipped for c in rigs["twin-flipped"].cameras] == [False, True]
+    assert [c.drop_fraction for c in rigs["twin-drops"].cameras] == [0.0, 0.05]
+    hd = rigs["hd"].cameras
+    assert [(c.width, c.height, c.fps) for c in hd] == [
+        (1920, 1080, NTSC_30),
+        (1280, 720, NTSC_30),
+        (1280, 720, NTSC_60),
+    ]
+    twelve = rigs["twelve"].cameras
+    assert len(twelve) == 12 and all((c.width, c.height, c.miss_probability) == (320, 180, 0.3) for c in twelve)
+    assert rigs["rolling-flicker"].cameras[0].exposure_ms == 0.5 and rigs["rolling-flicker"].flicker_depth == 0.03
+    assert not rigs["flash-free"].flashes
+    assert [c.jitter_ms for c in rigs["jittered-stamps"].cameras] == [0.0, 1.2, 0.0]
+    assert rigs["stamp-rate-change"].cameras[1].stamp_rate_changes == ((150, 1.5),)  # 300 frames in 10 s
+    long = recipe("long-pair")
+    assert long.duration_ms == 900_000.0 and len(long.flashes) == 30
+    assert long.cameras[1].drift_rate_ppm_per_s > 0 and long.player_radius_m == (0.55, 1.1)
+    real_light = ("rolling-flicker", "large-movers", "long-pair", "flash-free")
+    for name, rig in rigs.items():
+        tones = ("linear",) if name in real_light else ("srgb", "gamma")
+        assert all(c.tone in tones and 18 <= c.crf <= 30 for c in rig.cameras), name
+        assert all(f.shape in ("linear rise", "rectangular") for f in rig.flashes), name
+    assert recipe("hd", seed=1) == recipe("hd", seed=1)
+    with pytest.raises(FlashsyncError, match="unknown rig recipe 'nope'"):
+        recipe("nope")
