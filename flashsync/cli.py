@@ -32,7 +32,7 @@ EXAMPLES = {
     "      --detections restamped.csv --homographies homographies.json --validation validation.json --save sync.rrd\n"
     "  rerun sync.rrd        (or: ... --serve, then open the address it prints)",
     "simulate": "flashsync simulate sample -o sim/",
-    "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv --json diagnosis.json --rrd diagnosis.rrd",
+    "diagnose": "flashsync diagnose cam1.mp4 cam2.mkv -o sync.json --json diagnosis.json --rrd diagnosis.rrd",
     "demo": "flashsync demo",
     "frames": "flashsync frames --model sync.json --rate 100 -o frames.csv",
     "resample": "flashsync resample restamped.csv --model sync.json --rate 100 -o tracks.csv",
@@ -350,6 +350,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     diagnose.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
     diagnose.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
+    diagnose.add_argument(
+        "-o",
+        "--output",
+        type=Path,
+        metavar="sync.json",
+        help="also write the final model as a sync model file (the format sync writes; restamp uses it)",
+    )
     diagnose.add_argument("--json", type=Path, metavar="OUT.json", help="also write the steps as JSON")
     diagnose.add_argument(
         "--rrd", type=Path, metavar="OUT.rrd", help="also write a Rerun recording of the residuals after each step"
@@ -807,10 +814,14 @@ def _run_diagnose(args) -> None:
 
     from flashsync.atomic import write_text
     from flashsync.diagnose import diagnose, format_diagnosis
+    from flashsync.io import save_model
     from flashsync.pipeline import detect_videos
 
     timestamps = _timestamp_files(args.timestamps)
-    _files({"VIDEO": args.videos, "--timestamps": timestamps.values()}, {"--json": args.json, "--rrd": args.rrd})
+    _files(
+        {"VIDEO": args.videos, "--timestamps": timestamps.values()},
+        {"-o": args.output, "--json": args.json, "--rrd": args.rrd},
+    )
     diagnosis = diagnose(
         detect_videos(
             args.videos,
@@ -822,6 +833,10 @@ def _run_diagnose(args) -> None:
         args.reference,
     )
     print(format_diagnosis(diagnosis), flush=True)
+    if args.output:
+        save_model(diagnosis.sync_model, args.output)
+        _PLAN.did(args.output)
+        print(f"model -> {args.output}", file=sys.stderr)
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))
         _PLAN.did(args.json)

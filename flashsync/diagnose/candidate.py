@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from flashsync.diagnose.effects import (
     CATALOGUE,
@@ -34,8 +35,8 @@ from flashsync.diagnose.effects import (
     Features,
 )
 from flashsync.diagnose.measure import Measurement
-from flashsync.frame_clock import FrameClock, fit_frame_clock
-from flashsync.model import readout_rows
+from flashsync.frame_clock import FrameClock
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
 
 
@@ -65,6 +66,8 @@ class Candidate:
     coefficients : dict
         ``(name, camera) -> value`` for ``shift`` (ms), ``exposure`` (ms; camera -1: the
         shared one) and every effect column (see :mod:`flashsync.diagnose.effects`).
+    flash_ms : ndarray of shape (n_flashes,)
+        Each flash's global time (the instant its leading edges mark), ms.
     residual_ms : ndarray of shape (n_edges,)
         Measured minus predicted edge times, ms.
     scale_ms : float
@@ -79,6 +82,7 @@ class Candidate:
     flipped: list[bool]
     features: Features
     coefficients: dict[tuple[str, int], float]
+    flash_ms: np.ndarray
     residual_ms: np.ndarray
     scale_ms: float
     bic: float
@@ -116,7 +120,7 @@ class Candidate:
             CameraEstimate(
                 camera=camera.camera,
                 reference=c == self.reference,
-                flipped=self.flipped[c],
+                flipped=bool(self.flipped[c]),
                 frame_period_ms=clock.period_ms,
                 median_step_ms=clock.median_step_ms,
                 missing_frames=clock.missing,
@@ -132,21 +136,98 @@ class Candidate:
             for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
         ]
 
+    def sync_model(self) -> SyncModel:
+        """This model as the pipeline's :class:`~flashsync.model.SyncModel` (what ``flashsync
+        sync`` writes and ``restamp`` uses).
+
+        Each camera's frame times are its frame clock's under the model (the ladder, free of
+        the stamps' jitter); its map is ``alpha = 1 + drift``, ``beta`` the shift about its
+        mid time, the time per row the model's, and a drift-rate change the
+        piecewise-linear warp at :data:`WARP_KNOTS` interior knots. The covariance of
+        (alpha, beta, time per row) is the robust fit's (Cauchy weights, residual scale);
+        the matched events are the leading edges of the measured bands, with their residuals.
+        """
+        measurement = self.measurement
+        keys, design = _design(measurement, self.terms, self.features)
+        covariance = _covariance(design, self.residual_ms, self.scale_ms)
+        clocks = {}
+        for c, (camera, clock) in enumerate(zip(measurement.cameras, self.clocks)):
+            ladder = clock.ladder_ms
+            mid = 0.5 * (ladder[0] + ladder[-1])
+            half = 0.5 * (ladder[-1] - ladder[0])
+            drift, rate = self.coefficient(DRIFT, c), self.coefficient(DRIFT_RATE, c)
+            knots = np.linspace(ladder[0], ladder[-1], WARP_KNOTS + 2) if rate else np.zeros(0)
+            warp = rate * ((knots[1:-1] - mid) ** 2 - half**2)
+            gradient = np.zeros((3, design.shape[1]))  # d(alpha, beta, T_row) / d(parameters)
+            for name, row, factor in (("shift", 1, 1.0), (DRIFT, 0, 1.0), (DRIFT, 1, -mid), (ROW_TIME, 2, 1.0)):
+                if (name, c) in keys:
+                    gradient[row, keys.index((name, c))] = factor
+            block = np.zeros((3 + len(warp),) * 2)
+            block[:3, :3] = gradient @ covariance @ gradient.T
+            clocks[camera.camera] = CameraClock(
+                camera.camera,
+                ladder,
+                camera.height,
+                camera.width,
+                alpha=1.0 + drift,
+                beta_ms=self.coefficient("shift", c) - drift * mid + rate * half**2,
+                row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+                flipped=bool(self.flipped[c]),
+                covariance=block,
+                exposure_ms=self.exposure_ms(c),
+                video=str(camera.video),
+                drift_knots_ms=knots,
+                drift_warp_ms=warp,
+                frame_std_ms=clock.std_ms,
+            )
+        edges = measurement.edges
+        leading = ~self.features.trailing
+        names = np.array([camera.camera for camera in measurement.cameras])
+        events = pd.DataFrame(
+            {
+                "flash": edges.flash[leading],
+                "camera": names[edges.camera[leading]],
+                "event": edges.event[leading],
+                "frame": edges.frame[leading],
+                "row": edges.row[leading],
+                "t_frame_ms": [
+                    self.clocks[c].ladder_ms[f] for c, f in zip(edges.camera[leading], edges.frame[leading])
+                ],
+                "t_global_ms": self.flash_ms[edges.flash[leading]],
+                "residual_ms": self.residual_ms[leading],
+                "inlier": np.abs(self.residual_ms[leading]) <= INLIER_SCALES * self.scale_ms,
+            }
+        ).astype(MATCHED_EVENT_COLUMNS)
+        return SyncModel(names[self.reference], clocks, events)
+
+
+#: Interior knots of the warp that carries a drift-rate change into a :class:`SyncModel`
+#: (the parabola's chord error over a segment is rate x (length / 2)**2: 0.005 ms for
+#: 100 ppm/s over 40 s).
+WARP_KNOTS = 64
+#: An edge whose residual is within this many Cauchy scales counts as an inlier of the model.
+INLIER_SCALES = 5.0
+
+
+def _covariance(design: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
+    """Covariance of a Cauchy IRLS fit's parameters, shape (p, p): ``s**2 (X' W X)^-1`` with
+    the final Cauchy weights ``W`` and ``s**2`` their weighted mean squared residual over
+    the degrees of freedom."""
+    weights = 1.0 / (1.0 + (residual / scale) ** 2)
+    dof = max(weights.sum() - design.shape[1], 1.0)
+    variance = float(np.sum(weights * residual**2) / dof)
+    return variance * np.linalg.pinv(design.T @ (design * weights[:, None]))
+
 
 def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate | None:
     """Fit the model with the effects ``terms`` switched on; None when the measurement
     cannot determine its parameters."""
     cameras, edges = measurement.cameras, measurement.edges
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
-    flipped = [camera.flipped != flip for camera, flip in zip(cameras, reflected)]
+    flipped = [bool(camera.flipped != flip) for camera, flip in zip(cameras, reflected)]
     clocks = [
-        fit_frame_clock(
-            camera.frame_times_ms,
-            count_gaps=Term(DROPPED_FRAMES, c) in terms,
-            least_squares=Term(FRAME_CLOCK, c) in terms,
-            smoothing=False,
-        )
-        for c, camera in enumerate(cameras)
+        measurement.frame_clock(c, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
+        for c in range(len(cameras))
     ]
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, clock) in enumerate(zip(cameras, clocks)):
@@ -174,6 +255,7 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
         flipped,
         features,
         dict(zip(keys, parameters[: len(keys)].tolist())),
+        parameters[len(keys) :],
         residual,
         scale,
         float(bic),

@@ -14,13 +14,14 @@ under test.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Bands, Events
+from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
 from flashsync.timestamps import median_step_ms
 
@@ -39,6 +40,8 @@ class Edges:
         Index into :attr:`Measurement.cameras`.
     flash : int array
         Flash number, 0..n_flashes-1; every flash is seen by at least two cameras.
+    event : int array
+        The detector's event number of the edge (as in the events table).
     frame : int array
         Decoded frame index of the edge.
     row : float array
@@ -49,6 +52,7 @@ class Edges:
 
     camera: np.ndarray
     flash: np.ndarray
+    event: np.ndarray
     frame: np.ndarray
     row: np.ndarray
     trailing: np.ndarray
@@ -75,6 +79,9 @@ class Measurement:
         (the exposure over the time per row), and so are bands split across two frames
         (shorter by the hidden rows); NaN without three bands of a kind. Errors common to
         both edges of a band do not show in its length, so this is a lower bound.
+    camera_noise_ms : float array of shape (n_cameras,)
+        The same per camera (its own bands), :attr:`noise_ms` where a camera has no three
+        bands of a kind.
     warnings : tuple of str
         Cameras left out and why.
     """
@@ -83,7 +90,18 @@ class Measurement:
     reference: int
     edges: Edges
     noise_ms: float
+    camera_noise_ms: np.ndarray
     warnings: tuple[str, ...] = ()
+    _clocks: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def frame_clock(self, camera: int, count_gaps: bool, least_squares: bool) -> FrameClock:
+        """The camera's frame clock with those parts switched on (never smoothed), fitted once."""
+        key = (camera, count_gaps, least_squares)
+        if key not in self._clocks:
+            self._clocks[key] = fit_frame_clock(
+                self.cameras[camera].frame_times_ms, count_gaps=count_gaps, least_squares=least_squares, smoothing=False
+            )
+        return self._clocks[key]
 
     @property
     def n_flashes(self) -> int:
@@ -140,8 +158,16 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
             "no flash band with both edges inside the image is seen by two cameras; "
             "record more flashes, away from the top and bottom of the image"
         )
+    deviations = _length_deviations_ms(cameras, pulses)
+    pooled = _edge_noise_ms(np.concatenate(deviations))
+    own = np.array([_edge_noise_ms(d) for d in deviations])
     return Measurement(
-        cameras, [c.camera for c in cameras].index(reference), edges, _edge_noise_ms(cameras, pulses), warnings
+        cameras,
+        [c.camera for c in cameras].index(reference),
+        edges,
+        pooled,
+        np.where(np.isfinite(own), own, pooled),
+        warnings,
     )
 
 
@@ -188,7 +214,7 @@ def _pulses(detection: CameraDetection) -> _Pulses:
 
 def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[CameraDetection, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    camera, flash, frame, row, trailing = [], [], [], [], []
+    camera, flash, event, frame, row, trailing = [], [], [], [], [], []
     for index, (named, mine) in enumerate(zip(cameras, pulses)):
         for band in np.flatnonzero(mine.clean):
             if (named.camera, band) not in flash_of:
@@ -196,6 +222,7 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
             for is_trailing, edge in ((False, mine.bands.leading[band]), (True, mine.bands.trailing[band])):
                 camera.append(index)
                 flash.append(flash_of[(named.camera, band)])
+                event.append(mine.events.event[edge])
                 frame.append(mine.events.frame[edge])
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
@@ -203,28 +230,34 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
         flash,
+        np.asarray(event, dtype=np.int64)[keep],
         np.asarray(frame, dtype=np.int64)[keep],
         np.asarray(row, dtype=np.float64)[keep],
         np.asarray(trailing, dtype=bool)[keep],
     )
 
 
-def _edge_noise_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> float:
-    """Std of one edge's time, ms, from the scatter of band lengths among the bands of one
-    camera that span the same number of frames (a length holds two edges' errors). Every
-    band counts, one whose edge a codec artefact moved too: the edge residuals this is
-    compared with hold that edge as well."""
-    deviations = []
+def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> list[np.ndarray]:
+    """Per camera, each band's length minus the median length of the camera's bands that
+    span the same number of frames (with at least three of them), ms. Every band counts,
+    one whose edge a codec artefact moved too: the edge residuals this is compared with hold
+    that edge as well."""
+    per_camera = []
     for camera, mine in zip(cameras, pulses):
         bands = mine.bands.take(mine.clean)
         frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
         lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
+        deviations = [np.zeros(0)]
         for span in np.unique(frames):
             rows = lengths[frames == span]
             if len(rows) >= 3:
                 scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
                 deviations.append((rows - np.median(rows)) * scale)
-    if not deviations:
-        return float("nan")
-    deviations = np.concatenate(deviations)
-    return float(np.sqrt(np.mean(deviations**2) / 2.0))
+        per_camera.append(np.concatenate(deviations))
+    return per_camera
+
+
+def _edge_noise_ms(deviations: np.ndarray) -> float:
+    """Std of one edge's time, ms, from band-length deviations (a length holds two edges'
+    errors); NaN without any."""
+    return float(np.sqrt(np.mean(deviations**2) / 2.0)) if deviations.size else float("nan")

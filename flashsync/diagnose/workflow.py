@@ -5,17 +5,19 @@ every candidate (an effect of the catalogue on one camera, added to the current 
 keeps the one that lowers the Bayesian information criterion most, among those that lower
 it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals);
 without such a candidate, pairs of effects on one camera are tried the same way (a camera's
-time per row and exposure both change its band lengths, so one alone may not show), and
-without such a pair the residuals hold nothing the catalogue can explain and the loop
-stops. After each addition, an effect added earlier whose evidence has fallen to
+time per row and exposure both change its band lengths, so one alone may not show), then
+pairs on two cameras (the reference's time per row and another camera's exposure both move
+the gap between its edges), and without such a pair the residuals hold nothing the
+catalogue can explain and the loop stops. After each addition, an effect added earlier whose evidence has fallen to
 :data:`THRESHOLD` or less (a later one explains its structure better) is taken out again,
-for good. The final residuals are then compared with the edge noise the band lengths show.
+for good. The final residuals are then tested against the edge noise the band lengths show
+(:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is).
 The data never say which effect is there: the workflow sees frame stamps and band edges."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from itertools import combinations
 
 import numpy as np
@@ -24,26 +26,24 @@ from flashsync.detect import CameraDetection
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
 from flashsync.diagnose.effects import CATALOGUE, OTHER_CAMERAS
 from flashsync.diagnose.measure import Measurement, measure
+from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import NotEnoughDataError
+from flashsync.model import SyncModel
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
-#: Residuals are consistent with noise when their RMS is within this factor of what the edge
-#: noise seen in band lengths would leave. Band lengths miss the errors common to both edges
-#: of a band (the sub-row bias of locating a half-rise on a curved ramp), which make the
-#: residuals of a complete model 1 to 3 times that in simulations.
-NOISE_FACTOR = 3.0
 
 
 @dataclass(frozen=True)
 class Step:
-    """One effect (or a pair on one camera) added to the model, or one taken out again.
+    """One effect (or a pair) added to the model, or one taken out again.
 
     Attributes
     ----------
     effect, title : str
         Catalogue key and words for it (a pair's joined by ``+``).
     camera : str
+        The camera (a pair on two cameras: both, joined by ``+``).
     delta_bic : float
         How much the BIC fell, over edges and stamps (for a removal: how much the effect
         still lowered it).
@@ -93,8 +93,8 @@ class Diagnosis:
     expected_ms : float
         RMS the edge noise seen in band lengths (:attr:`Measurement.noise_ms`) would leave
         after fitting the final model's parameters, ms; NaN when unknown.
-    consistent : bool
-        ``final_rms_ms <= NOISE_FACTOR * expected_ms``.
+    noise : NoiseTest
+        The χ² test of the final residuals against each camera's edge noise.
     model : list of dict
         Final model per camera (readout, frame clock, drift, shift, time per row, exposure).
     residuals : dict
@@ -104,6 +104,9 @@ class Diagnosis:
         Per edge (lists of n_edges): ``camera``, ``flash``, ``trailing``; ``residual_ms`` one
         list per model: the plain one, then after each step.
     warnings : list of str
+    sync_model : SyncModel or None
+        The final model as the pipeline's model (:meth:`Candidate.sync_model`): what
+        ``flashsync diagnose -o`` writes and ``restamp`` uses. Not in :meth:`to_dict`.
     """
 
     cameras: list[str]
@@ -114,31 +117,36 @@ class Diagnosis:
     initial_rms_ms: float
     final_rms_ms: float
     expected_ms: float
-    consistent: bool
+    noise: NoiseTest
     model: list[dict]
     residuals: dict[str, list[dict]]
     edge_residuals: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    sync_model: SyncModel | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def consistent(self) -> bool:
+        """The final residuals pass the χ² test against the edge noise."""
+        return self.noise.consistent
 
     @property
     def verdict(self) -> str:
-        """One line on the final residuals against the noise."""
-        if not np.isfinite(self.expected_ms):
-            return (
-                f"residuals RMS {self.final_rms_ms:.4f} ms; noise unknown (fewer than three bands of a kind per camera)"
-            )
-        numbers = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
+        """One line on the final residuals against the noise (the χ² test, in words)."""
+        rms = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
+        if not self.noise.known:
+            return f"residuals {rms}; {self.noise.describe()}"
         if self.consistent:
-            return f"residuals consistent with noise ({numbers})"
+            return f"{self.noise.describe()} ({rms})"
         return (
-            f"residuals exceed the noise ({numbers}, more than {NOISE_FACTOR:g}x): an effect "
-            "outside the catalogue remains, or the measurement cannot separate the ones it has"
+            f"{self.noise.describe()} ({rms}): an effect outside the catalogue remains, or the measurement "
+            "cannot separate the ones it has"
         )
 
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence, the verdict and the
         catalogue the effects were chosen from."""
-        data = asdict(self)
+        data = asdict(replace(self, sync_model=None))
+        del data["sync_model"]
         for step, record in zip(self.steps, data["steps"]):
             record["evidence"] = step.evidence
         catalogue = [
@@ -152,7 +160,7 @@ class Diagnosis:
             }
             for e in CATALOGUE.values()
         ]
-        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, noise_factor=NOISE_FACTOR, catalogue=catalogue)
+        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, significance=SIGNIFICANCE, catalogue=catalogue)
         return _finite(data)
 
 
@@ -203,15 +211,14 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
 def _best_addition(
     measurement: Measurement, current: Candidate, removed: set[Term]
 ) -> tuple[tuple[Term, ...], Candidate] | None:
-    """The effect, else the pair of effects on one camera, whose model has the lowest BIC
-    among those that lower it by more than :data:`THRESHOLD` and shrink the RMS."""
+    """The effect, else the pair of effects on one camera, else the pair on two cameras,
+    whose model has the lowest BIC among those that lower it by more than :data:`THRESHOLD`
+    and shrink the RMS."""
     singles = _candidates(measurement, current.terms | removed)
-    pairs = [
-        (a, b)
-        for a, b in combinations(singles, 2)
-        if a.camera == b.camera and b not in _with_implied(a) and a not in _with_implied(b)
-    ]
-    for groups in ([(term,) for term in singles], pairs):
+    pairs = [(a, b) for a, b in combinations(singles, 2) if b not in _with_implied(a) and a not in _with_implied(b)]
+    one_camera = [(a, b) for a, b in pairs if a.camera == b.camera]
+    two_cameras = [(a, b) for a, b in pairs if a.camera != b.camera]
+    for groups in ([(term,) for term in singles], one_camera, two_cameras):
         best = None
         for group in groups:
             trial = fit_candidate(measurement, current.terms.union(*map(_with_implied, group)))
@@ -233,12 +240,17 @@ def _step(terms: tuple[Term, ...], without: Candidate, with_terms: Candidate, re
     before, after = (with_terms, without) if removed else (without, with_terms)
     camera = terms[0].camera
     estimates = with_terms.estimates()
+    names = dict.fromkeys(estimates[term.camera].camera for term in terms)
     return Step(
         "+".join(e.name for e in effects),
         " + ".join(e.title for e in effects),
-        estimates[camera].camera,
+        "+".join(names),
         without.bic - with_terms.bic,
-        "; ".join(e.describe(estimates[camera], estimates[with_terms.reference]) for e in effects),
+        "; ".join(
+            (f"{estimates[term.camera].camera}: " if len(names) > 1 else "")
+            + e.describe(estimates[term.camera], estimates[with_terms.reference])
+            for e, term in zip(effects, terms)
+        ),
         before.rms_ms,
         after.rms_ms,
         before.stamp_rms_ms[camera],
@@ -291,11 +303,32 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
         initial_rms_ms=plain.rms_ms,
         final_rms_ms=final.rms_ms,
         expected_ms=float(expected),
-        consistent=bool(final.rms_ms <= NOISE_FACTOR * expected),
+        noise=_noise_test(measurement, final),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         edge_residuals=_edge_residuals(measurement, fits),
         warnings=list(measurement.warnings),
+        sync_model=final.sync_model(),
+    )
+
+
+def _noise_test(measurement: Measurement, fit: Candidate) -> NoiseTest:
+    """The χ² test of the fit's residuals, edges timed by their flash from the reference's
+    first frame."""
+    edges = measurement.edges
+    start = fit.clocks[measurement.reference].ladder_ms[0]
+    names = [c.camera for c in measurement.cameras]
+    return noise_test(
+        fit.residual_ms,
+        edges.camera,
+        (fit.flash_ms[edges.flash] - start) / 1000.0,
+        [
+            f"{names[c]} flash {f} {'trailing' if t else 'leading'}"
+            for c, f, t in zip(edges.camera, edges.flash, edges.trailing)
+        ],
+        names,
+        measurement.camera_noise_ms,
+        measurement.n_flashes + len(fit.coefficients),
     )
 
 
