@@ -4,7 +4,8 @@ The model is linear in its parameters once its frame clocks and readout rows are
 each edge gives one equation (see :mod:`flashsync.diagnose.effects`), unknowns are the
 flashes' global times, the cameras' shifts, the shared exposure and the effects' columns.
 It is solved by the pipeline's robust fit (:func:`flashsync.robust.cauchy_fit`: Cauchy IRLS
-with a fitted scale, here no smaller than the edge noise the band lengths show), so one bad
+with a fitted scale, here no smaller than the edge noise the band lengths show), each edge
+weighted by its camera's edge noise, so one bad
 edge neither moves the fit nor names an effect, while a step or a trend shared by many edges
 weighs in full. Each camera's stamps are a second stream: their residuals about the model's
 frame clock (:class:`flashsync.frame_clock.FrameClock` with the parts the model's effects
@@ -18,6 +19,7 @@ A model's score is its Bayesian information criterion over both streams::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import product
 
 import numpy as np
 import pandas as pd
@@ -31,6 +33,7 @@ from flashsync.diagnose.effects import (
     FLIPPED,
     FRAME_CLOCK,
     ROW_TIME,
+    STAMP_RATE,
     CameraEstimate,
     Features,
 )
@@ -58,7 +61,11 @@ class Candidate:
     terms : frozenset of Term
         The effects switched on.
     clocks : list of FrameClock
-        Per camera, its frame clock under the model (never smoothed).
+        Per camera, its frame clock under the model (never smoothed): what its stamps are
+        compared with.
+    timing : list of FrameTiming
+        Per camera, its frames' times and period under the model: the clock's, or where
+        the stamps change rate and the model says the sensor did not, one rate throughout.
     flipped : list of bool
         Per camera: reads bottom-up under the model.
     features : Features
@@ -71,7 +78,7 @@ class Candidate:
     residual_ms : ndarray of shape (n_edges,)
         Measured minus predicted edge times, ms.
     scale_ms : float
-        Cauchy scale of the edge residuals, ms.
+        Cauchy scale of the weighted edge residuals (:func:`_edge_weights`), ms.
     bic : float
         Bayesian information criterion over edges and stamps.
     """
@@ -79,6 +86,7 @@ class Candidate:
     measurement: Measurement
     terms: frozenset[Term]
     clocks: list[FrameClock]
+    timing: list[FrameTiming]
     flipped: list[bool]
     features: Features
     coefficients: dict[tuple[str, int], float]
@@ -107,7 +115,7 @@ class Candidate:
 
     def nominal_row_time_ms(self, camera: int) -> float:
         """Frame period / image height, ms."""
-        return self.clocks[camera].period_ms / self.measurement.cameras[camera].height
+        return self.timing[camera].period_ms / self.measurement.cameras[camera].height
 
     def exposure_ms(self, camera: int) -> float:
         """The camera's exposure (shared one plus its own offset), ms."""
@@ -121,9 +129,10 @@ class Candidate:
                 camera=camera.camera,
                 reference=c == self.reference,
                 flipped=bool(self.flipped[c]),
-                frame_period_ms=clock.period_ms,
+                frame_period_ms=self.timing[c].period_ms,
                 median_step_ms=clock.median_step_ms,
                 missing_frames=clock.missing,
+                rate_changes=clock.rate_changes,
                 stamp_rms_ms=stamp_rms[c],
                 drift_ppm=1e6 * self.coefficient(DRIFT, c),
                 drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c),
@@ -149,10 +158,12 @@ class Candidate:
         """
         measurement = self.measurement
         keys, design = _design(measurement, self.terms, self.features)
-        covariance = _covariance(design, self.residual_ms, self.scale_ms)
+        weight = _edge_weights(measurement)
+        weighted = self.residual_ms * weight
+        covariance = _covariance(design * weight[:, None], weighted, self.scale_ms)
         clocks = {}
-        for c, (camera, clock) in enumerate(zip(measurement.cameras, self.clocks)):
-            ladder = clock.ladder_ms
+        for c, (camera, clock, timing) in enumerate(zip(measurement.cameras, self.clocks, self.timing)):
+            ladder = timing.times_ms
             mid = 0.5 * (ladder[0] + ladder[-1])
             half = 0.5 * (ladder[-1] - ladder[0])
             drift, rate = self.coefficient(DRIFT, c), self.coefficient(DRIFT_RATE, c)
@@ -190,12 +201,10 @@ class Candidate:
                 "event": edges.event[leading],
                 "frame": edges.frame[leading],
                 "row": edges.row[leading],
-                "t_frame_ms": [
-                    self.clocks[c].ladder_ms[f] for c, f in zip(edges.camera[leading], edges.frame[leading])
-                ],
+                "t_frame_ms": [self.timing[c].times_ms[f] for c, f in zip(edges.camera[leading], edges.frame[leading])],
                 "t_global_ms": self.flash_ms[edges.flash[leading]],
                 "residual_ms": self.residual_ms[leading],
-                "inlier": np.abs(self.residual_ms[leading]) <= INLIER_SCALES * self.scale_ms,
+                "inlier": np.abs(weighted[leading]) <= INLIER_SCALES * self.scale_ms,
             }
         ).astype(MATCHED_EVENT_COLUMNS)
         return SyncModel(names[self.reference], clocks, events)
@@ -219,32 +228,81 @@ def _covariance(design: np.ndarray, residual: np.ndarray, scale: float) -> np.nd
     return variance * np.linalg.pinv(design.T @ (design * weights[:, None]))
 
 
+@dataclass(frozen=True)
+class FrameTiming:
+    """A camera's frame times under a model.
+
+    Attributes
+    ----------
+    times_ms : ndarray of shape (n_frames,)
+        Each decoded frame's time, ms.
+    period_ms : float
+        Frame period, ms.
+    """
+
+    times_ms: np.ndarray
+    period_ms: float
+
+
+def frame_timings(clock: FrameClock, one_rate: bool) -> list[FrameTiming]:
+    """The frame times a model may give a camera: its clock's ladder; with ``one_rate``,
+    instead, where its stamps change rate, one per rate of its segments as if the sensor
+    had kept that rate throughout (:meth:`FrameClock.one_rate_alternatives`), none without
+    a rate change."""
+    if not one_rate:
+        return [FrameTiming(clock.ladder_ms, clock.period_ms)]
+    slots = clock.slots[-1] - clock.slots[0]
+    return [FrameTiming(times, float((times[-1] - times[0]) / slots)) for _, times in clock.one_rate_alternatives()]
+
+
 def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate | None:
     """Fit the model with the effects ``terms`` switched on; None when the measurement
-    cannot determine its parameters."""
-    cameras, edges = measurement.cameras, measurement.edges
+    cannot determine its parameters. Where a camera's frame times leave a choice (a stamp
+    rate change), the choice with the lowest BIC."""
+    cameras = measurement.cameras
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [bool(camera.flipped != flip) for camera, flip in zip(cameras, reflected)]
     clocks = [
         measurement.frame_clock(c, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
         for c in range(len(cameras))
     ]
+    choices = [frame_timings(clock, Term(STAMP_RATE, c) in terms) for c, clock in enumerate(clocks)]
+    fits = [
+        fit
+        for timing in product(*choices)
+        if (fit := _fit(measurement, terms, clocks, list(timing), flipped, reflected)) is not None
+    ]
+    return min(fits, key=lambda fit: fit.bic) if fits else None
+
+
+def _fit(
+    measurement: Measurement,
+    terms: frozenset[Term],
+    clocks: list[FrameClock],
+    timing: list[FrameTiming],
+    flipped: list[bool],
+    reflected: np.ndarray,
+) -> Candidate | None:
+    """The model with these frame clocks (stamps) and frame times (edges)."""
+    cameras, edges = measurement.cameras, measurement.edges
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
-    for c, (camera, clock) in enumerate(zip(cameras, clocks)):
+    for c, (camera, times) in enumerate(zip(cameras, timing)):
         mine = edges.camera == c
-        frame_ms[mine] = clock.ladder_ms[edges.frame[mine]]
+        frame_ms[mine] = times.times_ms[edges.frame[mine]]
         q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
-        observed[mine] = frame_ms[mine] + q[mine] * clock.period_ms / camera.height
-        frame_ms[mine] -= 0.5 * (clock.ladder_ms[0] + clock.ladder_ms[-1])
+        observed[mine] = frame_ms[mine] + q[mine] * times.period_ms / camera.height
+        frame_ms[mine] -= 0.5 * (times.times_ms[0] + times.times_ms[-1])
     features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
-    solved = cauchy_fit(design, observed, noise if np.isfinite(noise) else MIN_SCALE_MS)
+    weight = _edge_weights(measurement)
+    solved = cauchy_fit(design * weight[:, None], observed * weight, noise if np.isfinite(noise) else MIN_SCALE_MS)
     if solved is None:
         return None
-    parameters, residual, scale = solved
+    parameters, weighted, scale = solved
+    residual = weighted / weight
     stamp_residuals = [clock.residual_ms for clock in clocks]
-    log_likelihood = -cauchy_nll(residual, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
+    log_likelihood = -cauchy_nll(weighted, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
     n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
     n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
@@ -252,6 +310,7 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
         measurement,
         terms,
         clocks,
+        timing,
         flipped,
         features,
         dict(zip(keys, parameters[: len(keys)].tolist())),
@@ -260,6 +319,14 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
         scale,
         float(bic),
     )
+
+
+def _edge_weights(measurement: Measurement) -> np.ndarray:
+    """Each edge's weight in the fit, shape (n_edges,): the pooled edge noise over its
+    camera's (1 where unknown), so that a camera with sharp bands is not drowned by one with
+    noisy ones."""
+    weight = measurement.noise_ms / measurement.camera_noise_ms[measurement.edges.camera]
+    return np.where(np.isfinite(weight) & (weight > 0), weight, 1.0)
 
 
 def _design(

@@ -34,9 +34,13 @@ drift_rate      a curvature against time                    column ``-t**2`` (ot
                                                             half the drift's change per ms
 exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
                 and leading edges' residuals                exposure minus the reference's, ms
+stamp_rate      from one frame on, edges run away at a      frame times at one rate throughout
+                steady rate: the stamps changed rate, the   (one of the stamps' segments', the
+                sensor did not                              best fit), with dropped_frames and
+                                                            frame_clock (segments fitted)
 ==============  ==========================================  ======================================
 
-``dropped_frames`` and ``frame_clock`` switch on parts of the pipeline's frame clock
+``dropped_frames``, ``frame_clock`` and ``stamp_rate`` switch on parts of the pipeline's frame clock
 (:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
 fitted model's :class:`CameraEstimate` of the camera, never from the fit itself.
 
@@ -59,6 +63,7 @@ ROW_TIME = "row_time"
 DRIFT = "drift"
 DRIFT_RATE = "drift_rate"
 EXPOSURE = "exposure"
+STAMP_RATE = "stamp_rate"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -103,6 +108,9 @@ class CameraEstimate:
         The model's frame period and the camera's median stamp step, ms.
     missing_frames : int
         Frame slots without a frame under the model.
+    rate_changes : list of (int, float, float)
+        Where the stamps change rate under the model's frame clock: (first frame, period
+        before, period after), ms.
     stamp_rms_ms : float
         RMS of the stamps about the model's frame clock, ms.
     drift_ppm, drift_rate_ppm_per_s : float
@@ -121,6 +129,7 @@ class CameraEstimate:
     frame_period_ms: float
     median_step_ms: float
     missing_frames: int
+    rate_changes: list[tuple[int, float, float]]
     stamp_rms_ms: float
     drift_ppm: float
     drift_rate_ppm_per_s: float
@@ -183,6 +192,11 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
         f"frame period {camera.frame_period_ms:.4f} ms (median step {camera.median_step_ms:.4f}), "
         f"stamps scatter {camera.stamp_rms_ms:.3f} ms RMS about it"
     )
+
+
+def _describe_stamp_rate(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    changes = ", ".join(f"at frame {f} ({a:.3f} -> {b:.3f} ms)" for f, a, b in camera.rate_changes)
+    return f"stamps change rate {changes}; frames at one rate of {camera.frame_period_ms:.4f} ms throughout"
 
 
 def _describe_flip(camera: CameraEstimate, reference: CameraEstimate) -> str:
@@ -271,6 +285,17 @@ CATALOGUE: dict[str, Effect] = {
             OTHER_CAMERAS,
             _describe_exposure,
             column=lambda f: f.trailing.astype(np.float64),
+        ),
+        Effect(
+            STAMP_RATE,
+            "stamp rate change",
+            "from one frame on, the edges run away from the model at a steady rate while the "
+            "stamps about their own clock do not: the stamps changed rate, the sensor did not",
+            "frame times at one rate throughout (that of one of the stamps' segments, whichever fits "
+            "the edges best) instead of the stamps' own rate in each segment",
+            EVERY_CAMERA,
+            _describe_stamp_rate,
+            implies=(DROPPED_FRAMES, FRAME_CLOCK),
         ),
     )
 }

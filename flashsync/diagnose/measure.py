@@ -8,13 +8,15 @@ step / height) with the pipeline's matcher, :func:`flashsync.match.match_events`
 tolerance of a readout direction that may be wrong (one frame period): loose enough for
 every effect of the catalogue (an upside-down camera misplaces a band by less than a frame,
 a dropped frame or a clock drift does not move a stamp). Nothing here depends on the model
-under test.
+under test. A camera whose stamps change rate is paired both ways (its stamps as they
+are, and at one rate throughout), and the pairing that ties the most bands is kept.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from itertools import product
 
 import numpy as np
 
@@ -135,9 +137,13 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
             f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
             parameter="reference",
         )
-    pulses = {d.camera: _pulses(d) for d in detections}
     tolerance = match_tolerance_ms([median_step_ms(d.frame_times_ms) for d in detections], readout_known=False)
-    matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
+    matchings = []
+    for times in product(*map(_frame_times_ms, detections)):
+        pulses = {d.camera: _pulses(d.retimed(t)) for d, t in zip(detections, times)}
+        matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
+        matchings.append((len(matching.flashes), len(matchings), matching, pulses))
+    _, _, matching, pulses = max(matchings)
     tied = matching.tied_to(reference)
     kept = [d for d in detections if d.camera in tied]
     if len(kept) < 2:
@@ -169,6 +175,14 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         np.where(np.isfinite(own), own, pooled),
         warnings,
     )
+
+
+def _frame_times_ms(detection: CameraDetection) -> list[np.ndarray]:
+    """The frame times to pair the camera's bands with: its stamps and, where they change
+    rate, the times at one rate throughout for each rate (the sensor may not have changed
+    its rate with the stamps; :meth:`~flashsync.frame_clock.FrameClock.one_rate_alternatives`)."""
+    clock = fit_frame_clock(detection.frame_times_ms, smoothing=False)
+    return [detection.frame_times_ms] + [times for _, times in clock.one_rate_alternatives()]
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,8 @@
 Starting from the plainest model (see :mod:`flashsync.diagnose.effects`), each round fits
 every candidate (an effect of the catalogue on one camera, added to the current model) and
 keeps the one that lowers the Bayesian information criterion most, among those that lower
-it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals);
+it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals, or of
+the stamps about the model's frame clocks: a stamp fault the plain frame index hides);
 without such a candidate, pairs of effects on one camera are tried the same way (a camera's
 time per row and exposure both change its band lengths, so one alone may not show), then
 pairs on two cameras (the reference's time per row and another camera's exposure both move
@@ -213,7 +214,7 @@ def _best_addition(
 ) -> tuple[tuple[Term, ...], Candidate] | None:
     """The effect, else the pair of effects on one camera, else the pair on two cameras,
     whose model has the lowest BIC among those that lower it by more than :data:`THRESHOLD`
-    and shrink the RMS."""
+    and shrink the gap: the RMS of the edges, or of the stamps about their clocks."""
     singles = _candidates(measurement, current.terms | removed)
     pairs = [(a, b) for a, b in combinations(singles, 2) if b not in _with_implied(a) and a not in _with_implied(b)]
     one_camera = [(a, b) for a, b in pairs if a.camera == b.camera]
@@ -225,7 +226,7 @@ def _best_addition(
             if (
                 trial is not None
                 and current.bic - trial.bic > THRESHOLD
-                and trial.rms_ms < current.rms_ms
+                and (trial.rms_ms < current.rms_ms or sum(trial.stamp_rms_ms) < sum(current.stamp_rms_ms))
                 and (best is None or trial.bic < best[1].bic)
             ):
                 best = (group, trial)
@@ -316,7 +317,7 @@ def _noise_test(measurement: Measurement, fit: Candidate) -> NoiseTest:
     """The χ² test of the fit's residuals, edges timed by their flash from the reference's
     first frame."""
     edges = measurement.edges
-    start = fit.clocks[measurement.reference].ladder_ms[0]
+    start = fit.timing[measurement.reference].times_ms[0]
     names = [c.camera for c in measurement.cameras]
     return noise_test(
         fit.residual_ms,
