@@ -304,7 +304,7 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
         initial_rms_ms=plain.rms_ms,
         final_rms_ms=final.rms_ms,
         expected_ms=float(expected),
-        noise=_noise_test(measurement, final),
+        noise=residual_test(measurement, final),
         model=_camera_models(final),
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         edge_residuals=_edge_residuals(measurement, fits),
@@ -313,7 +313,7 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
     )
 
 
-def _noise_test(measurement: Measurement, fit: Candidate) -> NoiseTest:
+def residual_test(measurement: Measurement, fit: Candidate) -> NoiseTest:
     """The χ² test of the fit's residuals, edges timed by their flash from the reference's
     first frame."""
     edges = measurement.edges
