@@ -240,22 +240,39 @@ def small(spec: CameraSpec, width: int, height: int, **fields) -> CameraSpec:
     )
 
 
-def test_second_world_jittered_stamps_sync_and_diagnose_o_agree(tmp_path):
-    """The simulator's second world (``recipe("jittered-stamps")``: xenon or LED pulses,
-    tone curves, crf 18-30, players), its 25 fps camera and the one whose stamps are
-    jittered 1.2 ms, 6 s: the stamp jitter is named first and both models end within
-    0.1 ms RMS of the truth."""
-    scenario = recipe("jittered-stamps", seed=0, duration_ms=DURATION_MS)
-    scenario = replace(scenario, cameras=scenario.cameras[:2])
+#: Second-world cases: recipe, settings of its cam2, the effect hidden there, and the bound
+#: on sync's RMS error (ms): on the rate change (8 flashes, two cameras) sync's time per row
+#: of cam1 is 0.36 % short (0.137 ms at its last row) where diagnose's is within 0.1 %.
+SECOND_WORLD = {
+    "stamps jittered 1.2 ms": ("jittered-stamps", {}, "frame_clock", 0.1),
+    "stamps jittered 3 ms": ("jittered-stamps", dict(jitter_ms=3.0), "frame_clock", 0.1),
+    "stamp rate change": ("stamp-rate-change", {}, "stamp_rate", 0.15),
+}
+
+
+@pytest.mark.parametrize("case", SECOND_WORLD)
+def test_second_world_stamp_faults_are_named_first_and_sync_and_diagnose_o_agree(tmp_path, case):
+    """The simulator's second world (``recipe(name)``: xenon or LED pulses, tone curves, crf
+    18-30, players), its 25 fps camera and the 30 fps one with the stamp fault, 6 s: the
+    fault is named first on that camera, its gap (edges, or stamps for a rate change)
+    shrinks 5x, and the model ``diagnose -o`` writes is within 0.1 ms RMS of the truth, and
+    so is ``sync``'s but for the rate change."""
+    name, settings, effect, sync_bound = SECOND_WORLD[case]
+    scenario = recipe(name, seed=0, duration_ms=DURATION_MS)
+    scenario = replace(scenario, cameras=(scenario.cameras[0], replace(scenario.cameras[1], **settings)))
     truth = render_scenario(scenario, tmp_path)
-    cameras = detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras])
-    model, _ = synchronize(cameras)
-    d = diagnose(
-        detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras], estimate_readout=False)
+    videos = [tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras]
+    model, _ = synchronize(detect_videos(videos))
+    d = diagnose(detect_videos(videos, estimate_readout=False))
+    step = d.steps[0]
+    assert (step.effect, step.camera) == (effect, "cam2"), format_diagnosis(d)
+    before, after = (
+        (step.stamp_rms_before_ms, step.stamp_rms_after_ms)
+        if effect == "stamp_rate"
+        else (step.rms_before_ms, step.rms_after_ms)
     )
-    assert (d.steps[0].effect, d.steps[0].camera) == ("frame_clock", "cam2"), format_diagnosis(d)
-    assert d.steps[0].rms_after_ms < d.steps[0].rms_before_ms / 5.0
-    assert pooled_error_ms(model, truth) < 0.1
+    assert after <= before / 5.0, format_diagnosis(d)
+    assert pooled_error_ms(model, truth) < sync_bound
     assert pooled_error_ms(d.sync_model, truth) < 0.1, format_diagnosis(d)
 
 
