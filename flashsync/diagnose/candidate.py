@@ -33,6 +33,7 @@ from flashsync.diagnose.effects import (
     FLIPPED,
     FRAME_CLOCK,
     ROW_TIME,
+    SATURATION,
     STAMP_RATE,
     CameraEstimate,
     Features,
@@ -140,6 +141,7 @@ class Candidate:
                 row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
                 nominal_row_time_ms=self.nominal_row_time_ms(c),
                 exposure_ms=self.exposure_ms(c),
+                saturation_ms=self.coefficient(SATURATION, c),
                 effects=sorted(t.effect for t in self.terms if t.camera == c),
             )
             for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
@@ -292,7 +294,7 @@ def _fit(
         q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
         observed[mine] = frame_ms[mine] + q[mine] * times.period_ms / camera.height
         frame_ms[mine] -= 0.5 * (times.times_ms[0] + times.times_ms[-1])
-    features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera])
+    features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera], edges.saturated)
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
     weight = _edge_weights(measurement)

@@ -34,6 +34,9 @@ drift_rate      a curvature against time                    column ``-t**2`` (ot
                                                             half the drift's change per ms
 exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
                 and leading edges' residuals                exposure minus the reference's, ms
+saturation      the edges of bands clipped at white: the    column ``[saturated] * (+1 trailing,
+                leading ones early, the trailing ones late  -1 leading)``: how far a clipped
+                                                            band's edges move out, ms
 stamp_rate      from one frame on, edges run away at a      frame times at one rate throughout
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
@@ -64,6 +67,7 @@ DRIFT = "drift"
 DRIFT_RATE = "drift_rate"
 EXPOSURE = "exposure"
 STAMP_RATE = "stamp_rate"
+SATURATION = "saturation"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -85,12 +89,15 @@ class Features:
         Readout row under the model's readout direction.
     trailing : bool array
         Trailing edge under the model's readout direction.
+    saturated : bool array
+        The edge's band clipped at white.
     """
 
     camera: np.ndarray
     t_ms: np.ndarray
     q: np.ndarray
     trailing: np.ndarray
+    saturated: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -119,6 +126,8 @@ class CameraEstimate:
     row_time_ms, nominal_row_time_ms : float
         Time per row under the model and frame period / height, ms.
     exposure_ms : float
+    saturation_ms : float
+        How far the edges of a clipped band move out (leading earlier, trailing later), ms.
     effects : list of str
         The effects the model has on this camera.
     """
@@ -137,6 +146,7 @@ class CameraEstimate:
     row_time_ms: float
     nominal_row_time_ms: float
     exposure_ms: float
+    saturation_ms: float
     effects: list[str]
 
     @property
@@ -192,6 +202,10 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
         f"frame period {camera.frame_period_ms:.4f} ms (median step {camera.median_step_ms:.4f}), "
         f"stamps scatter {camera.stamp_rms_ms:.3f} ms RMS about it"
     )
+
+
+def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later)"
 
 
 def _describe_stamp_rate(camera: CameraEstimate, reference: CameraEstimate) -> str:
@@ -285,6 +299,16 @@ CATALOGUE: dict[str, Effect] = {
             OTHER_CAMERAS,
             _describe_exposure,
             column=lambda f: f.trailing.astype(np.float64),
+        ),
+        Effect(
+            SATURATION,
+            "saturation",
+            "the edges of bands clipped at white off the others': the clipped plateau pulls the "
+            "half-level crossing of the leading edge early and of the trailing edge late",
+            "adds how far a clipped band's edges move out (ms) on its edges, leading ones earlier",
+            EVERY_CAMERA,
+            _describe_saturation,
+            column=lambda f: np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0),
         ),
         Effect(
             STAMP_RATE,

@@ -22,7 +22,7 @@ import numpy as np
 
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
-from flashsync.events import Band, Bands, Events
+from flashsync.events import Band, Bands, Events, Flag
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
 from flashsync.timestamps import median_step_ms
@@ -50,6 +50,8 @@ class Edges:
         Stored-image row of the edge (sub-row).
     trailing : bool array
         Trailing edge in the readout direction the detection was told.
+    saturated : bool array
+        The edge's band clipped at white (:data:`~flashsync.events.Flag.SATURATED`).
     """
 
     camera: np.ndarray
@@ -58,6 +60,7 @@ class Edges:
     frame: np.ndarray
     row: np.ndarray
     trailing: np.ndarray
+    saturated: np.ndarray
 
     def __len__(self) -> int:
         return len(self.camera)
@@ -228,8 +231,9 @@ def _pulses(detection: CameraDetection) -> _Pulses:
 
 def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[CameraDetection, ...]) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    camera, flash, event, frame, row, trailing = [], [], [], [], [], []
+    camera, flash, event, frame, row, trailing, saturated = [], [], [], [], [], [], []
     for index, (named, mine) in enumerate(zip(cameras, pulses)):
+        clipped = mine.events.has_flag(Flag.SATURATED)
         for band in np.flatnonzero(mine.clean):
             if (named.camera, band) not in flash_of:
                 continue
@@ -240,6 +244,7 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
                 frame.append(mine.events.frame[edge])
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
+                saturated.append(bool(clipped[edge]))
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -248,12 +253,14 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
         np.asarray(frame, dtype=np.int64)[keep],
         np.asarray(row, dtype=np.float64)[keep],
         np.asarray(trailing, dtype=bool)[keep],
+        np.asarray(saturated, dtype=bool)[keep],
     )
 
 
 def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> list[np.ndarray]:
     """Per camera, each band's length minus the median length of the camera's bands that
-    span the same number of frames (with at least three of them), ms. Every band counts,
+    span the same number of frames and are clipped at white or not as it is (with at least
+    three of them), ms. Every band counts,
     one whose edge a codec artefact moved too: the edge residuals this is compared with hold
     that edge as well."""
     per_camera = []
@@ -261,9 +268,10 @@ def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pu
         bands = mine.bands.take(mine.clean)
         frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
         lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
+        clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
         deviations = [np.zeros(0)]
-        for span in np.unique(frames):
-            rows = lengths[frames == span]
+        for span, saturated in {(int(f), bool(c)) for f, c in zip(frames, clipped)}:
+            rows = lengths[(frames == span) & (clipped == saturated)]
             if len(rows) >= 3:
                 scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
                 deviations.append((rows - np.median(rows)) * scale)

@@ -359,6 +359,7 @@ def _camera_models(fit: Candidate) -> list[dict]:
             "shift_ms": e.shift_ms,
             "row_time_ms": e.row_time_ms,
             "exposure_ms": e.exposure_ms,
+            "saturation_ms": e.saturation_ms,
             "effects": e.effects,
         }
         for e in fit.estimates()
