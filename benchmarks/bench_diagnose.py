@@ -1,0 +1,94 @@
+"""``flashsync sync`` against ``flashsync diagnose -o``: both models scored against the truth.
+
+Run: python benchmarks/bench_diagnose.py [--folder DIR] [--cases all|NAME,...]
+
+Renders each rig once (kept in --folder for the next run, each in its own sub-folder, with
+``truth.json``), detects its events as each command does, runs ``synchronize`` (what
+``flashsync sync`` writes) and ``diagnose`` (whose final model ``flashsync diagnose -o``
+writes), and prints per rig and model the error against truth over every frame and every
+8th row (RMS over all cameras, then each camera's RMS, ms), the effects diagnose named and
+its verdict. Rigs:
+
+=====================  ===================================================================
+``jittered-stamps``    the second world's recipe, its 25 fps camera and the 30 fps one whose
+                       stamps are jittered 1.2 ms, 6 s
+``stamp-rate-change``  the second world's recipe, its 25 fps camera and the 30 fps one whose
+                       stamps run 1.5x as fast from frame 90 on (the sensor keeps its rate), 6 s
+``drifting``           three cameras at 29.97 / 29.97 / 59.94 fps, 320x180, 10 s, clocks 80
+                       and 100 ppm from the reference's (the issue's drifting HD rig, smaller)
+=====================  ===================================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from flashsync import detect_videos, synchronize
+from flashsync.diagnose import diagnose
+from flashsync.evaluate import sync_errors
+from flashsync.io import load_ground_truth
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, recipe
+
+
+def drifting() -> Scenario:
+    rng = np.random.default_rng(2)
+    instants = 300.0 + np.cumsum(120.0 + rng.exponential(150.0, 100))
+    flashes = tuple(
+        FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3)) for t in instants[instants < 9700.0]
+    )
+    cameras = (
+        CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
+        CameraSpec("cam2", 320, 180, NTSC_30, exposure_ms=4.0, drift_ppm=80.0, start_ms=1000.0, offset_ms=-900.0),
+        CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=100.0, start_ms=5000.0, offset_ms=-4950.0),
+    )
+    return Scenario("drifting", cameras, duration_ms=10_000.0, flashes=flashes, n_players=0, seed=2)
+
+
+def two_of(name: str) -> Scenario:
+    scenario = recipe(name, seed=0, duration_ms=6000.0)
+    return dataclasses.replace(scenario, cameras=scenario.cameras[:2])
+
+
+RIGS = {
+    "jittered-stamps": lambda: two_of("jittered-stamps"),
+    "stamp-rate-change": lambda: two_of("stamp-rate-change"),
+    "drifting": drifting,
+}
+
+
+def errors(model, truth) -> str:
+    table = sync_errors(model, truth)
+    pooled = float(np.sqrt(np.mean(table["rms_ms"] ** 2)))
+    cameras = "  ".join(f"{row.camera} {row.rms_ms:.4f}" for row in table.itertuples())
+    return f"{pooled:.4f} ms RMS ({cameras})"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--folder", type=Path, default=Path("bench_diagnose"), help="rendered rigs (kept)")
+    parser.add_argument("--cases", default="all", help=f"all, or some of {','.join(RIGS)}")
+    args = parser.parse_args()
+    names = list(RIGS) if args.cases == "all" else args.cases.split(",")
+    for name in names:
+        scenario, folder = RIGS[name](), args.folder / name
+        if not (folder / "truth.json").is_file():
+            render_scenario(scenario, folder)
+        truth = load_ground_truth(folder / "truth.json")
+        videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
+        model, _ = synchronize(detect_videos(videos))
+        d = diagnose(detect_videos(videos, estimate_readout=False))
+        print(f"{name}:")
+        print(f"  sync         {errors(model, truth)}")
+        print(f"  diagnose -o  {errors(d.sync_model, truth)}")
+        steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
+        print(f"  steps        {', '.join(steps)}")
+        print(f"  verdict      {d.verdict}")
+
+
+if __name__ == "__main__":
+    main()
