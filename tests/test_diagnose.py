@@ -318,3 +318,22 @@ def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path):
     verdict = residual_test(measurement, without)
     assert not verdict.consistent and set(verdict.cameras) & {"cam2", "cam3"}, verdict.describe()
     assert pooled_error_ms(d.sync_model, truth) < 0.05
+
+
+@pytest.mark.parametrize(
+    "output, message",
+    [("folder", "-o {}: is a folder; give a file name"), ("input", "is also an input (VIDEO {})")],
+)
+def test_cli_bad_model_output_is_one_line_error(tmp_path, capsys, output, message):
+    """``diagnose -o`` into a folder or over one of its videos: one line, exit 1, nothing written
+    (checked before any decoding)."""
+    from flashsync.cli import main
+
+    samples = Path(__file__).resolve().parents[1] / "samples"
+    videos = [str(samples / "cam1.mp4"), str(samples / "cam2.mkv")]
+    target = str(tmp_path) if output == "folder" else videos[0]
+    before = Path(target).stat().st_mtime_ns
+    assert main(["diagnose", *videos, "-o", target]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and message.format(target) in err
+    assert Path(target).stat().st_mtime_ns == before
