@@ -16,6 +16,9 @@ its verdict. Rigs:
                        stamps run 1.5x as fast from frame 90 on (the sensor keeps its rate), 6 s
 ``drifting``           three cameras at 29.97 / 29.97 / 59.94 fps, 320x180, 10 s, clocks 80
                        and 100 ppm from the reference's (the issue's drifting HD rig, smaller)
+``short-exposure``     320x180, 6 s: 25 fps with an 8 ms exposure and 30 fps with 1 ms,
+                       linear sensors, the default (xenon-like) flash
+``rolling-flicker``    the same under 5 % 100 Hz mains flicker
 =====================  ===================================================================
 """
 
@@ -49,6 +52,28 @@ def drifting() -> Scenario:
     return Scenario("drifting", cameras, duration_ms=10_000.0, flashes=flashes, n_players=0, seed=2)
 
 
+def short_exposure(flicker_depth: float = 0.0) -> Scenario:
+    rng = np.random.default_rng(1)
+    instants = 300.0 + np.cumsum(120.0 + rng.exponential(150.0, 100))
+    flashes = tuple(
+        FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3)) for t in instants[instants < 5700.0]
+    )
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0, tone="linear"),
+        CameraSpec("cam1", 320, 180, 30.0, exposure_ms=1.0, start_ms=3000.0, offset_ms=-2830.0, tone="linear"),
+    )
+    return Scenario(
+        "short-exposure",
+        cameras,
+        duration_ms=6000.0,
+        flashes=flashes,
+        n_players=0,
+        seed=1,
+        flicker_depth=flicker_depth,
+        flicker_hz=100.0,
+    )
+
+
 def two_of(name: str) -> Scenario:
     scenario = recipe(name, seed=0, duration_ms=6000.0)
     return dataclasses.replace(scenario, cameras=scenario.cameras[:2])
@@ -58,6 +83,8 @@ RIGS = {
     "jittered-stamps": lambda: two_of("jittered-stamps"),
     "stamp-rate-change": lambda: two_of("stamp-rate-change"),
     "drifting": drifting,
+    "short-exposure": short_exposure,
+    "rolling-flicker": lambda: short_exposure(0.05),
 }
 
 
