@@ -4,12 +4,12 @@ The model is linear in its parameters once its frame clocks and readout rows are
 each edge gives one equation (see :mod:`flashsync.diagnose.effects`), unknowns are the
 flashes' global times, the cameras' shifts, the shared exposure and the effects' columns.
 It is solved by the pipeline's robust fit (:func:`flashsync.robust.cauchy_fit`: Cauchy IRLS
-with a fitted scale, here no smaller than the edge noise the band lengths show), each edge
-weighted by its camera's edge noise, so one bad
+with a fitted scale, here no smaller than the edge noise the band lengths show), so one bad
 edge neither moves the fit nor names an effect, while a step or a trend shared by many edges
-weighs in full. Each camera's stamps are a second stream: their residuals about the model's
-frame clock (:class:`flashsync.frame_clock.FrameClock` with the parts the model's effects
-switch on) get a Cauchy likelihood of their own.
+weighs in full; each edge is weighted by its camera's edge noise, so a camera with blurry
+bands does not drown one with sharp bands. Each camera's stamps are a second stream: their
+residuals about the model's frame clock (:class:`flashsync.frame_clock.FrameClock` with the
+parts the model's effects switch on) get a Cauchy likelihood of their own.
 
 A model's score is its Bayesian information criterion over both streams::
 

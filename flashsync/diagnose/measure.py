@@ -260,9 +260,8 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
 def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> list[np.ndarray]:
     """Per camera, each band's length minus the median length of the camera's bands that
     span the same number of frames and are clipped at white or not as it is (with at least
-    three of them), ms. Every band counts,
-    one whose edge a codec artefact moved too: the edge residuals this is compared with hold
-    that edge as well."""
+    three of them), ms. Every band counts, one whose edge a codec artefact moved too: the edge
+    residuals this is compared with hold that edge as well."""
     per_camera = []
     for camera, mine in zip(cameras, pulses):
         bands = mine.bands.take(mine.clean)
@@ -270,7 +269,7 @@ def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pu
         lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
         clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
         deviations = [np.zeros(0)]
-        for span, saturated in {(int(f), bool(c)) for f, c in zip(frames, clipped)}:
+        for span, saturated in sorted({(int(f), bool(c)) for f, c in zip(frames, clipped)}):
             rows = lengths[(frames == span) & (clipped == saturated)]
             if len(rows) >= 3:
                 scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))

@@ -9,11 +9,11 @@ without such a candidate, pairs of effects on one camera are tried the same way 
 time per row and exposure both change its band lengths, so one alone may not show), then
 pairs on two cameras (the reference's time per row and another camera's exposure both move
 the gap between its edges), and without such a pair the residuals hold nothing the
-catalogue can explain and the loop stops. After each addition, an effect added earlier whose evidence has fallen to
-:data:`THRESHOLD` or less (a later one explains its structure better) is taken out again,
-for good. The final residuals are then tested against the edge noise the band lengths show
-(:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is).
-The data never say which effect is there: the workflow sees frame stamps and band edges."""
+catalogue can explain and the loop stops. After each addition, an effect added earlier
+whose evidence has fallen to :data:`THRESHOLD` or less (a later one explains its structure
+better) is taken out again, for good. The final residuals are then tested against the edge
+noise the band lengths show (:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where
+an excess is). The data never say which effect is there: the workflow sees frame stamps and band edges."""
 
 from __future__ import annotations
 
