@@ -111,3 +111,21 @@ def test_short_exposure_under_rolling_flicker(tmp_path_factory):
             assert detection.flicker is None
     assert abs(errors[0.03].mean() - errors[0.0].mean()) < 0.4, errors
     assert np.sqrt(np.mean(errors[0.03] ** 2)) < np.sqrt(np.mean(errors[0.0] ** 2)) + 0.4, errors
+
+
+def test_key_frame_under_rolling_flicker(tmp_path):
+    """30 fps, 0.5 ms, 3 % 100 Hz flicker, no flash, ten players, x264's 250-frame groups of
+    pictures. Before the key frame at 250 x264 predicts each frame from the one three back, at
+    the same phase, so flat rows follow the rolling pattern; just after it, it can only copy
+    the key frame's. The rows that had followed the pattern then hold the key frame's, and
+    were reported as three 5 % bands at frames 251-252 and 294: the blocks copied from the
+    key frame now get its correction."""
+    camera = CameraSpec("quiet", 320, 240, 30.0, r0=8, r1=12, exposure_ms=0.5, noise_std=1.5, crf=23)
+    scenario = Scenario(
+        "key-frame", (camera,), duration_ms=10_200.0, flicker_depth=0.03, flicker_hz=100.0, n_players=10, seed=3
+    )
+    render_scenario(scenario, tmp_path)
+    detection = detect_video(tmp_path / "quiet.mp4")
+    assert len(detection.frame_times_ms) > 300
+    assert detection.flicker.hz == 100.0
+    assert len(detection.events) == 0, events_to_frame(detection.events)
