@@ -129,3 +129,37 @@ def test_key_frame_under_rolling_flicker(tmp_path):
     assert len(detection.frame_times_ms) > 300
     assert detection.flicker.hz == 100.0
     assert len(detection.events) == 0, events_to_frame(detection.events)
+
+
+FPS_GRID = (25.0, 30000 / 1001, 30.0, 50.0, 60000 / 1001, 60.0)
+
+
+@pytest.mark.parametrize("exposure_ms", [0.25, 20.0])
+@pytest.mark.parametrize("hz", [100.0, 120.0])
+@pytest.mark.parametrize("fps", FPS_GRID)
+def test_flicker_grid(fps, hz, exposure_ms):
+    """Every frame rate of the issue under 50 and 60 Hz mains, at the shortest and the
+    longest exposure, lamps 10 % deep: the rows see the lamp's depth times the exposure's
+    average over it (``sinc(hz * exposure)``: 20 ms averages 100 Hz out). Rolling flicker is
+    measured (100 or 120 Hz, its period in rows) and no corrected row swings more than the
+    noise; standing or averaged-out flicker is left alone. A flash band keeps its change."""
+    rows_per_frame = 260  # 240 stored rows and 20 of blanking
+    period_rows = rows_per_frame * fps / hz
+    seen = 0.10 * abs(np.sinc(hz * exposure_ms / 1000.0))
+    frames = 400 if abs(hz / fps - round(hz / fps)) < 0.01 else 240  # a slow roll needs more
+    times, profiles, clean = synthetic_profiles(hz, fps, period_rows, seen, frames=frames, flashes=[(150, 90, 30)])
+    remover = FlickerRemover(profiles.shape[1])
+    corrected = np.array([p for _, p in remover(zip(times, profiles))])
+    flicker = remover.estimate()
+    standing = abs(hz / fps - round(hz / fps)) < 1e-9
+    if standing or seen < 0.002:
+        assert flicker is None
+    else:
+        assert flicker.hz == hz
+        assert flicker.period_rows == pytest.approx(period_rows, rel=2e-3)
+        assert np.isnan(flicker.depth) or flicker.depth == pytest.approx(seen, rel=0.1)
+    change = np.median(np.log(corrected[61:] / corrected[60:-1]) - np.log(clean[61:] / clean[60:-1]), axis=2)
+    swing = np.sqrt(np.mean((change - change.mean(axis=1, keepdims=True)) ** 2))
+    assert swing < 0.004, swing
+    band = np.median(np.log(corrected[150, 95:115] / corrected[148, 95:115]))
+    assert band == pytest.approx(np.log(1.3), abs=0.02)
