@@ -41,7 +41,7 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
-from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.solve import CameraSolution, Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (NOMINAL_HIDDEN_ROWS x
@@ -190,11 +190,14 @@ def synchronize(
     def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
         return _attempt(trial, reference, row_times, anchors, rate_std)
 
-    best = _best_readout(cameras, undecided, attempt)
+    best, flipped = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
-        best = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
-    report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings
+        best, flipped = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
+    spreads, readout_warnings = _readout_doubts(best, flipped, reference)
+    for name, spread in spreads.items():
+        frame_std[name] = np.hypot(frame_std[name], spread)
+    report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings + readout_warnings
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
@@ -296,13 +299,15 @@ def _best_frame_times(
 
 def _best_readout(
     cameras: dict[str, CameraDetection], undecided: list[str], attempt: Callable[[dict[str, CameraDetection]], _Attempt]
-) -> _Attempt:
+) -> tuple[_Attempt, dict[str, _Attempt]]:
     """The readout directions of the ``undecided`` cameras that explain the events best
     (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
-    best of all single flips, until none helps. Raises the first failure if nothing solves."""
+    best of all single flips, until none helps. Returns the best attempt and, per undecided
+    camera, the best one with that camera read the other way (where it solves). Raises the
+    first failure if nothing solves."""
     best, failure, start = None, None, cameras
     while True:
-        improved = False
+        improved, flipped = False, {}
         for flip in [None, *undecided] if best is None else undecided:
             trial = dict(start)
             if flip is not None:
@@ -312,13 +317,43 @@ def _best_readout(
             except FlashsyncError as error:
                 failure = failure or error
                 continue
+            if flip is not None:
+                flipped[flip] = result
             if best is None or result.score > best.score:
                 best, improved = result, True
         if best is None:
             raise failure
         if not improved:
-            return best
+            return best, flipped
         start = best.cameras
+
+
+def _readout_doubts(
+    best: _Attempt, flipped: dict[str, _Attempt], reference: str
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Cameras whose other reading explains the flashes nearly as well as the chosen one
+    (log-likelihood within :data:`DECIDED_LOG_LIKELIHOOD`): per camera, how far the two
+    readings' times of each frame are apart (ms, the largest over its rows; into its
+    sigma), and a warning line each."""
+    spreads, warnings = {}, []
+    for name, other in flipped.items():
+        if name not in best.connected or name not in other.connected or name in other.implausible:
+            continue
+        margin = best.score - other.score
+        if margin >= DECIDED_LOG_LIKELIHOOD:
+            continue
+        chosen, alternative = best.model(reference).cameras[name], other.model(reference).cameras[name]
+        frames = np.arange(chosen.n_frames)
+        rows = np.array([0.0, chosen.height - 1.0])
+        gap = np.abs(chosen.t_global_ms(frames[:, None], rows) - alternative.t_global_ms(frames[:, None], rows))
+        spreads[name] = gap.max(axis=1)
+        way = "bottom-up (upside down)" if chosen.flipped else "top-down (upright)"
+        warnings.append(
+            f"{best.cameras[name].video}: read {way}, but the flashes fit the other way nearly as well "
+            f"(log-likelihood {margin:.1f} better); its times may be off by up to {float(spreads[name].max()):.2f} ms "
+            "(in its sigma); give its mounting (--flipped) if known"
+        )
+    return spreads, warnings
 
 
 def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[str, str, SyncModel | str]]:
@@ -411,13 +446,30 @@ class _Attempt:
     solution: Solution
 
     @cached_property
+    def implausible(self) -> list[str]:
+        """Cameras whose solved time per row cannot be a sensor's: not positive, or reading
+        the visible rows takes longer than a frame period. Read the wrong way up, a camera's
+        bands still fit the other cameras' flashes, with a negative time per row: its rows
+        then run backwards in time, the trailing edges (one exposure late) standing in for
+        the leading ones."""
+        names = []
+        for index, name in enumerate(self.connected):
+            detection = self.cameras[name]
+            row_time = self.solution.cameras[index].row_time_ms
+            if not 0.0 < row_time * detection.height <= READOUT_SLACK * median_step_ms(detection.frame_times_ms):
+                names.append(name)
+        return names
+
+    @cached_property
     def score(self) -> float:
         """Log-likelihood of all the cameras' sync events under these readout directions:
         inliers Gaussian with the solve's residual scale, every other event (rejected, or
-        matched to nothing) uniform over a frame period. Counting inliers alone would
-        prefer a wrong direction whose loose fit (a scale ten times larger) lets one more
-        event in."""
-        n_inliers = int(self.solution.inlier[: len(self.matches)].sum())
+        matched to nothing, or of a camera whose time per row is :attr:`implausible`) uniform
+        over a frame period. Counting inliers alone would prefer a wrong direction whose
+        loose fit (a scale ten times larger) lets one more event in."""
+        inlier = self.solution.inlier[: len(self.matches)]
+        inlier = inlier & ~np.isin(self.matches.camera, self.implausible)
+        n_inliers = int(inlier.sum())
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
         sigma = max(self.solution.sigma_ms, 1e-4)
         period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
@@ -436,7 +488,7 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                s.covariance,
+                _with_edge_bias(s),
                 _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
                 str(d.video),
                 s.knots_ms,
@@ -518,6 +570,10 @@ def _attempt(
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
 
+#: The visible rows of a frame are read within this many frame periods (a little over one:
+#: the time per row is an estimate).
+READOUT_SLACK = 1.05
+
 #: A camera's drift prior is at least this many times the relative standard error of its and
 #: the reference's frame-clock rates: the drift must take up the rate the stamps give the frames.
 DRIFT_PRIOR_WIDENING = 3.0
@@ -542,16 +598,51 @@ def _contradicted_row_times(
     return contradicted
 
 
+#: Relative standard deviation of a time per row from the mains flicker's period in rows at
+#: the least: through H.264 the period comes out 0.2-1.7 % off (README, "Real light"), often
+#: many times its own spread.
+FLICKER_ROW_TIME_STD = 0.01
+
+
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
-    """Per camera index: a datasheet T_row (std 0.01 %) or the weak nominal prior."""
+    """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's (its
+    period, ``1000 / hz`` ms, over its period in rows; :data:`FLICKER_ROW_TIME_STD` at
+    least) where the camera shows rolling flicker, else the weak nominal prior. The
+    flicker frequency is the rig's: the one most cameras identified (one hall, one mains)."""
+    known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
+    hall_hz = max(set(known), key=known.count) if known else None
     priors = {}
     for index, camera in enumerate(cameras):
+        flicker = camera.flicker
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
+        elif hall_hz is not None and flicker is not None and flicker.period_rows > 0:
+            spread = flicker.period_rows_std / flicker.period_rows
+            relative = max(spread, FLICKER_ROW_TIME_STD) if np.isfinite(spread) else FLICKER_ROW_TIME_STD
+            row_time = 1000.0 / hall_hz / flicker.period_rows
+            priors[index] = (row_time, relative * row_time)
         else:
             nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
+
+
+#: A camera's sync events share an offset the solve cannot see (it moves the shift, not the
+#: residuals): the half-rise of a flash's band is not the same instant of the flash in every
+#: camera where the pulse is not the ramp the detector fits (a rectangle, a xenon tail, a
+#: slow rise) or the exposure is shorter than the pulse. Over the simulator's random rigs
+#: it is about this many times the camera's own edge noise (README, "Calibrated sigma").
+EDGE_BIAS_SIGMAS = 1.5
+
+
+def _with_edge_bias(camera: CameraSolution) -> np.ndarray:
+    """The camera's covariance with the variance of its edges' shared offset,
+    (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
+    uncertain by that much against the flashes' instants (the reference camera's too)."""
+    covariance = camera.covariance.copy()
+    if np.isfinite(camera.edge_sigma_ms):
+        covariance[1, 1] += (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
+    return covariance
 
 
 def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
