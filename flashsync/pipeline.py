@@ -303,11 +303,12 @@ def _best_readout(
     """The readout directions of the ``undecided`` cameras that explain the events best
     (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
     best of all single flips, until none helps. Returns the best attempt and, per undecided
-    camera, the best one with that camera read the other way (where it solves). Raises the
-    first failure if nothing solves."""
-    best, failure, start = None, None, cameras
+    camera, the best attempt tried with that camera read the other way (where one solved:
+    with two cameras read the wrong way up, the rival may differ in both). Raises the first
+    failure if nothing solves."""
+    best, failure, start, tried = None, None, cameras, []
     while True:
-        improved, flipped = False, {}
+        improved = False
         for flip in [None, *undecided] if best is None else undecided:
             trial = dict(start)
             if flip is not None:
@@ -317,15 +318,20 @@ def _best_readout(
             except FlashsyncError as error:
                 failure = failure or error
                 continue
-            if flip is not None:
-                flipped[flip] = result
+            tried.append(result)
             if best is None or result.score > best.score:
                 best, improved = result, True
         if best is None:
             raise failure
         if not improved:
-            return best, flipped
+            break
         start = best.cameras
+    rivals = {}
+    for name in undecided:
+        other = [r for r in tried if r.cameras[name].flipped != best.cameras[name].flipped]
+        if other:
+            rivals[name] = max(other, key=lambda r: r.score)
+    return best, rivals
 
 
 def _readout_doubts(
@@ -466,12 +472,15 @@ class _Attempt:
         inliers Gaussian with the solve's residual scale, every other event (rejected, or
         matched to nothing, or of a camera whose time per row is :attr:`implausible`) uniform
         over a frame period. Counting inliers alone would prefer a wrong direction whose
-        loose fit (a scale ten times larger) lets one more event in."""
+        loose fit (a scale ten times larger) lets one more event in. The scale counts as
+        :data:`SCORE_MIN_SIGMA_MS` at least: with few flashes a wrong reading can fit its
+        few events almost exactly (a scale of a few microseconds) and outscore the right
+        one, which matched more events."""
         inlier = self.solution.inlier[: len(self.matches)]
         inlier = inlier & ~np.isin(self.matches.camera, self.implausible)
         n_inliers = int(inlier.sum())
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
-        sigma = max(self.solution.sigma_ms, 1e-4)
+        sigma = max(self.solution.sigma_ms, SCORE_MIN_SIGMA_MS)
         period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
         return n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_events - n_inliers) * np.log(period)
 
@@ -569,6 +578,10 @@ def _attempt(
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
+
+#: No edge is located better than this (ms): a residual scale below it is a fit with almost
+#: no equations to spare, not evidence for a reading (:attr:`_Attempt.score`).
+SCORE_MIN_SIGMA_MS = 0.02
 
 #: The visible rows of a frame are read within this many frame periods (a little over one:
 #: the time per row is an estimate).
