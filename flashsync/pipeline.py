@@ -197,7 +197,8 @@ def synchronize(
     spreads, readout_warnings = _readout_doubts(best, flipped, reference)
     for name, spread in spreads.items():
         frame_std[name] = np.hypot(frame_std[name], spread)
-    report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings + readout_warnings
+    report.alignments = best.alignments
+    report.warnings = best.warnings + clock_warnings + readout_warnings + _few_flashes(best, reference)
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
@@ -332,6 +333,27 @@ def _best_readout(
         if other:
             rivals[name] = max(other, key=lambda r: r.score)
     return best, rivals
+
+
+#: A camera tied by fewer inlier flashes than this has almost no equation to spare.
+FEW_FLASHES = 4
+
+
+def _few_flashes(best: _Attempt, reference: str) -> list[str]:
+    """A warning per camera tied to the others by fewer than :data:`FEW_FLASHES` inlier
+    flashes: its drift, shift and time per row rest on them alone (its sigma comes from the
+    other cameras' edge noise and the priors, not from its own)."""
+    inlier = best.solution.inlier[: len(best.matches)]
+    warnings = []
+    for name in best.connected:
+        count = int(np.sum(inlier & (best.matches.camera == name)))
+        if name != reference and count < FEW_FLASHES:
+            warnings.append(
+                f"{best.cameras[name].video}: tied to the other cameras by {count} flashes only; its clock rests on "
+                "them alone with nothing to check them against (its sigma takes the other cameras' edge noise); "
+                "record more flashes seen by it"
+            )
+    return warnings
 
 
 def _readout_doubts(
@@ -620,8 +642,10 @@ FLICKER_ROW_TIME_STD = 0.01
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
     """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's (its
     period, ``1000 / hz`` ms, over its period in rows; :data:`FLICKER_ROW_TIME_STD` at
-    least) where the camera shows rolling flicker, else the weak nominal prior. The
-    flicker frequency is the rig's: the one most cameras identified (one hall, one mains)."""
+    least) where the camera identified the rig's flicker frequency (the one most cameras
+    identified: one hall, one mains) and sees a whole period, else the weak nominal prior.
+    A flicker the camera could not identify is not trusted: a period longer than the
+    image came out 40 % off."""
     known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
     hall_hz = max(set(known), key=known.count) if known else None
     priors = {}
@@ -629,7 +653,7 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
         flicker = camera.flicker
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
-        elif hall_hz is not None and flicker is not None and flicker.period_rows > 0:
+        elif hall_hz is not None and flicker is not None and flicker.hz == hall_hz and flicker.period_rows < camera.height:
             spread = flicker.period_rows_std / flicker.period_rows
             relative = max(spread, FLICKER_ROW_TIME_STD) if np.isfinite(spread) else FLICKER_ROW_TIME_STD
             row_time = 1000.0 / hall_hz / flicker.period_rows
