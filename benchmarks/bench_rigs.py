@@ -4,7 +4,8 @@ Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--durati
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
-into a temporary folder (removed afterwards) and run as a new user would, with no options,
+into a temporary folder (removed afterwards; with ``--keep DIR`` into ``DIR/<rig>``, and a
+rig kept there with the same scenario is reused, not rendered again) and run as a new user would, with no options,
 exactly as ``flashsync sync`` does: ``detect_videos(videos)`` (both ways up) then
 ``synchronize(detections)``. Every camera is measured against the truth over all frames and
 every 8th row (`flashsync.evaluate.camera_accuracy`): sync error (RMS, max), exposure
@@ -286,7 +287,7 @@ def main() -> None:
     parser.add_argument(
         "--keep",
         type=Path,
-        help="keep the rendered rigs in this folder; a rig already kept there with the same scenario is not rendered again",
+        help="keep the rendered rigs in this folder; a rig kept there with the same scenario is not rendered again",
     )
     parser.add_argument("--json", type=Path, help="write every rig and camera result here")
     parser.add_argument(

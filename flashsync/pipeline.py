@@ -653,7 +653,12 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
         flicker = camera.flicker
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
-        elif hall_hz is not None and flicker is not None and flicker.hz == hall_hz and flicker.period_rows < camera.height:
+        elif (
+            hall_hz is not None
+            and flicker is not None
+            and flicker.hz == hall_hz
+            and flicker.period_rows < camera.height
+        ):
             spread = flicker.period_rows_std / flicker.period_rows
             relative = max(spread, FLICKER_ROW_TIME_STD) if np.isfinite(spread) else FLICKER_ROW_TIME_STD
             row_time = 1000.0 / hall_hz / flicker.period_rows
