@@ -190,11 +190,11 @@ def synchronize(
     def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
         return _attempt(trial, reference, row_times, anchors, rate_std)
 
-    best, flipped = _best_readout(cameras, undecided, attempt)
+    best, rivals = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
-        best, flipped = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
-    spreads, readout_warnings = _readout_doubts(best, flipped, reference)
+        best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
+    spreads, readout_warnings = _readout_doubts(best, rivals, reference)
     for name, spread in spreads.items():
         frame_std[name] = np.hypot(frame_std[name], spread)
     report.alignments = best.alignments
@@ -239,7 +239,8 @@ def check_anchors(anchors: Sequence[str]) -> None:
 
 #: The frame times of stamps that change rate taken at the stamps' own rates.
 STAMPS_OWN_RATES = "the stamps' own rate in each segment"
-#: A choice of frame times whose log-likelihood leads the next by less than this is undecided.
+#: A choice of frame times, or of readout directions, whose log-likelihood leads the next
+#: by less than this is undecided.
 DECIDED_LOG_LIKELIHOOD = 5.0
 
 
@@ -357,14 +358,14 @@ def _few_flashes(best: _Attempt, reference: str) -> list[str]:
 
 
 def _readout_doubts(
-    best: _Attempt, flipped: dict[str, _Attempt], reference: str
+    best: _Attempt, rivals: dict[str, _Attempt], reference: str
 ) -> tuple[dict[str, np.ndarray], list[str]]:
-    """Cameras whose other reading explains the flashes nearly as well as the chosen one
-    (log-likelihood within :data:`DECIDED_LOG_LIKELIHOOD`): per camera, how far the two
-    readings' times of each frame are apart (ms, the largest over its rows; into its
-    sigma), and a warning line each."""
+    """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
+    flashes nearly as well as the chosen one (log-likelihood within
+    :data:`DECIDED_LOG_LIKELIHOOD`): per camera, how far the two readings' times of each
+    frame are apart (ms, the largest over its rows; into its sigma), and a warning line each."""
     spreads, warnings = {}, []
-    for name, other in flipped.items():
+    for name, other in rivals.items():
         if name not in best.connected or name not in other.connected or name in other.implausible:
             continue
         margin = best.score - other.score
@@ -590,7 +591,7 @@ def _attempt(
     given = {name: value for name, value in (row_times or {}).items() if name in connected}
     solution = solve(given)
     if given:
-        contradicted = _contradicted_row_times(solve({}), connected, given)
+        contradicted = _contradicted_row_times(solve({}), connected, given, chosen)
         for name, (value, std) in contradicted.items():
             warnings.append(
                 f"{cameras[name].video}: the datasheet time per row {given[name]:g} ms contradicts the events, "
@@ -620,15 +621,19 @@ ROW_TIME_TOLERANCE = 0.01
 
 
 def _contradicted_row_times(
-    free: Solution, connected: list[str], given: dict[str, float]
+    free: Solution, connected: list[str], given: dict[str, float], cameras: list[CameraDetection]
 ) -> dict[str, tuple[float, float]]:
     """The datasheet times per row (ms) that the events alone (``free``: solved with the weak
-    nominal prior) contradict: camera -> (the events' value, its std), ms."""
+    nominal prior) contradict, or that no sensor can have (reading the visible rows would
+    take more than :data:`READOUT_SLACK` frame periods): camera -> (the events' value, its
+    std), ms."""
     contradicted = {}
     for name, value in given.items():
-        camera = free.cameras[connected.index(name)]
+        index = connected.index(name)
+        camera, detection = free.cameras[index], cameras[index]
         std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
-        if abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
+        too_slow = value * detection.height > READOUT_SLACK * median_step_ms(detection.frame_times_ms)
+        if too_slow or abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
             contradicted[name] = (camera.row_time_ms, std)
     return contradicted
 

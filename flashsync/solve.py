@@ -392,25 +392,26 @@ class _System:
 
     def group_scales(self, x: np.ndarray, weights: np.ndarray, inlier: np.ndarray) -> np.ndarray:
         """Each equation's noise (ms, a clean edge's; shape (n_equations,)): the RMS of its
-        group's inlier residuals over the degrees of freedom they leave (residual variance
-        over ``1 - leverage``, summed), shrunk towards the pooled scale with
-        :data:`POOLED_EQUATIONS`; at least :data:`~flashsync.robust.MIN_SCALE_MS`."""
+        group's inlier residuals over the degrees of freedom they leave (their count less
+        their leverages, i.e. the trace of the inverse normal matrix times the group's own),
+        shrunk towards the pooled scale with :data:`POOLED_EQUATIONS`; at least
+        :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
         w = np.concatenate([weights, np.ones(self.n_priors)])
-        weighted = sparse.diags(np.sqrt(w)) @ self.matrix
-        normal = (weighted.T @ weighted).toarray()
+        weighted = (sparse.diags(np.sqrt(w)) @ self.matrix).tocsr()
         try:
-            inverse = linalg.inv(normal, check_finite=False)
+            inverse = linalg.inv((weighted.T @ weighted).toarray(), check_finite=False)
         except linalg.LinAlgError:
             return np.full(self.n_equations, self.event_sigma_ms)
-        rows = weighted[: self.n_equations].toarray()
-        leverage = np.einsum("ij,jk,ik->i", rows, inverse, rows)
-        free = np.where(inlier, np.clip(1.0 - leverage, 0.0, 1.0), 0.0)
-        squares = np.where(inlier, residual**2, 0.0)
-        pooled = float(squares.sum() / max(free.sum(), 1.0))
         groups = self.group.max() + 1
+        leverage = np.zeros(groups)
+        for g in range(groups):
+            rows = weighted[np.flatnonzero(self.group == g)]
+            leverage[g] = (rows.T @ rows).multiply(inverse).sum()
+        squares = np.where(inlier, residual**2, 0.0)
         sums = np.bincount(self.group, squares, minlength=groups)
-        dof = np.bincount(self.group, free, minlength=groups)
+        dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
+        pooled = float(squares.sum() / max(dof.sum(), 1.0))
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
         return np.maximum(scale[self.group], MIN_SCALE_MS)
 
