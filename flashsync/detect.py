@@ -6,9 +6,10 @@ profiles, so one or two flashed frames do not move it) as a relative change
 gives a flat plateau whatever the scene's texture, and a player changes only a few blocks.
 Rows over a noise-adaptive threshold form bands. A band's leading edge (first affected row
 in readout order) is where the change reaches half of the band's local plateau, refined to
-a fraction of a row by fitting the flash's ramp, blurred by the codec, to the rows around
-it (:mod:`flashsync.ramp`): the same instant of the flash in every camera, whatever its
-gain or scene.
+a fraction of a row by fitting the flash's pulse, integrated over the exposure and blurred
+by the codec, to the whole band where it lies in one frame, else to the rows around the
+edge (:mod:`flashsync.ramp`): the row whose exposure ended when the flash had given half
+its light, the same instant in every camera, whatever its gain, scene or exposure.
 
 A band that reaches the last row continues in the next frame (one event, flagged
 ``split``); a band that starts at row 0 with nothing open before it had its leading edge in
@@ -36,7 +37,7 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
 from flashsync.profiles import read_profiles
-from flashsync.ramp import fit_pulse_edge
+from flashsync.ramp import fit_pulse_band, fit_pulse_edge
 from flashsync.recurrence import RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
@@ -275,8 +276,10 @@ class EventDetector:
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: Band, trailing_visible: bool = True) -> None:
-        """Locate the edges of a finished band (:func:`_local_edge`) and hold them for the
-        recurrence filter; a band that darkens rows without staying dark (a passing shadow)
+        """Locate the edges of a finished band (:func:`_local_edge`; a band in one frame is
+        then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
+        exposure apart and at the flash's half-light instant even where the exposure is
+        shorter than the pulse) and hold them for the recurrence filter; a band that darkens rows without staying dark (a passing shadow)
         is not an event, and a degenerate one (no positive plateau to fit an edge on) is
         dropped and counted in :attr:`n_degenerate`."""
         first, last = event.segments[0], event.segments[-1]
@@ -291,6 +294,9 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
+        if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
+            whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
+            leading, trailing = whole if whole is not None else (leading, trailing)
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
@@ -420,9 +426,12 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
 
     The edge is the half-rise point for a pulse, the foot of the ramp for a step.
     Brightness, saturation and scene vary along a band, so the level is the band's local
-    plateau: the median change of ``window`` rows that start where the ramp has settled, five
-    times the 10 %-to-50 % rise length past the edge (an exponential ramp is then within 3 %
-    of its plateau). A pulse's half-rise point marks the same instant in every camera. A step
+    plateau: the median change of ``window`` rows that start where the ramp has settled: on a
+    leading edge five times the 10 %-to-50 % rise length past the edge (an exponential ramp
+    is then within 3 % of its plateau), on a trailing edge twice that length before it (a
+    falling ramp leaves its plateau steeply and ends in the pulse's long tail: five times
+    that length reached back across a short band into its leading ramp and halved the
+    level, putting the trailing edge of a 1 ms xenon pulse a whole decay late). A pulse's half-rise point marks the same instant in every camera. A step
     ramps linearly over one exposure, so its half-rise point moves with the exposure; its
     foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
     switch. Returns (None, nan) where the edge is not visible, (nan, nan) where the band is
@@ -439,8 +448,8 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
         if row > foot:
             settle = min(int(np.ceil(row + 5 * (row - foot))), segment.stop - window)
             inside = segment.change[max(settle, int(row) + 1) : settle + window]
-        else:
-            settle = max(int(row + 5 * (row - foot)), segment.start + window)
+        else:  # a falling ramp is steep at its top: its plateau ends just before the fall
+            settle = max(int(row + 2 * (row - foot)), segment.start + window)
             inside = segment.change[settle - window : min(settle, int(row))]
         if not np.isfinite(inside).any():
             break

@@ -1,16 +1,28 @@
-"""The flash's ramp at a band edge, and its robust fit to a fraction of a row.
+"""A flash band's shape across rows, and its robust fit to a fraction of a row.
 
-A row whose exposure ended ``z`` rows after the flash started integrated the share
-``1 - exp(-z / k)`` of the flash's light, ``k`` rows being the flash tube's decay time over
-the time per row: the leading edge. A row whose exposure started ``z`` rows after the flash
-started missed the share ``1 - exp(-z / k)``: the trailing edge is the same ramp, falling.
-The codec (quantisation, deblocking) and the lens blur that ramp across rows, and blur
-moves the half point of such an asymmetric ramp late, by about ``blur**2 / (2 k)`` rows
-(0.05 to 0.1 rows at H.264 crf 23). So the model is the exponential
-ramp convolved with a Gaussian of ``blur`` rows (the distribution function of an
-exponentially modified Gaussian), and the edge is its half point before the blur,
-``start + k ln 2``: the row whose exposure ended (leading) or started (trailing) when the
-flash had given half its light, the same instant in every camera.
+A row integrates light over its exposure window, so a flash of pulse shape ``p`` leaves in
+a row whose exposure ended ``z`` rows after the flash fired the share
+``R(z) - R(z - width)`` of its light, ``R`` the pulse's cumulative share and ``width`` the
+exposure in rows: the band. Where the exposure is longer than the pulse the band has a
+plateau, its leading edge is ``R`` rising and its trailing edge ``1 - R`` falling, one
+exposure later; where it is not (a 0.5 ms exposure, a xenon tail of 1 ms) the band never
+reaches its plateau and its half-level crossings are no longer one exposure apart nor at
+the same instant of the flash as in other cameras.
+
+The pulse is a hold of ``hold`` rows at full power followed by an exponential decay of
+``decay`` rows: an instant-rise flash (hold 0), a xenon tube (its rise of tens of
+microseconds is within the blur), an LED strobe (decay near 0); a slow rise is
+approximated by the hold. The codec (quantisation, deblocking) and the lens blur the
+band across rows, and blur moves the half point of an asymmetric ramp, so the model is
+convolved with a Gaussian of ``blur`` rows, in closed form (ramps and exponentially
+modified Gaussians).
+
+An edge is the half-light point of the pulse before the blur: the row whose exposure ended
+(leading) or started (trailing) when the flash had given half its light, the same instant
+in every camera whatever its exposure. A band whose two edges lie in one frame is fitted
+whole (:func:`fit_pulse_band`): its two edges are then exactly ``width`` rows apart, the
+exposure. An edge alone (a band split across frames) is fitted as a ramp
+(:func:`fit_pulse_edge`).
 """
 
 from __future__ import annotations
@@ -21,8 +33,8 @@ import numpy as np
 
 from flashsync.compiled import njit
 
-#: Bounds of the ramp's decay length and blur, rows.
-MIN_SCALE, MAX_SCALE = 0.1, 50.0
+#: Bounds of the pulse's hold and decay length and of the blur, rows.
+MIN_DECAY, MAX_LENGTH = 0.05, 200.0
 MAX_BLUR = 3.0
 #: Blur the fit starts from, rows.
 START_BLUR = 0.3
@@ -30,6 +42,16 @@ START_BLUR = 0.3
 #: as one row off by the loss scale. Without it the blur wanders where the ramp cannot tell
 #: it (a foot lost in a dead zone) and stalls short of 0 in sharp video.
 BLUR_PRIOR_STD = 2.0
+#: A hold is fitted where it lowers the cost by this many times the residual variance per
+#: row (Akaike's criterion asks for 2; a free hold trades with the blur and fits the noise
+#: of a blurred exponential ramp by 4-5 times).
+HOLD_EVIDENCE = 10.0
+#: What the fitted model is: a whole band, or its rising or falling edge alone.
+BAND, RISING, FALLING = 0, 1, 2
+#: Parameters of the model: (start, hold, decay, blur, width, level); ``start`` is the row
+#: whose exposure ended when the flash fired, ``width`` the exposure in rows, ``level`` the
+#: band's level for a row that saw the whole flash.
+N_PARAMETERS = 6
 
 
 def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, rising: bool) -> float:
@@ -56,22 +78,119 @@ def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, ri
     """
     if not (np.isfinite(row) and np.isfinite(rise) and np.isfinite(level) and level > 0):
         return float("nan")
-    k = max(rise / np.log(3.0), 0.3)  # 25 % -> 75 % of an exponential ramp: k ln 3
-    first, last = int(np.floor(row - 3 - 2 * k)), int(np.ceil(row + 2 + 6 * k))  # flat side, tail
-    x = np.arange(max(first, 0), min(last, len(values) - 1) + 1)
-    y = values[x]
-    keep = np.isfinite(y) & (x != _censored_foot(values, row, rising))
+    decay = _decay_guess(rise)
+    x = _window(len(values), [row], decay)
+    keep = np.isfinite(values[x]) & (x != _censored_foot(values, row, rising))
     if keep.sum() < 6:
         return row
-    fitted, converged = _fit_ramp(
-        x[keep].astype(np.float64),
-        y[keep].astype(np.float64),
-        np.array([row - k * np.log(2.0), k, START_BLUR, level]),
-        0.05 * level,
-        rising,
-    )
-    refined = fitted[0] + fitted[1] * np.log(2.0)
+    free = np.array([True, True, True, True, False, True])
+    fitted, converged = _best_fit(x[keep], values[x[keep]], row, 0.0, rise, level, free, RISING if rising else FALLING)
+    refined = fitted[0] + _half_light(fitted[1], fitted[2])
     return float(refined) if converged and abs(refined - row) <= 2.0 else row
+
+
+def fit_pulse_band(
+    values: np.ndarray, leading: float, trailing: float, rise: float, level: float
+) -> tuple[float, float] | None:
+    """Sub-row leading and trailing edges of a band whose two edges lie in one frame, from
+    a fit of the whole band (the pulse convolved with the exposure).
+
+    Parameters
+    ----------
+    values : float array of shape (rows,)
+        Relative change per readout row, the band positive; NaN where blind.
+    leading, trailing : float
+        The band's edges as located one by one (half-level crossings), rows.
+    rise : float
+        Rows from 25 % to 75 % of the band's level at its trailing edge (sets the window
+        and the first guess of the pulse's decay).
+    level : float
+        The band's plateau.
+
+    Returns
+    -------
+    (leading, trailing): rows, ``trailing - leading`` the exposure in rows; None where the
+    fit has too few rows or does not converge, or it would move an edge further than the
+    band's ramp could explain.
+    """
+    if not all(np.isfinite(v) for v in (leading, trailing, rise, level)) or level <= 0 or trailing <= leading:
+        return None
+    decay = _decay_guess(rise)
+    x = _window(len(values), [leading, trailing], decay)
+    keep = (
+        np.isfinite(values[x])
+        & (x != _censored_foot(values, leading, True))
+        & (x != _censored_foot(values, trailing, False))
+    )
+    if keep.sum() < 8:
+        return None
+    free = np.ones(N_PARAMETERS, dtype=np.bool_)
+    fitted, converged = _best_fit(x[keep], values[x[keep]], leading, trailing - leading, rise, level, free, BAND)
+    first = fitted[0] + _half_light(fitted[1], fitted[2])
+    last = first + fitted[4]
+    reach = 2.0 + 2.0 * decay
+    if not converged or abs(first - leading) > reach or abs(last - trailing) > reach:
+        return None
+    return float(first), float(last)
+
+
+def _best_fit(
+    x: np.ndarray, y: np.ndarray, edge: float, width: float, rise: float, level: float, free: np.ndarray, mode: int
+) -> tuple[np.ndarray, bool]:
+    """Fit of the model (:func:`_fit`) to rows ``x``, values ``y``: an exponential pulse
+    (no hold), or where it explains the rows clearly better (its cost on the rows lower by
+    :data:`HOLD_EVIDENCE` times the residual variance), a pulse with a hold, fitted from a
+    rectangle. Both start with their
+    half-light point at ``edge`` and a 25 %-to-75 % ramp of ``rise`` rows. A hold and the
+    blur both round a ramp's foot, so a hold that is free everywhere moves a blurred
+    exponential edge; and a ramp fitted from an exponential can stall in a local minimum
+    where the pulse is a rectangle (an exponential ramp blurred to look straight)."""
+    decay, hold = _decay_guess(rise), max(2.0 * rise, 0.3)
+    x, y, f_scale = x.astype(np.float64), y.astype(np.float64), 0.05 * level
+    no_hold = free.copy()
+    no_hold[1] = False
+    exponential, converged = _fit(
+        x, y, np.array([edge - decay * np.log(2.0), 0.0, decay, START_BLUR, width, level]), no_hold, f_scale, mode
+    )
+    held, held_converged = _fit(
+        x, y, np.array([edge - 0.5 * hold, hold, MIN_DECAY, START_BLUR, width, level]), free, f_scale, mode
+    )
+    if not held_converged:
+        return exponential, converged
+    cost = _data_cost(x, y, held, f_scale, mode)
+    if not converged or _data_cost(x, y, exponential, f_scale, mode) - cost > HOLD_EVIDENCE * cost / max(
+        x.size - free.sum(), 1
+    ):
+        return held, True
+    return exponential, converged
+
+
+def _data_cost(x: np.ndarray, y: np.ndarray, p: np.ndarray, f_scale: float, mode: int) -> float:
+    """The fit's cost without the blur's prior (the hold, which has none, can stand in for
+    the blur: with the prior counted, a hold would win where only the blur is there)."""
+    return _cost(x, y, p, f_scale, mode) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
+
+
+def _decay_guess(rise: float) -> float:
+    """First guess of the pulse's decay, rows, from the 25 %-to-75 % rise of a ramp
+    (``decay ln 3`` for an exponential one)."""
+    return max(rise / np.log(3.0), 0.3)
+
+
+def _window(n: int, edges: list[float], decay: float) -> np.ndarray:
+    """Rows around the edges that the fit uses: a few rows on the flat side, six decay
+    lengths of tail; the union for several edges, inside ``[0, n)``."""
+    rows = [np.arange(int(np.floor(e - 3 - 2 * decay)), int(np.ceil(e + 2 + 6 * decay)) + 1) for e in edges]
+    x = np.unique(np.concatenate(rows))
+    return x[(x >= 0) & (x < n)]
+
+
+def _half_light(hold: float, decay: float) -> float:
+    """Rows from the pulse's start to the instant it has given half its light."""
+    total = hold + decay
+    if hold >= decay:
+        return 0.5 * total
+    return hold + decay * np.log(2.0 * decay / total)
 
 
 def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
@@ -88,10 +207,11 @@ def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
 
 
 @njit
-def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
-    """Robust fit of ``y = plateau * ramp(x - start, scale, blur)`` (``rising``) or of
-    ``y = plateau * (1 - ramp(...))``; ``p`` = (start, scale, blur, plateau) is the first
-    guess. x, y: shape (n,).
+def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
+    """Robust fit of the band model ``p`` = (start, hold, decay, blur, width, level) of
+    ``mode`` (:data:`BAND`, :data:`RISING`, :data:`FALLING`) to ``y``; ``p`` is the first
+    guess, ``free`` (bool, shape (6,)) the parameters fitted (the others stay). x, y: shape
+    (n,).
 
     Levenberg-Marquardt on the soft-L1 cost ``sum 2 f^2 (sqrt(1 + (r / f)^2) - 1)`` (``f`` =
     ``f_scale``), the normal equations weighted by the loss's derivative (iteratively
@@ -104,31 +224,41 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     p = _clamp(p.copy())
     if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
         return p, False
-    cost = _cost(x, y, p, f_scale, rising)
+    cost = _cost(x, y, p, f_scale, mode)
     if not np.isfinite(cost):
         return p, False
+    index = np.flatnonzero(free)
+    m = index.size
     damping = 1e-3
-    jacobian = np.empty((n, 4))
+    jacobian = np.empty((n, m))
     residual = np.empty(n)
-    for _ in range(200):
+    for _ in range(300):
         for i in range(n):
-            shape = _shape(x[i], p, rising)
-            residual[i] = p[3] * shape - y[i]
-            jacobian[i, 3] = shape
-        for j in range(3):  # forward differences; the plateau is linear
-            step = 1e-6 * max(1.0, abs(p[j]))
+            residual[i] = _model(x[i], p, mode) - y[i]
+        for j in range(m):
+            k = index[j]
             moved = p.copy()
-            moved[j] += step
+            if k == 5:  # the level is linear: d model / d level = model / level
+                moved[5] = p[5] + 1.0
+            else:  # forward differences
+                moved[k] += 1e-6 * max(1.0, abs(p[k]))
+            step = moved[k] - p[k]
             for i in range(n):
-                jacobian[i, j] = (moved[3] * _shape(x[i], moved, rising) - y[i] - residual[i]) / step
+                jacobian[i, j] = (_model(x[i], moved, mode) - y[i] - residual[i]) / step
         weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
         normal = jacobian.T @ (jacobian * weight[:, None])
         gradient = jacobian.T @ (weight * residual)
-        normal[2, 2] += (f_scale / BLUR_PRIOR_STD) ** 2  # the prior's residual and slope
-        gradient[2] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[2]
+        for j in range(m):
+            if index[j] == 3:  # the blur's prior: its residual and slope
+                normal[j, j] += (f_scale / BLUR_PRIOR_STD) ** 2
+                gradient[j] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[3]
         for _ in range(30):
-            trial = _clamp(p - _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient))
-            trial_cost = _cost(x, y, trial, f_scale, rising)
+            delta = _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient)
+            trial = p.copy()
+            for j in range(m):
+                trial[index[j]] -= delta[j]
+            trial = _clamp(trial)
+            trial_cost = _cost(x, y, trial, f_scale, mode)
             if trial_cost <= cost:
                 break
             damping *= 10.0
@@ -145,35 +275,59 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
 
 @njit
 def _clamp(p):  # pragma: no cover - compiled
-    p[1] = min(max(p[1], MIN_SCALE), MAX_SCALE)
-    p[2] = min(max(p[2], 0.0), MAX_BLUR)
+    p[1] = min(max(p[1], 0.0), MAX_LENGTH)
+    p[2] = min(max(p[2], MIN_DECAY), MAX_LENGTH)
+    p[3] = min(max(p[3], 0.0), MAX_BLUR)
+    p[4] = max(p[4], 0.0)
     return p
 
 
 @njit
-def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
-    """Soft-L1 cost of the ramp ``p`` = (start, scale, blur, plateau) against ``y``, plus the
-    blur's prior."""
+def _cost(x, y, p, f_scale, mode):  # pragma: no cover - compiled
+    """Soft-L1 cost of the model ``p`` against ``y``, plus the blur's prior."""
     total = 0.0
     for i in range(x.size):
-        residual = p[3] * _shape(x[i], p, rising) - y[i]
+        residual = _model(x[i], p, mode) - y[i]
         total += 2.0 * f_scale**2 * (math.sqrt(1.0 + (residual / f_scale) ** 2) - 1.0)
-    return total + (f_scale * p[2] / BLUR_PRIOR_STD) ** 2
+    return total + (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
 
 @njit
-def _shape(x, p, rising):  # pragma: no cover - compiled
-    """The band's level at row ``x`` relative to its plateau, for ``p`` = (start, scale,
-    blur, plateau): the ramp rising from 0, or falling from 1."""
-    share = _ramp(x - p[0], p[1], p[2])
-    return share if rising else 1.0 - share
+def _model(x, p, mode):  # pragma: no cover - compiled
+    """The band's relative change at row ``x`` for ``p`` = (start, hold, decay, blur,
+    width, level): the whole band, its rising edge (the light from 0 to ``level``) or its
+    falling edge."""
+    share = _share(x - p[0], p[1], p[2], p[3])
+    if mode == RISING:
+        return p[5] * share
+    if mode == FALLING:
+        return p[5] * (1.0 - share)
+    return p[5] * (share - _share(x - p[0] - p[4], p[1], p[2], p[3]))
+
+
+@njit
+def _share(z, hold, decay, blur):  # pragma: no cover - compiled
+    """Share of the pulse's light (a hold of ``hold`` rows, then an exponential decay of
+    ``decay`` rows) given ``z`` rows past its start, convolved with a Gaussian of ``blur``
+    rows."""
+    held = _blurred_ramp(z, blur) - _blurred_ramp(z - hold, blur) if hold > 0.0 else 0.0
+    return (held + decay * _ramp(z - hold, decay, blur)) / (hold + decay)
+
+
+@njit
+def _blurred_ramp(z, blur):  # pragma: no cover - compiled
+    """``max(z, 0)`` convolved with a Gaussian of ``blur`` rows."""
+    if blur <= 0.0:
+        return max(z, 0.0)
+    u = z / blur
+    return z * 0.5 * math.erfc(-u / math.sqrt(2.0)) + blur * math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
 
 
 @njit
 def _ramp(z, scale, blur):  # pragma: no cover - compiled
-    """Share of the flash's light in a row ``z`` rows past its start: ``1 - exp(-z / scale)``
-    (0 before), convolved with a Gaussian of ``blur`` rows. The tail term
-    ``exp(a) Phi(b)`` is computed through ``erfcx`` where ``Phi(b)`` underflows."""
+    """Share of an exponential pulse's light in a row ``z`` rows past its start:
+    ``1 - exp(-z / scale)`` (0 before), convolved with a Gaussian of ``blur`` rows. The tail
+    term ``exp(a) Phi(b)`` is computed through ``erfcx`` where ``Phi(b)`` underflows."""
     if blur <= 0.0:
         return -math.expm1(-z / scale) if z > 0.0 else 0.0
     b = z / blur - blur / scale
