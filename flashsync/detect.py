@@ -37,7 +37,7 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
 from flashsync.profiles import read_profiles
-from flashsync.ramp import fit_pulse_band, fit_pulse_edge
+from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge
 from flashsync.recurrence import RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
@@ -157,6 +157,7 @@ class EventDetector:
         self._global_frames = 0
         self._n_events = 0
         self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
+        self._whole: list[tuple[BandFit, int]] = []  # bands fitted whole, where their edges are
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
 
@@ -227,6 +228,7 @@ class EventDetector:
             self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
         self._number(self._recurrence.release())
+        self._share_exposure()
         return Events.from_columns(*zip(*self._edges)) if self._edges else Events.concat([])
 
     @property
@@ -234,11 +236,30 @@ class EventDetector:
         """Bands dropped because they recur at the same rows (:mod:`flashsync.recurrence`)."""
         return self._recurrence.dropped
 
-    def _number(self, released: list[list[tuple]]) -> None:
-        """Number the events that passed the recurrence filter and keep their edges."""
-        for edges in released:
+    def _number(self, released: list[tuple[list[tuple], BandFit | None]]) -> None:
+        """Number the events that passed the recurrence filter and keep their edges (and
+        where the band was fitted whole, the fit and where its two edges are kept)."""
+        for edges, whole in released:
+            if whole is not None:
+                self._whole.append((whole, len(self._edges)))
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
             self._n_events += 1
+
+    def _share_exposure(self) -> None:
+        """Refit the bands fitted whole with the camera's one exposure
+        (:func:`~flashsync.ramp.common_width`) and move their edges accordingly: a short
+        exposure is then told from the pulse's decay by all the bands together."""
+        width = common_width([whole for whole, _ in self._whole])
+        if width is None:
+            return
+        for whole, at in self._whole:
+            refit = whole.with_width(width)
+            if refit is None:
+                continue
+            for index, row in ((at, refit[0].leading), (at + 1, refit[0].trailing)):
+                edge = list(self._edges[index])
+                edge[4] = readout_rows(row, self.height, self.settings.flipped)
+                self._edges[index] = tuple(edge)
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
         """Follow bands across frames. A band reaching the first (last) lit row of the frame
@@ -294,9 +315,10 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
+        whole = None
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
             whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
-            leading, trailing = whole if whole is not None else (leading, trailing)
+            leading, trailing = (whole.leading, whole.trailing) if whole is not None else (leading, trailing)
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
@@ -321,7 +343,7 @@ class EventDetector:
                 )
             )
         stripes = [segment.stripe for segment in event.segments]
-        self._recurrence.hold(stripes, first.sign * plateau, found, checked=kind is Band.PULSE)
+        self._recurrence.hold(stripes, first.sign * plateau, (found, whole), checked=kind is Band.PULSE)
 
 
 @njit

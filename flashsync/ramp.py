@@ -28,6 +28,7 @@ exposure. An edge alone (a band split across frames) is fitted as a ramp
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,6 +47,9 @@ BLUR_PRIOR_STD = 2.0
 #: row (Akaike's criterion asks for 2; a free hold trades with the blur and fits the noise
 #: of a blurred exponential ramp by 4-5 times).
 HOLD_EVIDENCE = 10.0
+#: Exposures tried between the 10th and 90th percentile of a camera's band widths
+#: (:func:`common_width`).
+WIDTH_GRID = 9
 #: What the fitted model is: a whole band, or its rising or falling edge alone.
 BAND, RISING, FALLING = 0, 1, 2
 #: Parameters of the model: (start, hold, decay, blur, width, level); ``start`` is the row
@@ -81,19 +85,73 @@ def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, ri
     decay = _decay_guess(rise)
     x = _window(len(values), [row], decay)
     keep = np.isfinite(values[x]) & (x != _censored_foot(values, row, rising))
+    if not rising:
+        keep &= ~_censored_tail(values, x, row)
     if keep.sum() < 6:
         return row
     free = np.array([True, True, True, True, False, True])
-    fitted, converged = _best_fit(x[keep], values[x[keep]], row, 0.0, rise, level, free, RISING if rising else FALLING)
-    refined = fitted[0] + _half_light(fitted[1], fitted[2])
-    return float(refined) if converged and abs(refined - row) <= 2.0 else row
+    x, y = x[keep].astype(np.float64), values[x[keep]].astype(np.float64)
+    fit = _best_fit(x, y, row, 0.0, rise, level, free, RISING if rising else FALLING)
+    refined = fit.p[0] + _half_light(fit.p[1], fit.p[2]) if fit is not None else np.nan
+    return float(refined) if abs(refined - row) <= 2.0 else row
 
 
-def fit_pulse_band(
-    values: np.ndarray, leading: float, trailing: float, rise: float, level: float
-) -> tuple[float, float] | None:
-    """Sub-row leading and trailing edges of a band whose two edges lie in one frame, from
-    a fit of the whole band (the pulse convolved with the exposure).
+@dataclass(frozen=True)
+class BandFit:
+    """A band fitted whole (:func:`fit_pulse_band`).
+
+    Attributes
+    ----------
+    x, y : float arrays of shape (n,)
+        The rows fitted and their relative change.
+    p : float array of shape (6,)
+        The model's parameters (start, hold, decay, blur, width, level), rows but the level.
+    free : bool array of shape (6,)
+        The parameters that were fitted (the hold is fixed at 0 where an exponential pulse
+        explained the band).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    p: np.ndarray
+    free: np.ndarray
+
+    @property
+    def leading(self) -> float:
+        """The row whose exposure ended when the flash had given half its light."""
+        return float(self.p[0] + _half_light(self.p[1], self.p[2]))
+
+    @property
+    def trailing(self) -> float:
+        """The row whose exposure started then: one exposure after the leading edge."""
+        return self.leading + float(self.p[4])
+
+    @property
+    def width(self) -> float:
+        """The exposure, rows."""
+        return float(self.p[4])
+
+    @property
+    def variance(self) -> float:
+        """The cost per degree of freedom (about the variance of a row's change)."""
+        return _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)
+
+    def with_width(self, width: float) -> tuple[BandFit, float] | None:
+        """This band fitted again with its exposure fixed at ``width`` rows, and the fit's
+        cost; None where it does not converge."""
+        free = self.free.copy()
+        free[4] = False
+        p = self.p.copy()
+        p[4] = width
+        fitted, converged = _fit(self.x, self.y, p, free, _f_scale(self.p), BAND)
+        if not converged:
+            return None
+        return BandFit(self.x, self.y, fitted, self.free), _data_cost(self.x, self.y, fitted, _f_scale(self.p), BAND)
+
+
+def fit_pulse_band(values: np.ndarray, leading: float, trailing: float, rise: float, level: float) -> BandFit | None:
+    """A band whose two edges lie in one frame, fitted whole (the pulse integrated over the
+    exposure): its leading and trailing edges one exposure apart.
 
     Parameters
     ----------
@@ -109,44 +167,70 @@ def fit_pulse_band(
 
     Returns
     -------
-    (leading, trailing): rows, ``trailing - leading`` the exposure in rows; None where the
-    fit has too few rows or does not converge, or it would move an edge further than the
-    band's ramp could explain.
+    BandFit, or None where the fit has too few rows or does not converge, or it would move
+    an edge further than the band's ramp could explain.
     """
     if not all(np.isfinite(v) for v in (leading, trailing, rise, level)) or level <= 0 or trailing <= leading:
         return None
     decay = _decay_guess(rise)
     x = _window(len(values), [leading, trailing], decay)
-    keep = (
-        np.isfinite(values[x])
-        & (x != _censored_foot(values, leading, True))
-        & (x != _censored_foot(values, trailing, False))
-    )
+    keep = np.isfinite(values[x]) & (x != _censored_foot(values, leading, True)) & ~_censored_tail(values, x, trailing)
     if keep.sum() < 8:
         return None
-    free = np.ones(N_PARAMETERS, dtype=np.bool_)
-    fitted, converged = _best_fit(x[keep], values[x[keep]], leading, trailing - leading, rise, level, free, BAND)
-    first = fitted[0] + _half_light(fitted[1], fitted[2])
-    last = first + fitted[4]
+    x, y = x[keep].astype(np.float64), values[x[keep]].astype(np.float64)
+    level = max(level, float(np.percentile(y, 90)))  # a short band's peak, above its median
+    fit = _best_fit(x, y, leading, trailing - leading, rise, level, np.ones(N_PARAMETERS, dtype=np.bool_), BAND)
     reach = 2.0 + 2.0 * decay
-    if not converged or abs(first - leading) > reach or abs(last - trailing) > reach:
+    if fit is None or abs(fit.leading - leading) > reach or abs(fit.trailing - trailing) > reach:
         return None
-    return float(first), float(last)
+    return fit
+
+
+def common_width(fits: list[BandFit]) -> float | None:
+    """The exposure, rows, that explains all of a camera's whole bands best: the minimum
+    of the sum of their costs (each in units of its own noise) refitted with the exposure
+    fixed, over the spread of their own estimates. One band alone cannot tell a short
+    exposure from the pulse's decay to better than a row or two (at 0.5-1 ms); the camera's
+    bands share the exposure. Bands whose own width is off the median by a factor of two
+    are left out; None with fewer than three bands."""
+    widths = np.array([fit.width for fit in fits])
+    middle = float(np.median(widths)) if widths.size else 0.0
+    used = [fit for fit in fits if 0.5 * middle <= fit.width <= 2.0 * middle]
+    if len(used) < 3 or middle <= 0:
+        return None
+    low, high = np.percentile([fit.width for fit in used], [10, 90])
+    if high - low < 0.02:
+        return middle
+    grid = np.linspace(low, high, WIDTH_GRID)
+    total = np.zeros(grid.size)
+    for fit in used:
+        scale = max(fit.variance, 1e-12)
+        for j, width in enumerate(grid):
+            refit = fit.with_width(width)
+            total[j] += (refit[1] if refit is not None else np.inf) / scale
+    j = int(np.argmin(total))
+    if not np.isfinite(total[j]):
+        return None
+    if 0 < j < grid.size - 1 and np.all(np.isfinite(total[j - 1 : j + 2])):  # the parabola's vertex
+        curvature = total[j - 1] - 2.0 * total[j] + total[j + 1]
+        if curvature > 0:
+            return float(grid[j] + 0.5 * (grid[1] - grid[0]) * (total[j - 1] - total[j + 1]) / curvature)
+    return float(grid[j])
 
 
 def _best_fit(
     x: np.ndarray, y: np.ndarray, edge: float, width: float, rise: float, level: float, free: np.ndarray, mode: int
-) -> tuple[np.ndarray, bool]:
-    """Fit of the model (:func:`_fit`) to rows ``x``, values ``y``: an exponential pulse
-    (no hold), or where it explains the rows clearly better (its cost on the rows lower by
-    :data:`HOLD_EVIDENCE` times the residual variance), a pulse with a hold, fitted from a
-    rectangle. Both start with their
-    half-light point at ``edge`` and a 25 %-to-75 % ramp of ``rise`` rows. A hold and the
-    blur both round a ramp's foot, so a hold that is free everywhere moves a blurred
-    exponential edge; and a ramp fitted from an exponential can stall in a local minimum
-    where the pulse is a rectangle (an exponential ramp blurred to look straight)."""
+) -> BandFit | None:
+    """Fit of the model (:func:`_fit`) to rows ``x``, values ``y`` (float64): an exponential
+    pulse (no hold), or where it explains the rows clearly better (its cost on the rows
+    lower by :data:`HOLD_EVIDENCE` times the residual variance), a pulse with a hold,
+    fitted from a rectangle. Both start with their half-light point at ``edge`` and a
+    25 %-to-75 % ramp of ``rise`` rows. A hold and the blur both round a ramp's foot, so a
+    hold that is free everywhere moves a blurred exponential edge; and a ramp fitted from
+    an exponential can stall in a local minimum where the pulse is a rectangle (an
+    exponential ramp blurred to look straight). None where neither converges."""
     decay, hold = _decay_guess(rise), max(2.0 * rise, 0.3)
-    x, y, f_scale = x.astype(np.float64), y.astype(np.float64), 0.05 * level
+    f_scale = 0.05 * level
     no_hold = free.copy()
     no_hold[1] = False
     exponential, converged = _fit(
@@ -155,14 +239,18 @@ def _best_fit(
     held, held_converged = _fit(
         x, y, np.array([edge - 0.5 * hold, hold, MIN_DECAY, START_BLUR, width, level]), free, f_scale, mode
     )
-    if not held_converged:
-        return exponential, converged
-    cost = _data_cost(x, y, held, f_scale, mode)
-    if not converged or _data_cost(x, y, exponential, f_scale, mode) - cost > HOLD_EVIDENCE * cost / max(
-        x.size - free.sum(), 1
-    ):
-        return held, True
-    return exponential, converged
+    if held_converged:
+        cost = _data_cost(x, y, held, f_scale, mode)
+        if not converged or _data_cost(x, y, exponential, f_scale, mode) - cost > HOLD_EVIDENCE * cost / max(
+            x.size - free.sum(), 1
+        ):
+            return BandFit(x, y, held, free)
+    return BandFit(x, y, exponential, no_hold) if converged else None
+
+
+def _f_scale(p: np.ndarray) -> float:
+    """The robust loss's scale for the model ``p``: 5 % of its level."""
+    return 0.05 * float(p[5])
 
 
 def _data_cost(x: np.ndarray, y: np.ndarray, p: np.ndarray, f_scale: float, mode: int) -> float:
@@ -193,6 +281,17 @@ def _half_light(hold: float, decay: float) -> float:
     return hold + decay * np.log(2.0 * decay / total)
 
 
+def _censored_tail(values: np.ndarray, x: np.ndarray, trailing: float) -> np.ndarray:
+    """Which rows ``x`` lie past the last changed row after a trailing edge (bool, shape of
+    ``x``). A pulse's tail fades under the codec's dead zone and the detector's 1.5 DN step
+    floor and reads exactly 0 long before the light is gone: those rows only say "less than
+    that", and fitting them as 0 cuts the tail and with it the exposure short."""
+    last = max(int(np.floor(trailing)), -1)
+    while last + 1 < len(values) and values[last + 1] != 0 and np.isfinite(values[last + 1]):
+        last += 1
+    return x > last
+
+
 def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
     """The unchanged row next to a ramp's first changed one (before it for a leading edge,
     after it for a trailing one), or -1. Its light was real but small: under the codec's
@@ -221,7 +320,7 @@ def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
     model: a division by zero gives inf, it does not raise).
     """
     n = x.size
-    p = _clamp(p.copy())
+    p = _clamp(p.copy(), mode)
     if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
         return p, False
     cost = _cost(x, y, p, f_scale, mode)
@@ -257,7 +356,7 @@ def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
             trial = p.copy()
             for j in range(m):
                 trial[index[j]] -= delta[j]
-            trial = _clamp(trial)
+            trial = _clamp(trial, mode)
             trial_cost = _cost(x, y, trial, f_scale, mode)
             if trial_cost <= cost:
                 break
@@ -274,8 +373,11 @@ def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
 
 
 @njit
-def _clamp(p):  # pragma: no cover - compiled
-    p[1] = min(max(p[1], 0.0), MAX_LENGTH)
+def _clamp(p, mode):  # pragma: no cover - compiled
+    """``p`` within bounds; in a band no longer a hold than the exposure (a band is the
+    exposure convolved with the pulse: a rectangular pulse and an exposure trade places,
+    and the longer of them is taken to be the exposure)."""
+    p[1] = min(max(p[1], 0.0), MAX_LENGTH if mode != BAND else max(p[4], 0.0))
     p[2] = min(max(p[2], MIN_DECAY), MAX_LENGTH)
     p[3] = min(max(p[3], 0.0), MAX_BLUR)
     p[4] = max(p[4], 0.0)

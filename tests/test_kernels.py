@@ -23,7 +23,7 @@ from flashsync.flicker import (
     _row_pattern,
     _update_mean,
 )
-from flashsync.ramp import BAND, FALLING, MAX_BLUR, MIN_DECAY, N_PARAMETERS, RISING, _fit, _solve_spd, fit_pulse_band, fit_pulse_edge
+from flashsync.ramp import BAND, FALLING, MAX_BLUR, MIN_DECAY, N_PARAMETERS, RISING, _fit, _solve_spd, common_width, fit_pulse_band, fit_pulse_edge
 
 FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 anything = st.floats(allow_nan=True, allow_infinity=True, width=32)
@@ -84,10 +84,11 @@ def test_pulse_edge_is_a_row_near_the_guess_or_nan(ramp, row, rise, rising):
 @given(ramps(), st.floats(-10, 70) | st.just(np.nan), st.floats(-5, 40), st.floats(-1, 20) | st.just(np.nan))
 def test_pulse_band_is_two_ordered_rows_near_the_guesses_or_none(ramp, leading, width, rise):
     _, y, level = ramp
-    edges = fit_pulse_band(y, leading, leading + width, rise, level)
-    if edges is not None:
-        assert np.all(np.isfinite(edges)) and edges[0] <= edges[1]
-        assert abs(edges[0] - leading) <= 2.0 + 2.0 * max(rise / np.log(3.0), 0.3) + 1e-9
+    fit = fit_pulse_band(y, leading, leading + width, rise, level)
+    if fit is not None:
+        assert np.isfinite(fit.leading) and fit.leading <= fit.trailing
+        assert abs(fit.leading - leading) <= 2.0 + 2.0 * max(rise / np.log(3.0), 0.3) + 1e-9
+        assert common_width([fit] * 3) is not None or fit.width <= 0
 
 
 @FAST
