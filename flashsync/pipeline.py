@@ -437,7 +437,7 @@ class _Attempt:
                 s.row_time_ms,
                 d.flipped,
                 s.covariance,
-                _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                _exposure_ms(d, self.matches.event[self.matches.camera_index == index], s.alpha, s.row_time_ms),
                 str(d.video),
                 s.knots_ms,
                 s.warp_ms,
@@ -554,17 +554,35 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
     return priors
 
 
-def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
+def _exposure_ms(detection: CameraDetection, matched: np.ndarray, alpha: float, row_time_ms: float) -> float | None:
     """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
     where the bands give no positive duration: a time per row the events could not tell).
 
-    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
-    flash are the ones whose exposure window holds it), so its duration is the exposure.
+    A band's trailing edge comes one exposure after its leading edge (the detector fits
+    the pulse integrated over the exposure, :mod:`flashsync.ramp`), so its duration is the
+    exposure. Only bands matched to a flash (``matched``: event numbers) count: a player
+    or a codec echo makes bands of any length, and where they outnumber the flashes they
+    set the median (a 8 ms exposure read as 0.84 ms). Bands within one frame are used
+    where there are any: their duration is the exposure in rows, the same in each (the
+    bands of a camera share one exposure), where a band split across frames also carries
+    the frame gap and the hidden rows.
     """
-    mine = durations.camera == camera
-    if not mine.any():
+    events = detection.events
+    bands = events.bands()
+    first = bands.first_edges()
+    bands = bands.take(
+        bands.complete
+        & (events.band[first] == Band.PULSE)
+        & ~events.has_flag(Flag.SATURATED)[first]
+        & np.isin(bands.event, matched)
+    )
+    if not len(bands):
         return None
-    exposure = float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    q = _readout_rows(detection, events)
+    dt = alpha * (events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
+    duration = dt + (q[bands.trailing] - q[bands.leading]) * row_time_ms
+    whole = dt == 0
+    exposure = float(np.median(duration[whole] if whole.any() else duration))
     return exposure if exposure > 0 else None
 
 

@@ -32,8 +32,19 @@ PULSES = {
 def rig(shape: str, width: int = 480, height: int = 270) -> Scenario:
     rng = np.random.default_rng(11)
     cameras = tuple(
-        CameraSpec(f"e{i}", width, height, fps, r0=6, r1=8, exposure_ms=e, noise_std=1.0, crf=23,
-                   start_ms=float(rng.uniform(0, 500)), drift_ppm=float(rng.uniform(-20, 20)))
+        CameraSpec(
+            f"e{i}",
+            width,
+            height,
+            fps,
+            r0=6,
+            r1=8,
+            exposure_ms=e,
+            noise_std=1.0,
+            crf=23,
+            start_ms=float(rng.uniform(0, 500)),
+            drift_ppm=float(rng.uniform(-20, 20)),
+        )
         for i, (e, fps) in enumerate(zip(EXPOSURES_MS, RATES))
     )
     instants = 400.0 + np.sort(rng.uniform(0, 600, 7)) + 480.0 * np.arange(7)

@@ -23,7 +23,19 @@ from flashsync.flicker import (
     _row_pattern,
     _update_mean,
 )
-from flashsync.ramp import BAND, FALLING, MAX_BLUR, MIN_DECAY, N_PARAMETERS, RISING, _fit, _solve_spd, common_width, fit_pulse_band, fit_pulse_edge
+from flashsync.ramp import (
+    BAND,
+    FALLING,
+    MAX_BLUR,
+    MIN_DECAY,
+    N_PARAMETERS,
+    RISING,
+    _fit,
+    _solve_spd,
+    common_width,
+    fit_pulse_band,
+    fit_pulse_edge,
+)
 
 FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 anything = st.floats(allow_nan=True, allow_infinity=True, width=32)
