@@ -343,8 +343,9 @@ class EventDetector:
         then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
         exposure apart and at the flash's half-light instant even where the exposure is
         shorter than the pulse) and hold them for the recurrence filter; a band that darkens
-        rows without staying dark (a passing shadow) is not an event, and a degenerate one (no positive plateau to fit an edge on) is
-        dropped and counted in :attr:`n_degenerate`."""
+        rows without staying dark (a passing shadow) is not an event, and a degenerate one
+        (no positive plateau to fit an edge on) is dropped and counted in
+        :attr:`n_degenerate`."""
         first, last = event.segments[0], event.segments[-1]
         if kind is Band.PULSE and first.sign < 0:
             return
@@ -503,7 +504,8 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
     falling ramp leaves its plateau steeply and ends in the pulse's long tail: five times
     that length reached back across a short band into its leading ramp and halved the
     level, putting the trailing edge of a 1 ms xenon pulse a whole decay late). A pulse's
-    half-rise point marks the same instant in every camera. A step ramps linearly over one exposure, so its half-rise point moves with the exposure; its
+    half-rise point marks the same instant in every camera. A step ramps linearly over one
+    exposure, so its half-rise point moves with the exposure; its
     foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
     switch. Returns (None, nan) where the edge is not visible, (nan, nan) where the band is
     degenerate (its local plateau is not positive: nothing to locate an edge on).
