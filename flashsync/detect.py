@@ -37,7 +37,7 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
 from flashsync.profiles import read_profiles
-from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge, fit_split_edge
+from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge
 from flashsync.recurrence import RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
@@ -124,28 +124,6 @@ class _Segment:
     stripe: Stripe
 
 
-@dataclass(frozen=True)
-class _Whole:
-    """A band fitted whole (its edges kept are the fit's)."""
-
-    fit: BandFit
-
-
-@dataclass(frozen=True)
-class _Split:
-    """A band split across frames, kept to refit its edges with the camera's exposure: the
-    first and last segments' change (None where that edge is hidden), the edges as
-    located alone and their rises, readout rows, and the band's plateau."""
-
-    first: np.ndarray | None
-    leading: float
-    leading_rise: float
-    last: np.ndarray | None
-    trailing: float
-    trailing_rise: float
-    level: float
-
-
 @dataclass
 class _Event:
     """A band followed across frames: its segments, first to last."""
@@ -179,7 +157,8 @@ class EventDetector:
         self._global_frames = 0
         self._n_events = 0
         self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
-        self._whole: list[tuple[_Whole | _Split, int]] = []  # pulse bands, where their edges are kept
+        self._whole: list[BandFit] = []  # the bands fitted whole that passed the recurrence filter
+        self.exposure_rows: float | None = None
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
 
@@ -245,12 +224,15 @@ class EventDetector:
         self._n_history = min(self._n_history + 1, len(self._history))
 
     def finish(self) -> Events:
-        """Close a band still open at the end of the video; return all the events' edges."""
+        """Close a band still open at the end of the video; return all the events' edges.
+        Sets :attr:`exposure_rows`: the exposure, readout rows, that the bands fitted whole
+        share (:func:`~flashsync.ramp.common_width`; one band alone tells a short exposure
+        from the pulse's decay only to a row or two), or None with fewer than three."""
         if self._open is not None:
             self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
         self._number(self._recurrence.release())
-        self._share_exposure()
+        self.exposure_rows = common_width(self._whole)
         return Events.from_columns(*zip(*self._edges)) if self._edges else Events.concat([])
 
     @property
@@ -258,50 +240,14 @@ class EventDetector:
         """Bands dropped because they recur at the same rows (:mod:`flashsync.recurrence`)."""
         return self._recurrence.dropped
 
-    def _number(self, released: list[tuple[list[tuple], _Whole | _Split | None]]) -> None:
+    def _number(self, released: list[tuple[list[tuple], BandFit | None]]) -> None:
         """Number the events that passed the recurrence filter and keep their edges (and
-        where the band was fitted whole, the fit and where its two edges are kept)."""
+        the fits of the bands fitted whole)."""
         for edges, whole in released:
-            if whole is not None and edges:
-                self._whole.append((whole, len(self._edges)))
+            if whole is not None:
+                self._whole.append(whole)
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
             self._n_events += 1
-
-    def _share_exposure(self) -> None:
-        """Refit the bands fitted whole with the camera's one exposure
-        (:func:`~flashsync.ramp.common_width`) and move their edges accordingly: a short
-        exposure is then told from the pulse's decay by all the bands together. The edges
-        of bands split across frames are fitted with the same model and exposure
-        (:func:`~flashsync.ramp.fit_split_edge`), so that split and whole bands agree (the
-        solve ties the time per row by their durations)."""
-        width = common_width([entry.fit for entry, _ in self._whole if isinstance(entry, _Whole)])
-        if width is None:
-            return
-        for entry, at in self._whole:
-            if isinstance(entry, _Whole):
-                refit = entry.fit.with_width(width)
-                if refit is not None:
-                    self._move(at, (refit[0].leading - entry.fit.leading, refit[0].trailing - entry.fit.trailing))
-                continue
-            self._move(
-                at,
-                [
-                    fit_split_edge(values, row, rise, entry.level, width, rising) - row
-                    for values, row, rise, rising in (
-                        (entry.first, entry.leading, entry.leading_rise, True),
-                        (entry.last, entry.trailing, entry.trailing_rise, False),
-                    )
-                    if values is not None
-                ],
-            )
-
-    def _move(self, at: int, shifts) -> None:
-        """Move the kept edges from index ``at`` on by ``shifts`` readout rows (one each)."""
-        for index, shift in enumerate(shifts, start=at):
-            edge = list(self._edges[index])
-            q = readout_rows(edge[4], self.height, self.settings.flipped) + shift
-            edge[4] = readout_rows(q, self.height, self.settings.flipped)
-            self._edges[index] = tuple(edge)
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
         """Follow bands across frames. A band reaching the first (last) lit row of the frame
@@ -358,17 +304,10 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
-        whole: _Whole | _Split | None = None
+        whole = None
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
-            fit = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
-            if fit is not None:
-                whole, leading, trailing = _Whole(fit), fit.leading, fit.trailing
-        elif kind is Band.PULSE:  # split: its edges are refitted with the camera's exposure at the end
-            whole = _Split(
-                *((first.change, leading, leading_rise) if leading is not None else (None, np.nan, np.nan)),
-                *((last.change, trailing, trailing_rise) if trailing is not None else (None, np.nan, np.nan)),
-                plateau,
-            )
+            whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
+            leading, trailing = (whole.leading, whole.trailing) if whole is not None else (leading, trailing)
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
@@ -599,6 +538,9 @@ class CameraDetection:
     n_recurring, n_degenerate : int
         Bands dropped as recurring at the same rows (:mod:`flashsync.recurrence`) and as
         degenerate (no plateau to fit an edge on), in the first reading.
+    exposure_rows : float or None
+        The exposure in readout rows that the camera's bands within one frame share
+        (:attr:`EventDetector.exposure_rows`); None where fewer than three were fitted.
     """
 
     camera: str
@@ -612,6 +554,7 @@ class CameraDetection:
     flicker: Flicker | None = None
     n_recurring: int = 0
     n_degenerate: int = 0
+    exposure_rows: float | None = None
 
     @property
     def events(self) -> Events:
@@ -689,4 +632,5 @@ def detect_video(
         flicker=remove_flicker.estimate(),
         n_recurring=detectors[0].n_recurring,
         n_degenerate=detectors[0].n_degenerate,
+        exposure_rows=detectors[0].exposure_rows,
     )

@@ -558,15 +558,17 @@ def _exposure_ms(detection: CameraDetection, matched: np.ndarray, alpha: float, 
     """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
     where the bands give no positive duration: a time per row the events could not tell).
 
-    A band's trailing edge comes one exposure after its leading edge (the detector fits
-    the pulse integrated over the exposure, :mod:`flashsync.ramp`), so its duration is the
-    exposure. Only bands matched to a flash (``matched``: event numbers) count: a player
-    or a codec echo makes bands of any length, and where they outnumber the flashes they
-    set the median (a 8 ms exposure read as 0.84 ms). Bands within one frame are used
-    where there are any: their duration is the exposure in rows, the same in each (the
-    bands of a camera share one exposure), where a band split across frames also carries
-    the frame gap and the hidden rows.
+    The detector's exposure in rows (:attr:`~flashsync.detect.CameraDetection.exposure_rows`,
+    shared by the camera's bands within one frame) times the time per row where it has one.
+    Else the median band: a band's trailing edge comes one exposure after its leading edge
+    (the detector fits the pulse integrated over the exposure, :mod:`flashsync.ramp`).
+    Only bands matched to a flash (``matched``: event numbers) count there: a player or a
+    codec echo makes bands of any length. Bands within one frame are used where there are
+    any: a band split across frames also carries the frame gap and the hidden rows.
     """
+    if detection.exposure_rows is not None:
+        exposure = detection.exposure_rows * row_time_ms
+        return exposure if exposure > 0 else None
     events = detection.events
     bands = events.bands()
     first = bands.first_edges()

@@ -186,57 +186,6 @@ def fit_pulse_band(values: np.ndarray, leading: float, trailing: float, rise: fl
     return fit
 
 
-def fit_split_edge(values: np.ndarray, row: float, rise: float, level: float, width: float, rising: bool) -> float:
-    """One edge of a band split across frames, from the band model with the camera's
-    exposure (``width`` rows, :func:`common_width`) fixed, fitted to the band's part in the
-    edge's frame: the same edge as :func:`fit_pulse_band` gives a band in one frame, where
-    a ramp fitted alone (the half-level crossing of a band that never reaches its plateau)
-    would not be.
-
-    Parameters
-    ----------
-    values : float array of shape (rows,)
-        Relative change per readout row of the frame holding the edge, the band positive.
-    row : float
-        The edge as located alone, rows.
-    rise, level : float
-        Rows from 25 % to 75 % of the local plateau, and the plateau.
-    width : float
-        The camera's exposure, rows.
-    rising : bool
-        A leading edge (the band runs on to the frame's last row); False for a trailing
-        one (the band started in an earlier frame: in this frame's rows, which run on in
-        time, its start lies before row 0).
-
-    Returns
-    -------
-    float: the fitted edge, rows; ``row`` itself where the fit fails or would move it
-    further than its ramp could explain.
-    """
-    if not all(np.isfinite(v) for v in (row, rise, level, width)) or level <= 0 or width <= 0:
-        return row
-    decay = _decay_guess(rise)
-    if rising:
-        x = np.arange(max(int(np.floor(row - 3 - 2 * decay)), 0), len(values))
-    else:
-        x = np.arange(0, min(int(np.ceil(row + 2 + 6 * decay)) + 1, len(values)))
-    keep = np.isfinite(values[x]) & (x != _censored_foot(values, row, rising))
-    if not rising:
-        keep &= ~_censored_tail(values, x, row)
-    if keep.sum() < 6:
-        return row
-    x, y = x[keep].astype(np.float64), values[x[keep]].astype(np.float64)
-    free = np.ones(N_PARAMETERS, dtype=np.bool_)
-    free[4] = False
-    fit = _best_fit(
-        x, y, row if rising else row - width, width, rise, max(level, float(np.percentile(y, 90))), free, BAND
-    )
-    if fit is None:
-        return row
-    refined = fit.leading if rising else fit.trailing
-    return refined if abs(refined - row) <= 2.0 + 2.0 * decay else row
-
-
 def common_width(fits: list[BandFit]) -> float | None:
     """The exposure, rows, that explains all of a camera's whole bands best: the minimum
     of the sum of their costs (each in units of its own noise) refitted with the exposure
