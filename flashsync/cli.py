@@ -51,6 +51,7 @@ OPTIONS = {
     "reference": "--reference",
     "row_times": "--row-time",
     "samples": "--samples",
+    "scheduler": "--scheduler",
     "start_ms": "--start-ms",
     "timestamps": "--timestamps",
 }
@@ -510,6 +511,35 @@ def _detection_options(parser: argparse.ArgumentParser) -> None:
         help="frame timestamps of a camera from a CSV (column t_ms, or rtp for 90 kHz "
         "RTP stamps; one row per frame) instead of the container's; repeatable",
     )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="decode on a Dask cluster: tcp://HOST:PORT of a running scheduler (its workers read the videos "
+        "by the same paths), or local:N for N worker processes here; same events (needs flashsync[cluster])",
+    )
+    parser.add_argument(
+        "--segment",
+        type=float,
+        default=SEGMENT_S,
+        metavar="SECONDS",
+        help=f"with --scheduler: videos are split at key frames into segments this long (default {SEGMENT_S:g})",
+    )
+
+
+#: Default --segment, s (flashsync.segments.SEGMENT_MS: the CLI does not import the detector to --help).
+SEGMENT_S = 120.0
+
+
+def _cluster_options(args) -> dict:
+    """detect_videos' scheduler and segment_ms from --scheduler and --segment."""
+    if args.scheduler is None:
+        return {}
+    from flashsync.cluster import check_scheduler
+
+    check_scheduler(args.scheduler)
+    if not (math.isfinite(args.segment) and args.segment > 0):
+        raise InputError(f"--segment {args.segment:g}: the value must be a positive, finite number of seconds")
+    return {"scheduler": args.scheduler, "segment_ms": args.segment * 1000.0}
 
 
 def _timestamp_files(values: list[str]) -> dict[str, Path]:
@@ -549,6 +579,7 @@ def _run_detect(args) -> None:
         estimate_readout=False,
         progress=_progress,
         timestamps=timestamps,
+        **_cluster_options(args),
     )
     save_events(all_events(detections), args.output)
     _PLAN.did(args.output)
@@ -587,7 +618,9 @@ def _run_sync(args) -> None:
     planned = [(str(path), "written") for path in (args.events, args.output) if path]
     planned += [("the --pairwise table", "printed")] if args.pairwise else []
     _PLAN.outputs(*planned, *((str(path), "written") for path in (args.json, args.rrd) if path))
-    detections = detect_videos(args.videos, args.flipped, progress=_progress, timestamps=timestamps)
+    detections = detect_videos(
+        args.videos, args.flipped, progress=_progress, timestamps=timestamps, **_cluster_options(args)
+    )
     for detection in detections:
         for note in detection_notes(detection):
             print(f"flashsync sync: {note}", file=sys.stderr)
@@ -818,6 +851,7 @@ def _run_diagnose(args) -> None:
             estimate_readout=False,
             progress=_progress,
             timestamps=timestamps,
+            **_cluster_options(args),
         ),
         args.reference,
     )
