@@ -97,9 +97,9 @@ def detect_on_cluster(
     -------
     list of CameraDetection, one per path, equal to what ``detect_video`` gives.
     """
-    from distributed import as_completed
-
     with connect(scheduler) as client:
+        from distributed import as_completed
+
         futures = []
         try:
             plans = client.map(plan_segments, list(paths), segment_ms=segment_ms, pure=False)
