@@ -265,12 +265,27 @@ def _parser() -> argparse.ArgumentParser:
     _detection_options(sync)
 
     restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
-    restamp.add_argument("detections", type=Path, metavar="DETECTIONS")
+    restamp.add_argument(
+        "detections",
+        type=Path,
+        metavar="DETECTIONS",
+        help="a table (.csv, .parquet, MOTChallenge .txt) or a folder of .parquet/.csv tables (a partitioned dataset)",
+    )
     restamp.add_argument(
         "--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json in the current folder)"
     )
     restamp.add_argument(
-        "-o", "--output", type=Path, help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv)"
+        "-o",
+        "--output",
+        type=Path,
+        help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv); for a folder, a new folder "
+        "with the same files (default: DETECTIONS.restamped)",
+    )
+    restamp.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with a folder: re-stamp its tables on a Dask cluster, tcp://HOST:PORT or local:N "
+        "(its workers see both folders by the same paths; needs flashsync[cluster])",
     )
     restamp.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
     restamp.add_argument(
@@ -706,20 +721,26 @@ def _load_model(path: Path):
 
 
 def _run_restamp(args) -> int:
-    from tracking_adapter.restamp import format_summary, restamp_file
+    from tracking_adapter.restamp import format_summary, restamp_file, restamp_folder
 
-    output = args.output or args.detections.with_suffix(".restamped.csv")
+    folder = args.detections.is_dir()
+    output = args.output or args.detections.with_suffix(".restamped" if folder else ".restamped.csv")
     exposures = _per_camera_ms("--exposure", args.exposure)
-    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output})
+    if args.scheduler is not None and not folder:
+        raise InputError(f"--scheduler {args.scheduler}: re-stamps a folder of tables; {args.detections} is a file")
+    if args.scheduler is not None:
+        from flashsync.cluster import check_scheduler
+
+        check_scheduler(args.scheduler)
+    if folder and args.camera:
+        raise InputError(f"--camera {args.camera}: names the camera of a MOTChallenge file, not of a folder")
+    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output}, ["-o"] if folder else [])
     model = _load_model(args.model)
-    summary = restamp_file(
-        args.detections,
-        output,
-        model,
-        camera=args.camera,
-        exposure_ms=exposures,
-        with_std=args.std,
-    )
+    options = {"exposure_ms": exposures, "with_std": args.std}
+    if folder:
+        summary = restamp_folder(args.detections, output, model, scheduler=args.scheduler, **options)
+    else:
+        summary = restamp_file(args.detections, output, model, camera=args.camera, **options)
     _PLAN.did(output)
     print(format_summary(summary), file=sys.stderr)
     if "unknown camera" in summary.failed:
