@@ -235,3 +235,16 @@ def test_a_broken_video_on_the_cluster_is_one_line(clips, tmp_path, capsys, loca
     code, _, err = run(capsys, "detect", broken, "-o", tmp_path / "e.csv", "--scheduler", local_cluster)
     assert code == 1 and not (tmp_path / "e.csv").exists()
     one_error_line(err, str(broken), "cut short")
+
+
+@pytest.mark.parametrize("command, output", [("sync", "-o"), ("diagnose", "--json")])
+def test_sync_and_diagnose_on_the_cluster_write_what_the_plain_run_writes(
+    tiny_scenario, local_cluster, tmp_path, capsys, command, output
+):
+    videos = sorted(p for p in tiny_scenario.iterdir() if p.suffix in (".mp4", ".mkv"))
+    written = []
+    for name, options in (("plain", []), ("cluster", ["--scheduler", local_cluster, "--segment", 0.5])):
+        code, out, err = run(capsys, command, *videos, output, tmp_path / f"{name}.json", *options)
+        assert code == 0, err
+        written.append(((tmp_path / f"{name}.json").read_bytes(), out))
+    assert written[0] == written[1]
