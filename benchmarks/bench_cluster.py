@@ -8,18 +8,22 @@ Writes a clip (``bench_detect``'s scene: textured, moving blobs, a flash every 4
 commands on it: plain (local threads), and with ``--scheduler tcp://127.0.0.1:PORT`` against
 ``dask scheduler`` + ``dask worker --nworkers W --nthreads 1`` processes started here for
 W = 1 and 2 (their start-up is not timed: a cluster runs before a job comes), each run's
-events compared with the plain run's byte for byte. Then, on 2 workers, segments of a
-quarter the length give the per-segment overhead; and the detection state pushed through one
-video in one process without decoding (the part that runs in order) gives the rate of the
-per-video chain. Last, decode-only (PyAV, threads AUTO): the floor.
+events compared with the plain run's byte for byte (on 2 workers with segments of a quarter
+the length too). Then the cost of a segment: decoding the video in segments of a quarter
+the length, one after the other in this process, against decoding it whole (seeking, the
+decoder's start, the frames read past a segment's end), plus a Dask task's round trip on
+the 2-worker cluster; the detection state pushed through the video in one process without
+decoding (the part that runs in order): the rate of the per-video chain; and decode-only
+(PyAV, threads AUTO), the floor.
 
 The projection for N machines like this one, a game of C cameras x F frames each::
 
     time ~ max(C F / (N r), F / chain) + C F / (segment frames) x overhead / (N W)
 
-with r the frames per second of one machine (the 2-worker run), chain the chain's rate and W
-workers per machine: decoding scales with machines, each video's chain runs in order (the
-videos' chains in parallel).
+with r the frames per second of one machine (the 2-worker run, conservative: one video),
+chain the chain's rate, segments of the default 120 s and W = 2 workers per machine:
+decoding scales with machines, each video's chain runs in order (the videos' chains in
+parallel, on the workers too).
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from bench_detect import SIZES, decode_only  # noqa: E402
 
 from flashsync.detect import VideoDetection  # noqa: E402
 from flashsync.profiles import read_profiles  # noqa: E402
+from flashsync.segments import SEGMENT_MS, plan_segments, read_segment  # noqa: E402
 from flashsync.simulation.encode import write_video  # noqa: E402
 
 FPS = 25.0
@@ -122,6 +127,32 @@ def timed_detect(video: Path, output: Path, *options: str) -> float:
     return time.perf_counter() - start
 
 
+def segment_cost(video: Path, segment_ms: float) -> tuple[float, float, int]:
+    """Time to decode the video's profiles whole and in segments (one after the other), s,
+    and the number of segments."""
+    start = time.perf_counter()
+    for _ in read_profiles(video)[1]:
+        pass
+    whole = time.perf_counter() - start
+    segments = plan_segments(video, segment_ms)[1]
+    start = time.perf_counter()
+    for segment in segments:
+        read_segment(segment)
+    return whole, time.perf_counter() - start, len(segments)
+
+
+def task_round_trip(address: str, n_tasks: int = 200) -> float:
+    """Mean wall time of a trivial task submitted and gathered one at a time, s."""
+    from distributed import Client
+
+    with Client(address) as client:
+        client.submit(abs, -1, pure=False).result()
+        start = time.perf_counter()
+        for i in range(n_tasks):
+            client.submit(abs, -i, pure=False).result()
+        return (time.perf_counter() - start) / n_tasks
+
+
 def chain_fps(video: Path) -> float:
     """Frames per second of the detection state alone (profiles decoded beforehand)."""
     info, profiles = read_profiles(video)
@@ -147,11 +178,11 @@ def main() -> None:
     video = folder / f"cluster_{args.size}_{n_frames}.mkv"
     if not video.exists():
         make_clip(video, *SIZES[args.size], n_frames)
-    print(f"{video.name}: {n_frames} frames {args.size}, segments of {args.segment:g} s; whole commands")
+    print(f"{video.name}: {n_frames} frames {args.size}, segments of {args.segment:g} s; whole commands", flush=True)
     plain = timed_detect(video, folder / "plain.csv")
     expected = (folder / "plain.csv").read_bytes()
-    print(f"plain (local threads):  {plain:7.2f} s  {n_frames / plain:6.1f} frames/s")
-    times = {}
+    print(f"plain (local threads):  {plain:7.2f} s  {n_frames / plain:6.1f} frames/s", flush=True)
+    times, round_trip = {}, 0.0
     for workers in (1, 2):
         with DaskProcesses(workers) as address:
             runs = [(args.segment, f"{workers} worker{'s' * (workers > 1)}")]
@@ -163,21 +194,28 @@ def main() -> None:
                 times[(workers, segment)] = took
                 print(
                     f"{label + ':':<24}{took:7.2f} s  {n_frames / took:6.1f} frames/s  "
-                    f"{took / plain:.2f}x plain  events {'identical' if same else 'DIFFER'}"
+                    f"{took / plain:.2f}x plain  events {'identical' if same else 'DIFFER'}",
+                    flush=True,
                 )
-    coarse, fine = times[(2, args.segment)], times[(2, args.segment / 4)]
-    n_coarse, n_fine = (max(1, int(args.seconds // s)) for s in (args.segment, args.segment / 4))
-    overhead = (fine - coarse) / (n_fine - n_coarse)
+            if workers == 2:
+                round_trip = task_round_trip(address)
+    whole, parts, n_parts = segment_cost(video, args.segment * 1000.0 / 4)
+    overhead = (parts - whole) / n_parts + round_trip
     chain = chain_fps(video)
     start = time.perf_counter()
     decoded = decode_only(video)
     floor = decoded / (time.perf_counter() - start)
-    print(f"per-segment overhead:   {overhead:+.3f} s ({n_coarse} -> {n_fine} segments on 2 workers)")
+    print(
+        f"per-segment overhead:   {overhead * 1000:6.1f} ms (decoding in {n_parts} segments {parts:.2f} s, whole "
+        f"{whole:.2f} s; a task's round trip {round_trip * 1000:.1f} ms)"
+    )
     print(f"per-video chain:        {chain:7.1f} frames/s (the part that runs in order)")
     print(f"decode-only floor:      {floor:7.1f} frames/s")
+    coarse = times[(2, args.segment)]
     rate = n_frames / coarse
     cameras, game = 20, 3 * 3600 * FPS
-    segment_frames = args.segment * FPS
+    segment_frames = SEGMENT_MS / 1000.0 * FPS  # a real run's default segments
+    print(f"one 3 h video's chain alone: {game / chain / 60:.1f} min (the floor of any number of machines)")
     for machines in (1, 4, 16, 64):
         projected = max(cameras * game / (machines * rate), game / chain)
         projected += cameras * game / segment_frames * max(overhead, 0.0) / (machines * 2)

@@ -21,9 +21,11 @@ from flashsync.atomic import check_output, remove_temporaries
 from flashsync.errors import FlashsyncError, InputError, ModelFileError
 
 EXAMPLES = {
-    "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv",
+    "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv\n"
+    "  flashsync detect /shared/game1/*.mp4 -o events.csv --scheduler tcp://scheduler:8786   (on a Dask cluster)",
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
-    "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
+    "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+    "  flashsync restamp detections/ --model sync.json -o restamped/   (a folder of Parquet files)",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
     "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
     "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
