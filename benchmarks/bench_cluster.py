@@ -21,7 +21,7 @@ The projection for N machines like this one, a game of C cameras x F frames each
     time ~ max(C F / (N r), F / chain) + C F / (segment frames) x overhead / (N W)
 
 with r the frames per second of one machine (the 2-worker run, conservative: one video),
-chain the chain's rate, segments of the default 120 s and W = 2 workers per machine:
+chain the chain's rate, segments of the default 60 s and W = 2 workers per machine:
 decoding scales with machines, each video's chain runs in order (the videos' chains in
 parallel, on the workers too).
 """

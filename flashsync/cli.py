@@ -544,7 +544,7 @@ def _detection_options(parser: argparse.ArgumentParser) -> None:
 
 
 #: Default --segment, s (flashsync.segments.SEGMENT_MS: the CLI does not import the detector to --help).
-SEGMENT_S = 120.0
+SEGMENT_S = 60.0
 
 
 def _cluster_options(args) -> dict:

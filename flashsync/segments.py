@@ -20,9 +20,11 @@ from flashsync.errors import InputError
 from flashsync.profiles import RECOPY, VideoInfo, cut_short, read_profiles, video_info
 from flashsync.timestamps import open_video
 
-#: Default length of a segment, ms: a few minutes, long against the cost of starting one
-#: (seeking, the decoder's first frames, a task on the cluster).
-SEGMENT_MS = 120_000.0
+#: Default length of a segment, ms: a minute is long against the cost of starting one
+#: (seeking, the decoder's first frames, a task on the cluster: 0.04-0.4 s measured by
+#: ``benchmarks/bench_cluster.py``, a few per cent of decoding a minute of 1080p), and an
+#: 8-minute video still gives two workers eight segments to share.
+SEGMENT_MS = 60_000.0
 
 
 @dataclass(frozen=True)
