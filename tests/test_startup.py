@@ -17,7 +17,8 @@ def imported_by(code: str) -> set[str]:
 
 @pytest.mark.parametrize("command", ["", "detect", "sync", "restamp", "diagnose"])
 def test_help_imports_nothing_heavy(command):
-    code = f"from flashsync.cli import main\ntry:\n    main([*{command.split()!r}, '--help'])\nexcept SystemExit:\n    pass"
+    arguments = [*command.split(), "--help"]
+    code = f"from flashsync.cli import main\ntry:\n    main({arguments!r})\nexcept SystemExit:\n    pass"
     assert imported_by(code) == set()
 
 
