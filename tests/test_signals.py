@@ -141,11 +141,11 @@ def test_sync_interrupted_after_the_model_says_the_model_was_written(synced_scen
 
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc to see when decoding starts")
 def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_scenario, tmp_path):
-    """SIGTERM while 45 videos decode (in threads, some seconds of work): exit 143 within a
+    """SIGTERM while 90 videos decode (in threads, ~30 s of work on a busy 2-core machine): exit 143 within a
     second or two, no output."""
     videos = tmp_path / "videos"
     videos.mkdir()
-    for copy in range(15):
+    for copy in range(30):
         for name in ("r.mp4", "f.mkv", "s.mp4"):
             (videos / f"{Path(name).stem}{copy}{Path(name).suffix}").write_bytes((synced_scenario / name).read_bytes())
     out = tmp_path / "out"
@@ -159,6 +159,6 @@ def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_sce
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 143, err
-    assert time.monotonic() - sent < 3
+    assert time.monotonic() - sent < 6  # a busy CI machine took 4.2 s; the whole run takes far longer
     assert last_line(err) == "flashsync sync: interrupted; no output written"
     assert not out.exists() and not temporaries(tmp_path)
