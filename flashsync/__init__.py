@@ -86,4 +86,4 @@ __all__ = [
 ]
 
 
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
+lazy_exports(__name__, _EXPORTS)

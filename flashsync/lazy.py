@@ -7,32 +7,39 @@ only the modules it uses (``flashsync --help`` starts in well under a second), w
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import sys
+import types
+from collections.abc import Mapping
 from importlib import import_module
 
 
-def lazy_exports(package: str, namespace: dict, exports: Mapping[str, str]) -> tuple[Callable, Callable]:
-    """A package's ``__getattr__`` and ``__dir__`` that import each export on first use.
+def lazy_exports(package: str, exports: Mapping[str, str]) -> None:
+    """Make the package ``package`` import each export on first use.
 
     Parameters
     ----------
-    package : the package's ``__name__``.
-    namespace : the package's ``globals()``; an export is cached there once imported.
+    package : the package's ``__name__`` (call this at the end of its ``__init__``).
     exports : each exported name and the module that defines it.
 
-    Returns
-    -------
-    (__getattr__, __dir__) to assign at the package's module level.
+    An export named like a submodule (``tracking_adapter.restamp``, the function, from
+    ``tracking_adapter/restamp.py``) stays the export when the submodule is imported, as it
+    did when ``__init__`` imported it eagerly.
     """
 
-    def __getattr__(name: str):
-        if name not in exports:
-            raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(import_module(exports[name]), name)
-        namespace[name] = value
-        return value
+    class LazyPackage(types.ModuleType):
+        def __getattr__(self, name: str):
+            if name not in exports:
+                raise AttributeError(f"module {package!r} has no attribute {name!r}")
+            value = getattr(import_module(exports[name]), name)
+            super().__setattr__(name, value)
+            return value
 
-    def __dir__() -> list[str]:
-        return sorted({*namespace, *exports})
+        def __setattr__(self, name: str, value) -> None:
+            if name in exports and getattr(value, "__name__", None) == f"{package}.{name}":
+                return  # the import system binding the submodule: the export keeps the name
+            super().__setattr__(name, value)
 
-    return __getattr__, __dir__
+        def __dir__(self) -> list[str]:
+            return sorted({*self.__dict__, *exports})
+
+    sys.modules[package].__class__ = LazyPackage

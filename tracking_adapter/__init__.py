@@ -48,4 +48,4 @@ __all__ = [
     "validate",
 ]
 
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
+lazy_exports(__name__, _EXPORTS)

@@ -69,4 +69,4 @@ __all__ = [
     "write_table",
 ]
 
-__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
+lazy_exports(__name__, _EXPORTS)
