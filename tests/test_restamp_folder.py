@@ -40,13 +40,21 @@ def test_each_partition_as_restamp_file_makes_it(dataset, tmp_path, model):  # n
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no scratch left
 
 
-def test_command_here_and_on_a_local_cluster(dataset, tmp_path, model, capsys):  # noqa: F811
+def test_command_here_and_on_a_cluster(dataset, tmp_path, model, capsys, local_cluster):  # noqa: F811
     save_model(model, tmp_path / "sync.json")
     code, _, err = run(capsys, "restamp", dataset, "--model", tmp_path / "sync.json")
     assert code == 1 and "names cameras that are not in" in err  # the unknown camera's row
     here = tmp_path / "dets.restamped"
     code, _, err = run(
-        capsys, "restamp", dataset, "--model", tmp_path / "sync.json", "-o", tmp_path / "c", "--scheduler", "local:1"
+        capsys,
+        "restamp",
+        dataset,
+        "--model",
+        tmp_path / "sync.json",
+        "-o",
+        tmp_path / "c",
+        "--scheduler",
+        local_cluster,
     )
     assert code == 1 and "7 rows, 5 stamped" in err
     for path in here.rglob("*.*"):
