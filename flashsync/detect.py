@@ -37,7 +37,7 @@ from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
 from flashsync.profiles import VideoInfo, read_profiles
 from flashsync.ramp import fit_pulse_edge
-from flashsync.recurrence import RecurrenceFilter, Stripe
+from flashsync.recurrence import ECHO_FRACTION, RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
 
@@ -188,28 +188,36 @@ class EventDetector:
         )
         self._lit_rows = (lit_start, lit_stop)
         segments = []
-        for sign in (1, -1) if peak > threshold and self._n_history >= MIN_BASELINE else ():
+        # an echo or a repeat of a band near the threshold is below it: bands down to the
+        # fraction of it that makes an echo are evidence of recurrence, and a band is compared
+        # with them as it stands at that level
+        searched = ECHO_FRACTION * threshold
+        shortest = max(self.settings.min_rows, self.height // 100)
+        for sign in (1, -1) if peak > searched and self._n_history >= MIN_BASELINE else ():
             signed = sign * change
-            for start, stop in _runs(signed > threshold, gap=2):
-                if stop - start < max(self.settings.min_rows, self.height // 100):
+            stripes = []
+            for start, stop in _runs(signed > searched, gap=2):
+                if stop - start >= shortest:
+                    level = sign * float(np.median(signed[start:stop]))
+                    stripes.append(Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop))
+                    self._recurrence.see(stripes[-1])  # whether or not it is light
+            for start, stop in _runs(signed > threshold, gap=2) if peak > threshold else ():
+                if stop - start < shortest or np.median(agree[start:stop]) < self.settings.agreement:
                     continue
-                level = sign * float(np.median(signed[start:stop]))
-                stripe = Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop)
-                self._recurrence.see(stripe)  # evidence of recurrence, whether or not it is light
-                if np.median(agree[start:stop]) >= self.settings.agreement:
-                    segments.append(
-                        _Segment(
-                            frame,
-                            t_frame_ms,
-                            signed,
-                            int(start),
-                            int(stop),
-                            sign,
-                            bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
-                            sigma,
-                            stripe,
-                        )
+                stripe = next(s for s in stripes if s.start <= start and stop <= s.stop)
+                segments.append(
+                    _Segment(
+                        frame,
+                        t_frame_ms,
+                        signed,
+                        int(start),
+                        int(stop),
+                        sign,
+                        bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
+                        sigma,
+                        stripe,
                     )
+                )
         self._remember(readout)
         self._consume(sorted(segments, key=lambda s: s.start), readout)
         self._number(self._recurrence.release(frame))

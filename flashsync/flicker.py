@@ -161,6 +161,7 @@ class FlickerRemover:
         self._fits: list[tuple[int, float, complex]] = []  # (frame, t_ms, fundamental)
         self._evidence = _Evidence()
         self._mean_phasor = 0j
+        self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
         for t_ms, profile, *key in frames:
@@ -243,7 +244,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, profile
+            return t_ms, self._divide(profile, np.zeros(len(profile)), key)
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -268,7 +269,28 @@ class FlickerRemover:
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
-        return t_ms, profile / np.exp(pattern).astype(np.float32)[:, None]
+        return t_ms, self._divide(profile, pattern, key)
+
+    def _divide(self, profile: np.ndarray, pattern: np.ndarray, key: bool) -> np.ndarray:
+        """``profile`` (shape (height, blocks)) with the log ``pattern`` (shape (height,))
+        divided out of its rows, except in the blocks that the codec copied from the last key
+        frame (the same value to the last bit: sensor noise never repeats): they hold the key
+        frame's light and get the key frame's correction.
+
+        Between key frames x264 predicts a frame from one at the same phase of a rolling
+        flicker (three frames back at 30 fps under 50 Hz mains), so flat rows follow the
+        pattern; the frames just after a key frame can only be predicted from it, at another
+        phase, and their flat blocks are copies of it, as are those of the frames predicted
+        from them, until the codec codes them again. Rows that follow the pattern in one
+        group of pictures hold the key frame's in the next: no row's share of the pattern
+        learned over the frames before can tell (5 % bands at rows that had followed it)."""
+        applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
+        if key:
+            self._key = (profile, applied)
+        elif self._key is not None and self._key[0].shape == profile.shape:
+            copied = profile == self._key[0]
+            applied[copied] = self._key[1][copied]
+        return profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
         """The flicker found (None: no rolling flicker), once the frames are all through.
