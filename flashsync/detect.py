@@ -36,7 +36,7 @@ from flashsync.errors import NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
-from flashsync.profiles import read_profiles
+from flashsync.profiles import VideoInfo, read_profiles
 from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge
 from flashsync.recurrence import ECHO_FRACTION, RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
@@ -613,32 +613,73 @@ def detect_video(
     """
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
-    directions = [False, True] if flipped is None else [flipped]
-    base = settings or DetectorSettings()
-    detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction)) for direction in directions]
-    times = []
-    remove_flicker = FlickerRemover(info.height)
-    for frame, (t_ms, profile) in enumerate(remove_flicker(profiles)):
-        times.append(t_ms)
-        for detector in detectors:
-            detector.push(frame, t_ms, profile)
+    detection = VideoDetection(info, flipped, settings)
+    for t_ms, profile, key in profiles:
+        detection.push(t_ms, profile, key)
         if update is not None:
             update(1)
-    frame_times = check_timestamps(np.asarray(times), str(info.path))
-    if len(frame_times) < 2:
-        raise NotEnoughDataError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
-    readings = {direction: detector.finish() for direction, detector in zip(directions, detectors)}
-    return CameraDetection(
-        info.camera,
-        info.path,
-        info.width,
-        info.height,
-        frame_times,
-        readings.get(False),
-        readings.get(True),
-        flipped=directions[0],
-        flicker=remove_flicker.estimate(),
-        n_recurring=detectors[0].n_recurring,
-        n_degenerate=detectors[0].n_degenerate,
-        exposure_rows=detectors[0].exposure_rows,
-    )
+    return detection.finish()
+
+
+class VideoDetection:
+    """One video's detection pass, fed its frames in order, in one go or in parts.
+
+    Everything the pass carries from frame to frame (the flicker model, each reading's
+    baseline, recurrence filter and event numbering) is in this object, which pickles: a
+    video decoded in segments on several machines is detected by handing it from one
+    segment to the next (:mod:`flashsync.cluster`), with the same events as in one go.
+
+    Parameters
+    ----------
+    info : the video's :class:`~flashsync.profiles.VideoInfo`.
+    flipped, settings : as for :func:`detect_video`.
+    """
+
+    def __init__(self, info: VideoInfo, flipped: bool | None = False, settings: DetectorSettings | None = None):
+        self.info = info
+        self.directions = [False, True] if flipped is None else [flipped]
+        base = settings or DetectorSettings()
+        self._detectors = [
+            EventDetector(info.camera, info.height, replace(base, flipped=direction)) for direction in self.directions
+        ]
+        self._remove_flicker = FlickerRemover(info.height)
+        self._times: list[float] = []
+
+    @property
+    def n_frames(self) -> int:
+        """Frames pushed so far."""
+        return self._remove_flicker.n_seen
+
+    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> None:
+        """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`)
+        and whether it is a key frame."""
+        self._detect(self._remove_flicker.push(t_ms, profile, key))
+
+    def finish(self) -> CameraDetection:
+        """The detection, once every frame is pushed."""
+        self._detect(self._remove_flicker.flush())
+        frame_times = check_timestamps(np.asarray(self._times), str(self.info.path))
+        if len(frame_times) < 2:
+            raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
+        readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
+        return CameraDetection(
+            self.info.camera,
+            self.info.path,
+            self.info.width,
+            self.info.height,
+            frame_times,
+            readings.get(False),
+            readings.get(True),
+            flipped=self.directions[0],
+            flicker=self._remove_flicker.estimate(),
+            n_recurring=self._detectors[0].n_recurring,
+            n_degenerate=self._detectors[0].n_degenerate,
+            exposure_rows=self._detectors[0].exposure_rows,
+        )
+
+    def _detect(self, frames: list[tuple[float, np.ndarray]]) -> None:
+        for t_ms, profile in frames:
+            frame = len(self._times)
+            self._times.append(t_ms)
+            for detector in self._detectors:
+                detector.push(frame, t_ms, profile)

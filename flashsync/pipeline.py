@@ -41,6 +41,7 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.segments import SEGMENT_MS
 from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
@@ -56,6 +57,8 @@ def detect_videos(
     settings: DetectorSettings | None = None,
     progress: Callable[[str, int], Callable[[int], None]] | None = None,
     timestamps: dict[str, Path] | None = None,
+    scheduler: str | None = None,
+    segment_ms: float = SEGMENT_MS,
 ) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
@@ -69,9 +72,12 @@ def detect_videos(
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
         per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
+    scheduler : ``tcp://HOST:PORT`` of a Dask scheduler or ``local:N`` (N worker processes):
+        the videos are decoded there in segments of ``segment_ms`` (ms), with the same
+        events (:mod:`flashsync.cluster`; needs the ``cluster`` extra).
 
-    Videos are decoded in parallel threads, one per core (decoding and the compiled row
-    kernel release the GIL).
+    Without a scheduler, videos are decoded in parallel threads, one per core (decoding and
+    the compiled row kernel release the GIL).
     """
     paths = [Path(p) for p in paths]
     stems = [p.stem for p in paths]
@@ -100,9 +106,10 @@ def detect_videos(
 
         return step
 
-    def detect(path: Path) -> CameraDetection:
-        direction = True if path.stem in flipped else (None if estimate_readout else False)
-        detection = detect_video(path, flipped=direction, settings=settings, progress=watched)
+    def direction(path: Path) -> bool | None:
+        return True if path.stem in flipped else (None if estimate_readout else False)
+
+    def retimed(path: Path, detection: CameraDetection) -> CameraDetection:
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
@@ -111,6 +118,15 @@ def detect_videos(
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
             )
         return detection.retimed(stamps[path.stem])
+
+    if scheduler is not None:
+        from flashsync.cluster import detect_on_cluster
+
+        found = detect_on_cluster(scheduler, paths, [direction(p) for p in paths], settings, progress, segment_ms)
+        return [retimed(path, detection) for path, detection in zip(paths, found)]
+
+    def detect(path: Path) -> CameraDetection:
+        return retimed(path, detect_video(path, flipped=direction(path), settings=settings, progress=watched))
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         try:
