@@ -161,23 +161,37 @@ class FlickerRemover:
         self._fits: list[tuple[int, float, complex]] = []  # (frame, t_ms, fundamental)
         self._evidence = _Evidence()
         self._mean_phasor = 0j
+        self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
-        settings = self.settings
         for t_ms, profile, *key in frames:
-            profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
-            self._queue.append((t_ms, profile, bool(key and key[0])))
-            if self._n_seen % settings.reservoir_step == 0:
-                self._reservoir.append((t_ms, profile))
-            self._n_seen += 1
-            if self._lock is None and self._n_seen >= self._next_attempt:
-                self._learn()
-            if len(self._queue) > settings.lookahead:
-                yield self._correct(*self._queue.popleft())
+            yield from self.push(t_ms, profile, bool(key and key[0]))
+        yield from self.flush()
+
+    @property
+    def n_seen(self) -> int:
+        """Frames taken so far."""
+        return self._n_seen
+
+    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> list[tuple[float, np.ndarray]]:
+        """Take one frame (``key``: a key frame); return the frames it lets out, corrected
+        (none while the lookahead fills, then one). The state between calls is all in the
+        object, which pickles: a video can be fed in parts, on different machines."""
+        settings = self.settings
+        profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
+        self._queue.append((t_ms, profile, key))
+        if self._n_seen % settings.reservoir_step == 0:
+            self._reservoir.append((t_ms, profile))
+        self._n_seen += 1
+        if self._lock is None and self._n_seen >= self._next_attempt:
+            self._learn()
+        return [self._correct(*self._queue.popleft())] if len(self._queue) > settings.lookahead else []
+
+    def flush(self) -> list[tuple[float, np.ndarray]]:
+        """The frames still held back, corrected: call once after the last :meth:`push`."""
         if self._lock is None and self._attempts == 0 and len(self._queue) >= 8:
             self._learn()
-        while self._queue:
-            yield self._correct(*self._queue.popleft())
+        return [self._correct(*self._queue.popleft()) for _ in range(len(self._queue))]
 
     def _learn(self) -> None:
         """Look for a rolling flicker in the held-back and reservoir frames; lock onto it.
@@ -230,7 +244,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, profile
+            return t_ms, self._divide(profile, np.zeros(len(profile)), key)
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -255,7 +269,28 @@ class FlickerRemover:
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
-        return t_ms, profile / np.exp(pattern).astype(np.float32)[:, None]
+        return t_ms, self._divide(profile, pattern, key)
+
+    def _divide(self, profile: np.ndarray, pattern: np.ndarray, key: bool) -> np.ndarray:
+        """``profile`` (shape (height, blocks)) with the log ``pattern`` (shape (height,))
+        divided out of its rows, except in the blocks that the codec copied from the last key
+        frame (the same value to the last bit: sensor noise never repeats): they hold the key
+        frame's light and get the key frame's correction.
+
+        Between key frames x264 predicts a frame from one at the same phase of a rolling
+        flicker (three frames back at 30 fps under 50 Hz mains), so flat rows follow the
+        pattern; the frames just after a key frame can only be predicted from it, at another
+        phase, and their flat blocks are copies of it, as are those of the frames predicted
+        from them, until the codec codes them again. Rows that follow the pattern in one
+        group of pictures hold the key frame's in the next: no row's share of the pattern
+        learned over the frames before can tell (5 % bands at rows that had followed it)."""
+        applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
+        if key:
+            self._key = (profile, applied)
+        elif self._key is not None and self._key[0].shape == profile.shape:
+            copied = profile == self._key[0]
+            applied[copied] = self._key[1][copied]
+        return profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
         """The flicker found (None: no rolling flicker), once the frames are all through.

@@ -41,6 +41,7 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.segments import SEGMENT_MS
 from flashsync.solve import CameraSolution, Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
@@ -56,6 +57,8 @@ def detect_videos(
     settings: DetectorSettings | None = None,
     progress: Callable[[str, int], Callable[[int], None]] | None = None,
     timestamps: dict[str, Path] | None = None,
+    scheduler: str | None = None,
+    segment_ms: float = SEGMENT_MS,
 ) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
@@ -69,9 +72,12 @@ def detect_videos(
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
         per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
+    scheduler : ``tcp://HOST:PORT`` of a Dask scheduler or ``local:N`` (N worker processes):
+        the videos are decoded there in segments of ``segment_ms`` (ms), with the same
+        events (:mod:`flashsync.cluster`; needs the ``cluster`` extra).
 
-    Videos are decoded in parallel threads, one per core (decoding and the compiled row
-    kernel release the GIL).
+    Without a scheduler, videos are decoded in parallel threads, one per core (decoding and
+    the compiled row kernel release the GIL).
     """
     paths = [Path(p) for p in paths]
     stems = [p.stem for p in paths]
@@ -100,9 +106,10 @@ def detect_videos(
 
         return step
 
-    def detect(path: Path) -> CameraDetection:
-        direction = True if path.stem in flipped else (None if estimate_readout else False)
-        detection = detect_video(path, flipped=direction, settings=settings, progress=watched)
+    def direction(path: Path) -> bool | None:
+        return True if path.stem in flipped else (None if estimate_readout else False)
+
+    def retimed(path: Path, detection: CameraDetection) -> CameraDetection:
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
@@ -111,6 +118,15 @@ def detect_videos(
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
             )
         return detection.retimed(stamps[path.stem])
+
+    if scheduler is not None:
+        from flashsync.cluster import detect_on_cluster
+
+        found = detect_on_cluster(scheduler, paths, [direction(p) for p in paths], settings, progress, segment_ms)
+        return [retimed(path, detection) for path, detection in zip(paths, found)]
+
+    def detect(path: Path) -> CameraDetection:
+        return retimed(path, detect_video(path, flipped=direction(path), settings=settings, progress=watched))
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         try:
@@ -521,7 +537,7 @@ class _Attempt:
                 s.row_time_ms,
                 d.flipped,
                 _with_edge_bias(s),
-                _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                _exposure_ms(d, self.matches.event[self.matches.camera_index == index], s.alpha, s.row_time_ms),
                 str(d.video),
                 s.knots_ms,
                 s.warp_ms,
@@ -692,17 +708,37 @@ def _with_edge_bias(camera: CameraSolution) -> np.ndarray:
     return covariance
 
 
-def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
+def _exposure_ms(detection: CameraDetection, matched: np.ndarray, alpha: float, row_time_ms: float) -> float | None:
     """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
     where the bands give no positive duration: a time per row the events could not tell).
 
-    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
-    flash are the ones whose exposure window holds it), so its duration is the exposure.
+    The detector's exposure in rows (:attr:`~flashsync.detect.CameraDetection.exposure_rows`,
+    shared by the camera's bands within one frame) times the time per row where it has one.
+    Else the median band: a band's trailing edge comes one exposure after its leading edge
+    (the detector fits the pulse integrated over the exposure, :mod:`flashsync.ramp`).
+    Only bands matched to a flash (``matched``: event numbers) count there: a player or a
+    codec echo makes bands of any length. Bands within one frame are used where there are
+    any: a band split across frames also carries the frame gap and the hidden rows.
     """
-    mine = durations.camera == camera
-    if not mine.any():
+    if detection.exposure_rows is not None:
+        exposure = detection.exposure_rows * row_time_ms
+        return exposure if exposure > 0 else None
+    events = detection.events
+    bands = events.bands()
+    first = bands.first_edges()
+    bands = bands.take(
+        bands.complete
+        & (events.band[first] == Band.PULSE)
+        & ~events.has_flag(Flag.SATURATED)[first]
+        & np.isin(bands.event, matched)
+    )
+    if not len(bands):
         return None
-    exposure = float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    q = _readout_rows(detection, events)
+    dt = alpha * (events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
+    duration = dt + (q[bands.trailing] - q[bands.leading]) * row_time_ms
+    whole = dt == 0
+    exposure = float(np.median(duration[whole] if whole.any() else duration))
     return exposure if exposure > 0 else None
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from flashsync.detect import detect_video
+from flashsync.detect import DetectorSettings, EventDetector, detect_video
 from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, Scenario, render_scenario
 
@@ -193,3 +193,22 @@ def test_weak_flashes_at_short_exposure_among_players_under_flicker(tmp_path):
     true_ms = np.array([f["half_rise_global_ms"] for f in truth.flashes])
     assert len(events) == len(flashes), events
     assert np.abs(edge_ms - true_ms).max() < 1.0
+
+
+@pytest.mark.parametrize("repeat", [0.04, 0.0])
+def test_a_band_whose_repeats_stay_under_the_threshold_goes(repeat):
+    """A 5 % band over a 4.5 % threshold that comes back at 80 % of its strength every third
+    frame at the same rows (a codec that codes frozen rows again, at the phase of a rolling
+    flicker their group of frames follows from then on) recurs: its repeats are below the
+    threshold, but not below the fraction of it that makes an echo. Alone, it is reported."""
+    rng = np.random.default_rng(1)
+    scene = rng.uniform(0.3, 0.6, (120, 8)).astype(np.float32)
+    detector = EventDetector("cam", 120, DetectorSettings(min_change=0.045))
+    for frame in range(40):
+        profile = scene * (1.0 + 0.001 * rng.standard_normal(scene.shape)).astype(np.float32)
+        if frame == 20 or (frame > 20 and frame % 3 == 2):
+            profile[50:70] *= 1.05 if frame == 20 else 1.0 + repeat
+        detector.push(frame, frame * 1000.0 / 30.0, profile)
+    events = detector.finish()
+    assert len(events) == (0 if repeat else 2), events_to_frame(events)
+    assert detector.n_recurring == (1 if repeat else 0)
