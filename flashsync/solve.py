@@ -167,11 +167,12 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     weights = inlier.astype(np.float64)
     x = system.solve(weights)
     scale = np.full(system.n_equations, np.nan)
+    n_events = len(system.flash_index)
     for _ in range(GROUP_SCALE_ROUNDS):
         scale = system.group_scales(x, weights, inlier)
+        scale[:n_events] = np.maximum(scale[:n_events], _edge_floor_ms(system, x, n_cameras)[system.group[:n_events]])
         weights = inlier * (system.event_sigma_ms / scale) ** 2
         x = system.solve(weights)
-    n_events = len(system.flash_index)
     edge_sigma = np.full(n_cameras, np.nan)
     edge_sigma[system.group[:n_events]] = scale[:n_events]
     residual = system.residuals(x)
@@ -191,6 +192,17 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
 
 
+def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray:
+    """Each camera's least edge noise, ms (shape (n_cameras,)): :data:`EDGE_FLOOR_ROWS` of its
+    time per row. A camera of a few events fits them almost exactly and would claim a noise
+    no band edge has."""
+    columns = np.array([system.param_columns[c][2] for c in range(n_cameras)])
+    return EDGE_FLOOR_ROWS * np.where(columns >= 0, np.abs(x[np.maximum(columns, 0)]), 0.0)
+
+
+#: The least noise of a band edge, rows: clean edges are located to 0.10-0.16 rows RMS
+#: (`benchmarks/bench_edges.py`, README "Edge precision").
+EDGE_FLOOR_ROWS = 0.15
 #: Rounds of reweighting by the groups' noise scales (each camera's events, each camera's
 #: band durations): their edges differ (exposure, pulse, size, codec), by a factor of ten.
 GROUP_SCALE_ROUNDS = 3
