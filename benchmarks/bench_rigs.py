@@ -4,7 +4,8 @@ Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--durati
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
-into a temporary folder (removed afterwards) and run as a new user would, with no options,
+into a temporary folder (removed afterwards; with ``--keep DIR`` into ``DIR/<rig>``, and a
+rig kept there with the same scenario is reused, not rendered again) and run as a new user would, with no options,
 exactly as ``flashsync sync`` does: ``detect_videos(videos)`` (both ways up) then
 ``synchronize(detections)``. Every camera is measured against the truth over all frames and
 every 8th row (`flashsync.evaluate.camera_accuracy`): sync error (RMS, max), exposure
@@ -30,6 +31,7 @@ import pandas as pd
 
 from flashsync import CameraDetection, detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
+from flashsync.io.truth import load_ground_truth
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import RECIPES, random_rig, recipe
 from flashsync.simulation.truth import CameraTruth
@@ -86,15 +88,28 @@ def shared_flashes(truth) -> dict[str, int]:
     return {name: len({k for k in mine if any(k in seen[o] for o in seen if o != name)}) for name, mine in seen.items()}
 
 
+def rendered(scenario, folder: Path):
+    """The truth of `scenario` rendered into `folder`: an earlier rendering of exactly this
+    scenario kept there (same name, seed, size cap and duration) or a new one."""
+    try:
+        truth = load_ground_truth(folder)
+        if truth.scenario == scenario.to_dict():
+            return truth
+    except Exception:  # noqa: BLE001 - nothing usable kept: render
+        pass
+    return render_scenario(scenario, folder)
+
+
 def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
-    """Render, detect, sync and measure one rig; returns its summary and per-camera table."""
+    """Render (or reuse a kept rendering), detect, sync and measure one rig; returns its
+    summary and per-camera table."""
     info = describe(scenario)
     stage = "render"
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="flashsync-rig-") as tmp:
         folder = keep / scenario.name if keep else Path(tmp)
         try:
-            truth = render_scenario(scenario, folder)
+            truth = rendered(scenario, folder) if keep else render_scenario(scenario, folder)
             info["render_s"] = time.perf_counter() - start
             stage = "detect"
             videos = [folder / truth.cameras[c.name].file for c in scenario.cameras]
@@ -269,7 +284,11 @@ def main() -> None:
         help="length of recipe rigs, s (default: each recipe's own, 15 min for long-pair)",
     )
     parser.add_argument("--recipe-seed", type=int, default=0)
-    parser.add_argument("--keep", type=Path, help="keep the rendered rigs in this folder")
+    parser.add_argument(
+        "--keep",
+        type=Path,
+        help="keep the rendered rigs in this folder; a rig kept there with the same scenario is not rendered again",
+    )
     parser.add_argument("--json", type=Path, help="write every rig and camera result here")
     parser.add_argument(
         "--summarise",

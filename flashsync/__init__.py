@@ -15,17 +15,42 @@ Every file format has its ``load_*`` / ``save_*`` in :mod:`flashsync.io`; the di
 workflow is :mod:`flashsync.diagnose`; docs/architecture.md maps the modules.
 """
 
-from flashsync.detect import CameraDetection, DetectorSettings, EventDetector, detect_video
-from flashsync.errors import FlashsyncError, InputError, ModelFileError, NotEnoughDataError
-from flashsync.events import Band, Bands, Edge, Events, Flag
-from flashsync.flicker import Flicker, FlickerRemover
-from flashsync.frame_clock import FrameClock
-from flashsync.io.model_file import load_model, save_model
-from flashsync.match import PairAlignment
-from flashsync.model import CameraClock, SyncModel
-from flashsync.montage import MontageSummary, write_montage
-from flashsync.pipeline import SyncReport, all_events, detect_videos, solve_pairs, synchronize
-from flashsync.ticks import frame_table, model_ticks_ms
+from flashsync.lazy import lazy_exports
+
+#: Each exported name and the module that defines it, imported on first use
+#: (:mod:`flashsync.lazy`): a command loads only the modules it needs.
+_EXPORTS = {
+    "Band": "flashsync.events",
+    "Bands": "flashsync.events",
+    "CameraClock": "flashsync.model",
+    "CameraDetection": "flashsync.detect",
+    "DetectorSettings": "flashsync.detect",
+    "Edge": "flashsync.events",
+    "EventDetector": "flashsync.detect",
+    "Events": "flashsync.events",
+    "Flag": "flashsync.events",
+    "FlashsyncError": "flashsync.errors",
+    "Flicker": "flashsync.flicker",
+    "FlickerRemover": "flashsync.flicker",
+    "FrameClock": "flashsync.frame_clock",
+    "InputError": "flashsync.errors",
+    "ModelFileError": "flashsync.errors",
+    "MontageSummary": "flashsync.montage",
+    "NotEnoughDataError": "flashsync.errors",
+    "PairAlignment": "flashsync.match",
+    "SyncModel": "flashsync.model",
+    "SyncReport": "flashsync.pipeline",
+    "all_events": "flashsync.pipeline",
+    "detect_video": "flashsync.detect",
+    "detect_videos": "flashsync.pipeline",
+    "frame_table": "flashsync.ticks",
+    "load_model": "flashsync.io.model_file",
+    "model_ticks_ms": "flashsync.ticks",
+    "save_model": "flashsync.io.model_file",
+    "solve_pairs": "flashsync.pipeline",
+    "synchronize": "flashsync.pipeline",
+    "write_montage": "flashsync.montage",
+}
 
 __all__ = [
     "Band",
@@ -59,3 +84,6 @@ __all__ = [
     "synchronize",
     "write_montage",
 ]
+
+
+lazy_exports(__name__, _EXPORTS)

@@ -21,9 +21,11 @@ from flashsync.atomic import check_output, remove_temporaries
 from flashsync.errors import FlashsyncError, InputError, ModelFileError
 
 EXAMPLES = {
-    "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv",
+    "detect": "flashsync detect cam1.mp4 cam2.mkv -o events.csv\n"
+    "  flashsync detect /shared/game1/*.mp4 -o events.csv --scheduler tcp://scheduler:8786   (on a Dask cluster)",
     "sync": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json",
-    "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv",
+    "restamp": "flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
+    "  flashsync restamp detections/ --model sync.json -o restamped/   (a folder of Parquet files)",
     "validate": "flashsync validate restamped.csv --model sync.json --homographies homographies.json",
     "view": "flashsync sync cam1.mp4 cam2.mkv cam3.mp4 -o sync.json --events events.csv\n"
     "  flashsync restamp detections.csv --model sync.json -o restamped.csv\n"
@@ -51,6 +53,7 @@ OPTIONS = {
     "reference": "--reference",
     "row_times": "--row-time",
     "samples": "--samples",
+    "scheduler": "--scheduler",
     "start_ms": "--start-ms",
     "timestamps": "--timestamps",
 }
@@ -264,12 +267,27 @@ def _parser() -> argparse.ArgumentParser:
     _detection_options(sync)
 
     restamp = command("restamp", "Add t_global_ms to each row of a detections table.", _run_restamp)
-    restamp.add_argument("detections", type=Path, metavar="DETECTIONS")
+    restamp.add_argument(
+        "detections",
+        type=Path,
+        metavar="DETECTIONS",
+        help="a table (.csv, .parquet, MOTChallenge .txt) or a folder of .parquet/.csv tables (a partitioned dataset)",
+    )
     restamp.add_argument(
         "--model", type=Path, default=Path("sync.json"), help="model file (default: sync.json in the current folder)"
     )
     restamp.add_argument(
-        "-o", "--output", type=Path, help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv)"
+        "-o",
+        "--output",
+        type=Path,
+        help="output table, .csv or .parquet (default: DETECTIONS.restamped.csv); for a folder, a new folder "
+        "with the same files (default: DETECTIONS.restamped)",
+    )
+    restamp.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with a folder: re-stamp its tables on a Dask cluster, tcp://HOST:PORT or local:N "
+        "(its workers see both folders by the same paths; needs flashsync[cluster])",
     )
     restamp.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
     restamp.add_argument(
@@ -517,6 +535,35 @@ def _detection_options(parser: argparse.ArgumentParser) -> None:
         help="frame timestamps of a camera from a CSV (column t_ms, or rtp for 90 kHz "
         "RTP stamps; one row per frame) instead of the container's; repeatable",
     )
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="decode on a Dask cluster: tcp://HOST:PORT of a running scheduler (its workers read the videos "
+        "by the same paths), or local:N for N worker processes here; same events (needs flashsync[cluster])",
+    )
+    parser.add_argument(
+        "--segment",
+        type=float,
+        default=SEGMENT_S,
+        metavar="SECONDS",
+        help=f"with --scheduler: videos are split at key frames into segments this long (default {SEGMENT_S:g})",
+    )
+
+
+#: Default --segment, s (flashsync.segments.SEGMENT_MS: the CLI does not import the detector to --help).
+SEGMENT_S = 60.0
+
+
+def _cluster_options(args) -> dict:
+    """detect_videos' scheduler and segment_ms from --scheduler and --segment."""
+    if args.scheduler is None:
+        return {}
+    from flashsync.cluster import check_scheduler
+
+    check_scheduler(args.scheduler)
+    if not (math.isfinite(args.segment) and args.segment > 0):
+        raise InputError(f"--segment {args.segment:g}: the value must be a positive, finite number of seconds")
+    return {"scheduler": args.scheduler, "segment_ms": args.segment * 1000.0}
 
 
 def _timestamp_files(values: list[str]) -> dict[str, Path]:
@@ -556,6 +603,7 @@ def _run_detect(args) -> None:
         estimate_readout=False,
         progress=_progress,
         timestamps=timestamps,
+        **_cluster_options(args),
     )
     save_events(all_events(detections), args.output)
     _PLAN.did(args.output)
@@ -594,7 +642,9 @@ def _run_sync(args) -> None:
     planned = [(str(path), "written") for path in (args.events, args.output) if path]
     planned += [("the --pairwise table", "printed")] if args.pairwise else []
     _PLAN.outputs(*planned, *((str(path), "written") for path in (args.json, args.rrd) if path))
-    detections = detect_videos(args.videos, args.flipped, progress=_progress, timestamps=timestamps)
+    detections = detect_videos(
+        args.videos, args.flipped, progress=_progress, timestamps=timestamps, **_cluster_options(args)
+    )
     for detection in detections:
         for note in detection_notes(detection):
             print(f"flashsync sync: {note}", file=sys.stderr)
@@ -680,20 +730,26 @@ def _load_model(path: Path):
 
 
 def _run_restamp(args) -> int:
-    from tracking_adapter.restamp import format_summary, restamp_file
+    from tracking_adapter.restamp import format_summary, restamp_file, restamp_folder
 
-    output = args.output or args.detections.with_suffix(".restamped.csv")
+    folder = args.detections.is_dir()
+    output = args.output or args.detections.with_suffix(".restamped" if folder else ".restamped.csv")
     exposures = _per_camera_ms("--exposure", args.exposure)
-    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output})
+    if args.scheduler is not None and not folder:
+        raise InputError(f"--scheduler {args.scheduler}: re-stamps a folder of tables; {args.detections} is a file")
+    if args.scheduler is not None:
+        from flashsync.cluster import check_scheduler
+
+        check_scheduler(args.scheduler)
+    if folder and args.camera:
+        raise InputError(f"--camera {args.camera}: names the camera of a MOTChallenge file, not of a folder")
+    _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output}, ["-o"] if folder else [])
     model = _load_model(args.model)
-    summary = restamp_file(
-        args.detections,
-        output,
-        model,
-        camera=args.camera,
-        exposure_ms=exposures,
-        with_std=args.std,
-    )
+    options = {"exposure_ms": exposures, "with_std": args.std}
+    if folder:
+        summary = restamp_folder(args.detections, output, model, scheduler=args.scheduler, **options)
+    else:
+        summary = restamp_file(args.detections, output, model, camera=args.camera, **options)
     _PLAN.did(output)
     print(format_summary(summary), file=sys.stderr)
     if "unknown camera" in summary.failed:
@@ -829,6 +885,7 @@ def _run_diagnose(args) -> None:
             estimate_readout=False,
             progress=_progress,
             timestamps=timestamps,
+            **_cluster_options(args),
         ),
         args.reference,
     )

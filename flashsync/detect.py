@@ -6,9 +6,10 @@ profiles, so one or two flashed frames do not move it) as a relative change
 gives a flat plateau whatever the scene's texture, and a player changes only a few blocks.
 Rows over a noise-adaptive threshold form bands. A band's leading edge (first affected row
 in readout order) is where the change reaches half of the band's local plateau, refined to
-a fraction of a row by fitting the flash's ramp, blurred by the codec, to the rows around
-it (:mod:`flashsync.ramp`): the same instant of the flash in every camera, whatever its
-gain or scene.
+a fraction of a row by fitting the flash's pulse, integrated over the exposure and blurred
+by the codec, to the whole band where it lies in one frame, else to the rows around the
+edge (:mod:`flashsync.ramp`): the row whose exposure ended when the flash had given half
+its light, the same instant in every camera, whatever its gain, scene or exposure.
 
 A band that reaches the last row continues in the next frame (one event, flagged
 ``split``); a band that starts at row 0 with nothing open before it had its leading edge in
@@ -35,8 +36,8 @@ from flashsync.errors import NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
-from flashsync.profiles import read_profiles
-from flashsync.ramp import fit_pulse_edge
+from flashsync.profiles import VideoInfo, read_profiles
+from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge
 from flashsync.recurrence import ECHO_FRACTION, RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
@@ -156,6 +157,8 @@ class EventDetector:
         self._global_frames = 0
         self._n_events = 0
         self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
+        self._whole: list[BandFit] = []  # the bands fitted whole that passed the recurrence filter
+        self.exposure_rows: float | None = None
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
 
@@ -229,11 +232,15 @@ class EventDetector:
         self._n_history = min(self._n_history + 1, len(self._history))
 
     def finish(self) -> Events:
-        """Close a band still open at the end of the video; return all the events' edges."""
+        """Close a band still open at the end of the video; return all the events' edges.
+        Sets :attr:`exposure_rows`: the exposure, readout rows, that the bands fitted whole
+        share (:func:`~flashsync.ramp.common_width`; one band alone tells a short exposure
+        from the pulse's decay only to a row or two), or None with fewer than three."""
         if self._open is not None:
             self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
         self._number(self._recurrence.release())
+        self.exposure_rows = common_width(self._whole)
         return Events.from_columns(*zip(*self._edges)) if self._edges else Events.concat([])
 
     @property
@@ -241,9 +248,12 @@ class EventDetector:
         """Bands dropped because they recur at the same rows (:mod:`flashsync.recurrence`)."""
         return self._recurrence.dropped
 
-    def _number(self, released: list[list[tuple]]) -> None:
-        """Number the events that passed the recurrence filter and keep their edges."""
-        for edges in released:
+    def _number(self, released: list[tuple[list[tuple], BandFit | None]]) -> None:
+        """Number the events that passed the recurrence filter and keep their edges (and
+        the fits of the bands fitted whole)."""
+        for edges, whole in released:
+            if whole is not None:
+                self._whole.append(whole)
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
             self._n_events += 1
 
@@ -283,10 +293,13 @@ class EventDetector:
         self._global_frames = 0
 
     def _emit(self, event: _Event, kind: Band, trailing_visible: bool = True) -> None:
-        """Locate the edges of a finished band (:func:`_local_edge`) and hold them for the
-        recurrence filter; a band that darkens rows without staying dark (a passing shadow)
-        is not an event, and a degenerate one (no positive plateau to fit an edge on) is
-        dropped and counted in :attr:`n_degenerate`."""
+        """Locate the edges of a finished band (:func:`_local_edge`; a band in one frame is
+        then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
+        exposure apart and at the flash's half-light instant even where the exposure is
+        shorter than the pulse) and hold them for the recurrence filter; a band that darkens
+        rows without staying dark (a passing shadow) is not an event, and a degenerate one
+        (no positive plateau to fit an edge on) is dropped and counted in
+        :attr:`n_degenerate`."""
         first, last = event.segments[0], event.segments[-1]
         if kind is Band.PULSE and first.sign < 0:
             return
@@ -299,6 +312,10 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
+        whole = None
+        if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
+            whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
+            leading, trailing = (whole.leading, whole.trailing) if whole is not None else (leading, trailing)
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
@@ -323,7 +340,7 @@ class EventDetector:
                 )
             )
         stripes = [segment.stripe for segment in event.segments]
-        self._recurrence.hold(stripes, first.sign * plateau, found, checked=kind is Band.PULSE)
+        self._recurrence.hold(stripes, first.sign * plateau, (found, whole), checked=kind is Band.PULSE)
 
 
 @njit
@@ -428,10 +445,14 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
 
     The edge is the half-rise point for a pulse, the foot of the ramp for a step.
     Brightness, saturation and scene vary along a band, so the level is the band's local
-    plateau: the median change of ``window`` rows that start where the ramp has settled, five
-    times the 10 %-to-50 % rise length past the edge (an exponential ramp is then within 3 %
-    of its plateau). A pulse's half-rise point marks the same instant in every camera. A step
-    ramps linearly over one exposure, so its half-rise point moves with the exposure; its
+    plateau: the median change of ``window`` rows that start where the ramp has settled: on a
+    leading edge five times the 10 %-to-50 % rise length past the edge (an exponential ramp
+    is then within 3 % of its plateau), on a trailing edge twice that length before it (a
+    falling ramp leaves its plateau steeply and ends in the pulse's long tail: five times
+    that length reached back across a short band into its leading ramp and halved the
+    level, putting the trailing edge of a 1 ms xenon pulse a whole decay late). A pulse's
+    half-rise point marks the same instant in every camera. A step ramps linearly over one
+    exposure, so its half-rise point moves with the exposure; its
     foot (half-rise minus the 25 %-to-75 % length) is the row whose exposure ended at the
     switch. Returns (None, nan) where the edge is not visible, (nan, nan) where the band is
     degenerate (its local plateau is not positive: nothing to locate an edge on).
@@ -447,8 +468,8 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
         if row > foot:
             settle = min(int(np.ceil(row + 5 * (row - foot))), segment.stop - window)
             inside = segment.change[max(settle, int(row) + 1) : settle + window]
-        else:
-            settle = max(int(row + 5 * (row - foot)), segment.start + window)
+        else:  # a falling ramp is steep at its top: its plateau ends just before the fall
+            settle = max(int(row + 2 * (row - foot)), segment.start + window)
             inside = segment.change[settle - window : min(settle, int(row))]
         if not np.isfinite(inside).any():
             break
@@ -525,6 +546,9 @@ class CameraDetection:
     n_recurring, n_degenerate : int
         Bands dropped as recurring at the same rows (:mod:`flashsync.recurrence`) and as
         degenerate (no plateau to fit an edge on), in the first reading.
+    exposure_rows : float or None
+        The exposure in readout rows that the camera's bands within one frame share
+        (:attr:`EventDetector.exposure_rows`); None where fewer than three were fitted.
     """
 
     camera: str
@@ -538,6 +562,7 @@ class CameraDetection:
     flicker: Flicker | None = None
     n_recurring: int = 0
     n_degenerate: int = 0
+    exposure_rows: float | None = None
 
     @property
     def events(self) -> Events:
@@ -588,31 +613,73 @@ def detect_video(
     """
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
-    directions = [False, True] if flipped is None else [flipped]
-    base = settings or DetectorSettings()
-    detectors = [EventDetector(info.camera, info.height, replace(base, flipped=direction)) for direction in directions]
-    times = []
-    remove_flicker = FlickerRemover(info.height)
-    for frame, (t_ms, profile) in enumerate(remove_flicker(profiles)):
-        times.append(t_ms)
-        for detector in detectors:
-            detector.push(frame, t_ms, profile)
+    detection = VideoDetection(info, flipped, settings)
+    for t_ms, profile, key in profiles:
+        detection.push(t_ms, profile, key)
         if update is not None:
             update(1)
-    frame_times = check_timestamps(np.asarray(times), str(info.path))
-    if len(frame_times) < 2:
-        raise NotEnoughDataError(f"{info.path}: only {len(frame_times)} frame decoded; give a longer video")
-    readings = {direction: detector.finish() for direction, detector in zip(directions, detectors)}
-    return CameraDetection(
-        info.camera,
-        info.path,
-        info.width,
-        info.height,
-        frame_times,
-        readings.get(False),
-        readings.get(True),
-        flipped=directions[0],
-        flicker=remove_flicker.estimate(),
-        n_recurring=detectors[0].n_recurring,
-        n_degenerate=detectors[0].n_degenerate,
-    )
+    return detection.finish()
+
+
+class VideoDetection:
+    """One video's detection pass, fed its frames in order, in one go or in parts.
+
+    Everything the pass carries from frame to frame (the flicker model, each reading's
+    baseline, recurrence filter and event numbering) is in this object, which pickles: a
+    video decoded in segments on several machines is detected by handing it from one
+    segment to the next (:mod:`flashsync.cluster`), with the same events as in one go.
+
+    Parameters
+    ----------
+    info : the video's :class:`~flashsync.profiles.VideoInfo`.
+    flipped, settings : as for :func:`detect_video`.
+    """
+
+    def __init__(self, info: VideoInfo, flipped: bool | None = False, settings: DetectorSettings | None = None):
+        self.info = info
+        self.directions = [False, True] if flipped is None else [flipped]
+        base = settings or DetectorSettings()
+        self._detectors = [
+            EventDetector(info.camera, info.height, replace(base, flipped=direction)) for direction in self.directions
+        ]
+        self._remove_flicker = FlickerRemover(info.height)
+        self._times: list[float] = []
+
+    @property
+    def n_frames(self) -> int:
+        """Frames pushed so far."""
+        return self._remove_flicker.n_seen
+
+    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> None:
+        """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`)
+        and whether it is a key frame."""
+        self._detect(self._remove_flicker.push(t_ms, profile, key))
+
+    def finish(self) -> CameraDetection:
+        """The detection, once every frame is pushed."""
+        self._detect(self._remove_flicker.flush())
+        frame_times = check_timestamps(np.asarray(self._times), str(self.info.path))
+        if len(frame_times) < 2:
+            raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
+        readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
+        return CameraDetection(
+            self.info.camera,
+            self.info.path,
+            self.info.width,
+            self.info.height,
+            frame_times,
+            readings.get(False),
+            readings.get(True),
+            flipped=self.directions[0],
+            flicker=self._remove_flicker.estimate(),
+            n_recurring=self._detectors[0].n_recurring,
+            n_degenerate=self._detectors[0].n_degenerate,
+            exposure_rows=self._detectors[0].exposure_rows,
+        )
+
+    def _detect(self, frames: list[tuple[float, np.ndarray]]) -> None:
+        for t_ms, profile in frames:
+            frame = len(self._times)
+            self._times.append(t_ms)
+            for detector in self._detectors:
+                detector.push(frame, t_ms, profile)

@@ -9,9 +9,11 @@ Calibration of the predicted uncertainty compares errors with a ``sigma`` functi
 default `predicted_std_ms`, i.e. `CameraClock.t_global_std_ms` from the solve's
 covariance); pass another one to try a new definition of sigma:
 
-- per camera, ``error / sigma(camera, frame, row)`` over its probes. The reference camera's
-  sigma is 0 at its frame 0, row 0 (its clock defines the global one), so its own
-  calibration is not defined (NaN);
+- per camera, the error of each probe against ``sigma`` of the camera and of the reference
+  camera at the same true instant, ``sqrt(sigma_c**2 + sigma_ref**2)``: a camera's sigma
+  is its uncertainty against the flashes' instants, the reference's too (its edges locate
+  the flashes no better than any camera's), and the error is measured against the
+  reference's clock. The reference camera's own calibration is not defined (NaN);
 - pairwise, for every camera including the reference: each probe of camera ``c`` is
   located in every other camera ``d`` at the same true instant (frame and row, from the
   truth; skipped where ``d`` is not recording then), and the error of the difference
@@ -184,7 +186,11 @@ def camera_accuracy(
         pairs = [pair_errors(model, truth, name, other, row_step, sigma) for other in model.cameras if other != name]
         pair_error = np.concatenate([e for e, _ in pairs]) if pairs else np.empty(0)
         pair_std = np.concatenate([s for _, s in pairs]) if pairs else np.empty(0)
-        z_rms, within = _z_stats(error, std) if name != model.reference else (float("nan"), float("nan"))
+        z_rms, within = (
+            _z_stats(*pair_errors(model, truth, name, model.reference, row_step, sigma))
+            if name != model.reference
+            else (float("nan"), float("nan"))
+        )
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
         row.update(

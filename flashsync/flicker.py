@@ -164,21 +164,34 @@ class FlickerRemover:
         self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
-        settings = self.settings
         for t_ms, profile, *key in frames:
-            profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
-            self._queue.append((t_ms, profile, bool(key and key[0])))
-            if self._n_seen % settings.reservoir_step == 0:
-                self._reservoir.append((t_ms, profile))
-            self._n_seen += 1
-            if self._lock is None and self._n_seen >= self._next_attempt:
-                self._learn()
-            if len(self._queue) > settings.lookahead:
-                yield self._correct(*self._queue.popleft())
+            yield from self.push(t_ms, profile, bool(key and key[0]))
+        yield from self.flush()
+
+    @property
+    def n_seen(self) -> int:
+        """Frames taken so far."""
+        return self._n_seen
+
+    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> list[tuple[float, np.ndarray]]:
+        """Take one frame (``key``: a key frame); return the frames it lets out, corrected
+        (none while the lookahead fills, then one). The state between calls is all in the
+        object, which pickles: a video can be fed in parts, on different machines."""
+        settings = self.settings
+        profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
+        self._queue.append((t_ms, profile, key))
+        if self._n_seen % settings.reservoir_step == 0:
+            self._reservoir.append((t_ms, profile))
+        self._n_seen += 1
+        if self._lock is None and self._n_seen >= self._next_attempt:
+            self._learn()
+        return [self._correct(*self._queue.popleft())] if len(self._queue) > settings.lookahead else []
+
+    def flush(self) -> list[tuple[float, np.ndarray]]:
+        """The frames still held back, corrected: call once after the last :meth:`push`."""
         if self._lock is None and self._attempts == 0 and len(self._queue) >= 8:
             self._learn()
-        while self._queue:
-            yield self._correct(*self._queue.popleft())
+        return [self._correct(*self._queue.popleft()) for _ in range(len(self._queue))]
 
     def _learn(self) -> None:
         """Look for a rolling flicker in the held-back and reservoir frames; lock onto it.

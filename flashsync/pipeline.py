@@ -41,7 +41,8 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
-from flashsync.solve import Durations, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.segments import SEGMENT_MS
+from flashsync.solve import CameraSolution, Durations, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (NOMINAL_HIDDEN_ROWS x
@@ -56,6 +57,8 @@ def detect_videos(
     settings: DetectorSettings | None = None,
     progress: Callable[[str, int], Callable[[int], None]] | None = None,
     timestamps: dict[str, Path] | None = None,
+    scheduler: str | None = None,
+    segment_ms: float = SEGMENT_MS,
 ) -> list[CameraDetection]:
     """Detect events in each video (camera names = file stems, which must be unique).
 
@@ -69,9 +72,12 @@ def detect_videos(
     progress : ``progress(camera, n_frames_hint)`` may return a callback taking frames decoded.
     timestamps : per camera, a CSV of frame timestamps (``t_ms``, or 90 kHz ``rtp``, one row
         per decoded frame) used instead of the container's (see :func:`~flashsync.io.timestamps.load_timestamps`).
+    scheduler : ``tcp://HOST:PORT`` of a Dask scheduler or ``local:N`` (N worker processes):
+        the videos are decoded there in segments of ``segment_ms`` (ms), with the same
+        events (:mod:`flashsync.cluster`; needs the ``cluster`` extra).
 
-    Videos are decoded in parallel threads, one per core (decoding and the compiled row
-    kernel release the GIL).
+    Without a scheduler, videos are decoded in parallel threads, one per core (decoding and
+    the compiled row kernel release the GIL).
     """
     paths = [Path(p) for p in paths]
     stems = [p.stem for p in paths]
@@ -100,9 +106,10 @@ def detect_videos(
 
         return step
 
-    def detect(path: Path) -> CameraDetection:
-        direction = True if path.stem in flipped else (None if estimate_readout else False)
-        detection = detect_video(path, flipped=direction, settings=settings, progress=watched)
+    def direction(path: Path) -> bool | None:
+        return True if path.stem in flipped else (None if estimate_readout else False)
+
+    def retimed(path: Path, detection: CameraDetection) -> CameraDetection:
         if path.stem not in stamps:
             return detection
         if len(stamps[path.stem]) != len(detection.frame_times_ms):
@@ -111,6 +118,15 @@ def detect_videos(
                 f"{len(detection.frame_times_ms)} frames of {path}; give one row per decoded frame"
             )
         return detection.retimed(stamps[path.stem])
+
+    if scheduler is not None:
+        from flashsync.cluster import detect_on_cluster
+
+        found = detect_on_cluster(scheduler, paths, [direction(p) for p in paths], settings, progress, segment_ms)
+        return [retimed(path, detection) for path, detection in zip(paths, found)]
+
+    def detect(path: Path) -> CameraDetection:
+        return retimed(path, detect_video(path, flipped=direction(path), settings=settings, progress=watched))
 
     with ThreadPoolExecutor(max_workers=max(1, min(len(paths), os.cpu_count() or 1))) as pool:
         try:
@@ -190,11 +206,15 @@ def synchronize(
     def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
         return _attempt(trial, reference, row_times, anchors, rate_std)
 
-    best = _best_readout(cameras, undecided, attempt)
+    best, rivals = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
-        best = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
-    report.alignments, report.warnings = best.alignments, best.warnings + clock_warnings
+        best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
+    spreads, readout_warnings = _readout_doubts(best, rivals, reference)
+    for name, spread in spreads.items():
+        frame_std[name] = np.hypot(frame_std[name], spread)
+    report.alignments = best.alignments
+    report.warnings = best.warnings + clock_warnings + readout_warnings + _few_flashes(best, reference)
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
@@ -235,7 +255,8 @@ def check_anchors(anchors: Sequence[str]) -> None:
 
 #: The frame times of stamps that change rate taken at the stamps' own rates.
 STAMPS_OWN_RATES = "the stamps' own rate in each segment"
-#: A choice of frame times whose log-likelihood leads the next by less than this is undecided.
+#: A choice of frame times, or of readout directions, whose log-likelihood leads the next
+#: by less than this is undecided.
 DECIDED_LOG_LIKELIHOOD = 5.0
 
 
@@ -296,11 +317,14 @@ def _best_frame_times(
 
 def _best_readout(
     cameras: dict[str, CameraDetection], undecided: list[str], attempt: Callable[[dict[str, CameraDetection]], _Attempt]
-) -> _Attempt:
+) -> tuple[_Attempt, dict[str, _Attempt]]:
     """The readout directions of the ``undecided`` cameras that explain the events best
     (:attr:`_Attempt.score`): steepest ascent from the detected ones, each step taking the
-    best of all single flips, until none helps. Raises the first failure if nothing solves."""
-    best, failure, start = None, None, cameras
+    best of all single flips, until none helps. Returns the best attempt and, per undecided
+    camera, the best attempt tried with that camera read the other way (where one solved:
+    with two cameras read the wrong way up, the rival may differ in both). Raises the first
+    failure if nothing solves."""
+    best, failure, start, tried = None, None, cameras, []
     while True:
         improved = False
         for flip in [None, *undecided] if best is None else undecided:
@@ -312,13 +336,69 @@ def _best_readout(
             except FlashsyncError as error:
                 failure = failure or error
                 continue
+            tried.append(result)
             if best is None or result.score > best.score:
                 best, improved = result, True
         if best is None:
             raise failure
         if not improved:
-            return best
+            break
         start = best.cameras
+    rivals = {}
+    for name in undecided:
+        other = [r for r in tried if r.cameras[name].flipped != best.cameras[name].flipped]
+        if other:
+            rivals[name] = max(other, key=lambda r: r.score)
+    return best, rivals
+
+
+#: A camera tied by fewer inlier flashes than this has almost no equation to spare.
+FEW_FLASHES = 4
+
+
+def _few_flashes(best: _Attempt, reference: str) -> list[str]:
+    """A warning per camera tied to the others by fewer than :data:`FEW_FLASHES` inlier
+    flashes: its drift, shift and time per row rest on them alone (its sigma comes from the
+    other cameras' edge noise and the priors, not from its own)."""
+    inlier = best.solution.inlier[: len(best.matches)]
+    warnings = []
+    for name in best.connected:
+        count = int(np.sum(inlier & (best.matches.camera == name)))
+        if name != reference and count < FEW_FLASHES:
+            warnings.append(
+                f"{best.cameras[name].video}: tied to the other cameras by {count} flashes only; its clock rests on "
+                "them alone with nothing to check them against (its sigma takes the other cameras' edge noise); "
+                "record more flashes seen by it"
+            )
+    return warnings
+
+
+def _readout_doubts(
+    best: _Attempt, rivals: dict[str, _Attempt], reference: str
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
+    flashes nearly as well as the chosen one (log-likelihood within
+    :data:`DECIDED_LOG_LIKELIHOOD`): per camera, how far the two readings' times of each
+    frame are apart (ms, the largest over its rows; into its sigma), and a warning line each."""
+    spreads, warnings = {}, []
+    for name, other in rivals.items():
+        if name not in best.connected or name not in other.connected or name in other.implausible:
+            continue
+        margin = best.score - other.score
+        if margin >= DECIDED_LOG_LIKELIHOOD:
+            continue
+        chosen, alternative = best.model(reference).cameras[name], other.model(reference).cameras[name]
+        frames = np.arange(chosen.n_frames)
+        rows = np.array([0.0, chosen.height - 1.0])
+        gap = np.abs(chosen.t_global_ms(frames[:, None], rows) - alternative.t_global_ms(frames[:, None], rows))
+        spreads[name] = gap.max(axis=1)
+        way = "bottom-up (upside down)" if chosen.flipped else "top-down (upright)"
+        warnings.append(
+            f"{best.cameras[name].video}: read {way}, but the flashes fit the other way nearly as well "
+            f"(log-likelihood {margin:.1f} better); its times may be off by up to {float(spreads[name].max()):.2f} ms "
+            "(in its sigma); give its mounting (--flipped) if known"
+        )
+    return spreads, warnings
 
 
 def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[str, str, SyncModel | str]]:
@@ -411,15 +491,35 @@ class _Attempt:
     solution: Solution
 
     @cached_property
+    def implausible(self) -> list[str]:
+        """Cameras whose solved time per row cannot be a sensor's: not positive, or reading
+        the visible rows takes longer than a frame period. Read the wrong way up, a camera's
+        bands still fit the other cameras' flashes, with a negative time per row: its rows
+        then run backwards in time, the trailing edges (one exposure late) standing in for
+        the leading ones."""
+        names = []
+        for index, name in enumerate(self.connected):
+            detection = self.cameras[name]
+            row_time = self.solution.cameras[index].row_time_ms
+            if not 0.0 < row_time * detection.height <= READOUT_SLACK * median_step_ms(detection.frame_times_ms):
+                names.append(name)
+        return names
+
+    @cached_property
     def score(self) -> float:
         """Log-likelihood of all the cameras' sync events under these readout directions:
         inliers Gaussian with the solve's residual scale, every other event (rejected, or
-        matched to nothing) uniform over a frame period. Counting inliers alone would
-        prefer a wrong direction whose loose fit (a scale ten times larger) lets one more
-        event in."""
-        n_inliers = int(self.solution.inlier[: len(self.matches)].sum())
+        matched to nothing, or of a camera whose time per row is :attr:`implausible`) uniform
+        over a frame period. Counting inliers alone would prefer a wrong direction whose
+        loose fit (a scale ten times larger) lets one more event in. The scale counts as
+        :data:`SCORE_MIN_SIGMA_MS` at least: with few flashes a wrong reading can fit its
+        few events almost exactly (a scale of a few microseconds) and outscore the right
+        one, which matched more events."""
+        inlier = self.solution.inlier[: len(self.matches)]
+        inlier = inlier & ~np.isin(self.matches.camera, self.implausible)
+        n_inliers = int(inlier.sum())
         n_events = sum(len(_sync_events(d)) for d in self.cameras.values())
-        sigma = max(self.solution.sigma_ms, 1e-4)
+        sigma = max(self.solution.sigma_ms, SCORE_MIN_SIGMA_MS)
         period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
         return n_inliers * (-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_events - n_inliers) * np.log(period)
 
@@ -436,8 +536,8 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                s.covariance,
-                _exposure_ms(self.durations, index, s.alpha, s.row_time_ms),
+                _with_edge_bias(s),
+                _exposure_ms(d, self.matches.event[self.matches.camera_index == index], s.alpha, s.row_time_ms),
                 str(d.video),
                 s.knots_ms,
                 s.warp_ms,
@@ -507,7 +607,7 @@ def _attempt(
     given = {name: value for name, value in (row_times or {}).items() if name in connected}
     solution = solve(given)
     if given:
-        contradicted = _contradicted_row_times(solve({}), connected, given)
+        contradicted = _contradicted_row_times(solve({}), connected, given, chosen)
         for name, (value, std) in contradicted.items():
             warnings.append(
                 f"{cameras[name].video}: the datasheet time per row {given[name]:g} ms contradicts the events, "
@@ -517,6 +617,14 @@ def _attempt(
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
 
+
+#: No edge is located better than this (ms): a residual scale below it is a fit with almost
+#: no equations to spare, not evidence for a reading (:attr:`_Attempt.score`).
+SCORE_MIN_SIGMA_MS = 0.02
+
+#: The visible rows of a frame are read within this many frame periods (a little over one:
+#: the time per row is an estimate).
+READOUT_SLACK = 1.05
 
 #: A camera's drift prior is at least this many times the relative standard error of its and
 #: the reference's frame-clock rates: the drift must take up the rate the stamps give the frames.
@@ -529,42 +637,108 @@ ROW_TIME_TOLERANCE = 0.01
 
 
 def _contradicted_row_times(
-    free: Solution, connected: list[str], given: dict[str, float]
+    free: Solution, connected: list[str], given: dict[str, float], cameras: list[CameraDetection]
 ) -> dict[str, tuple[float, float]]:
     """The datasheet times per row (ms) that the events alone (``free``: solved with the weak
-    nominal prior) contradict: camera -> (the events' value, its std), ms."""
+    nominal prior) contradict, or that no sensor can have (reading the visible rows would
+    take more than :data:`READOUT_SLACK` frame periods): camera -> (the events' value, its
+    std), ms."""
     contradicted = {}
     for name, value in given.items():
-        camera = free.cameras[connected.index(name)]
+        index = connected.index(name)
+        camera, detection = free.cameras[index], cameras[index]
         std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
-        if abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
+        too_slow = value * detection.height > READOUT_SLACK * median_step_ms(detection.frame_times_ms)
+        if too_slow or abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
             contradicted[name] = (camera.row_time_ms, std)
     return contradicted
 
 
+#: Relative standard deviation of a time per row from the mains flicker's period in rows at
+#: the least: through H.264 the period comes out 0.2-1.7 % off (README, "Real light"), often
+#: many times its own spread.
+FLICKER_ROW_TIME_STD = 0.01
+
+
 def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
-    """Per camera index: a datasheet T_row (std 0.01 %) or the weak nominal prior."""
+    """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's (its
+    period, ``1000 / hz`` ms, over its period in rows; :data:`FLICKER_ROW_TIME_STD` at
+    least) where the camera identified the rig's flicker frequency (the one most cameras
+    identified: one hall, one mains) and sees a whole period, else the weak nominal prior.
+    A flicker the camera could not identify is not trusted: a period longer than the
+    image came out 40 % off."""
+    known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
+    hall_hz = max(set(known), key=known.count) if known else None
     priors = {}
     for index, camera in enumerate(cameras):
+        flicker = camera.flicker
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
+        elif (
+            hall_hz is not None
+            and flicker is not None
+            and flicker.hz == hall_hz
+            and flicker.period_rows < camera.height
+        ):
+            spread = flicker.period_rows_std / flicker.period_rows
+            relative = max(spread, FLICKER_ROW_TIME_STD) if np.isfinite(spread) else FLICKER_ROW_TIME_STD
+            row_time = 1000.0 / hall_hz / flicker.period_rows
+            priors[index] = (row_time, relative * row_time)
         else:
             nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
 
 
-def _exposure_ms(durations: Durations, camera: int, alpha: float, row_time_ms: float) -> float | None:
+#: A camera's sync events share an offset the solve cannot see (it moves the shift, not the
+#: residuals): the half-rise of a flash's band is not the same instant of the flash in every
+#: camera where the pulse is not the ramp the detector fits (a rectangle, a xenon tail, a
+#: slow rise) or the exposure is shorter than the pulse. Over the simulator's random rigs
+#: it is about this many times the camera's own edge noise (README, "Calibrated sigma").
+EDGE_BIAS_SIGMAS = 1.5
+
+
+def _with_edge_bias(camera: CameraSolution) -> np.ndarray:
+    """The camera's covariance with the variance of its edges' shared offset,
+    (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
+    uncertain by that much against the flashes' instants (the reference camera's too)."""
+    covariance = camera.covariance.copy()
+    if np.isfinite(camera.edge_sigma_ms):
+        covariance[1, 1] += (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
+    return covariance
+
+
+def _exposure_ms(detection: CameraDetection, matched: np.ndarray, alpha: float, row_time_ms: float) -> float | None:
     """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
     where the bands give no positive duration: a time per row the events could not tell).
 
-    A band's half-fall comes one exposure after its half-rise (rows that saw the whole
-    flash are the ones whose exposure window holds it), so its duration is the exposure.
+    The detector's exposure in rows (:attr:`~flashsync.detect.CameraDetection.exposure_rows`,
+    shared by the camera's bands within one frame) times the time per row where it has one.
+    Else the median band: a band's trailing edge comes one exposure after its leading edge
+    (the detector fits the pulse integrated over the exposure, :mod:`flashsync.ramp`).
+    Only bands matched to a flash (``matched``: event numbers) count there: a player or a
+    codec echo makes bands of any length. Bands within one frame are used where there are
+    any: a band split across frames also carries the frame gap and the hidden rows.
     """
-    mine = durations.camera == camera
-    if not mine.any():
+    if detection.exposure_rows is not None:
+        exposure = detection.exposure_rows * row_time_ms
+        return exposure if exposure > 0 else None
+    events = detection.events
+    bands = events.bands()
+    first = bands.first_edges()
+    bands = bands.take(
+        bands.complete
+        & (events.band[first] == Band.PULSE)
+        & ~events.has_flag(Flag.SATURATED)[first]
+        & np.isin(bands.event, matched)
+    )
+    if not len(bands):
         return None
-    exposure = float(np.median(alpha * durations.dt_frame_ms[mine] + durations.dq[mine] * row_time_ms))
+    q = _readout_rows(detection, events)
+    dt = alpha * (events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
+    duration = dt + (q[bands.trailing] - q[bands.leading]) * row_time_ms
+    whole = dt == 0
+    exposure = float(np.median(duration[whole] if whole.any() else duration))
     return exposure if exposure > 0 else None
 
 

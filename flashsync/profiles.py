@@ -101,9 +101,17 @@ def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
-def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, bool]]]:
+def read_profiles(
+    path: str | Path, start_pts: int | None = None, stop_pts: int | None = None
+) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, bool]]]:
     """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile,
     key)`` per decoded frame, presentation order (the file closes when the iterator ends).
+
+    ``start_pts``, ``stop_pts`` (stream time-base units) read a segment only: the frames
+    whose stamps are in ``[start_pts, stop_pts)``, decoded from the key frame at or before
+    ``start_pts`` (:mod:`flashsync.segments`; a segment that starts at a key frame decodes to
+    the same pixels as the whole video does); the check that the video is complete is then
+    the caller's (:func:`cut_short`).
 
     ``profile`` is the float32 mean luma per row and column block, shape (height, blocks),
     as a fraction of the way from black (0) to white (1), so that light scales it: a flash
@@ -118,28 +126,37 @@ def read_profiles(path: str | Path) -> tuple[VideoInfo, Iterator[tuple[float, np
     except FlashsyncError:
         container.close()
         raise
-    return info, _profiles(container, path)
+    return info, _profiles(container, path, start_pts, stop_pts)
 
 
-def _profiles(container: av.container.InputContainer, path: Path) -> Iterator[tuple[float, np.ndarray, bool]]:
+def _profiles(
+    container: av.container.InputContainer, path: Path, start_pts: int | None, stop_pts: int | None
+) -> Iterator[tuple[float, np.ndarray, bool]]:
+    whole = start_pts is None and stop_pts is None
     with container:
         stream = container.streams.video[0]
         stream.thread_type = "AUTO"
+        if start_pts is not None:
+            container.seek(start_pts, stream=stream, backward=True)
         decoded, times = 0, []
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
                     raise InputError(f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)")
+                if start_pts is not None and frame.pts < start_pts:
+                    continue
+                if stop_pts is not None and frame.pts >= stop_pts:
+                    break
                 time_ms = float(frame.pts * frame.time_base) * 1000.0
                 decoded += 1
                 times = [*times[-1:], time_ms]
                 yield time_ms, row_profile(luma_plane(frame), *luma_range(frame)), bool(frame.key_frame)
         except av.FFmpegError as error:
-            cut = cut_short(container, decoded, times)
+            cut = cut_short(container, decoded, times) if whole else None
             if cut:
                 raise InputError(f"{path}: {cut} (decoding failed: {error.strerror}); {RECOPY}") from None
             raise InputError(f"{path}: cannot decode ({error.strerror}); is the file complete?") from None
-        cut = cut_short(container, decoded, times)
+        cut = cut_short(container, decoded, times) if whole else None
         if cut:
             raise InputError(f"{path}: {cut}; {RECOPY}")
 

@@ -1,28 +1,41 @@
-"""The flash's ramp at a band edge, and its robust fit to a fraction of a row.
+"""A flash band's shape across rows, and its robust fit to a fraction of a row.
 
-A row whose exposure ended ``z`` rows after the flash started integrated the share
-``1 - exp(-z / k)`` of the flash's light, ``k`` rows being the flash tube's decay time over
-the time per row: the leading edge. A row whose exposure started ``z`` rows after the flash
-started missed the share ``1 - exp(-z / k)``: the trailing edge is the same ramp, falling.
-The codec (quantisation, deblocking) and the lens blur that ramp across rows, and blur
-moves the half point of such an asymmetric ramp late, by about ``blur**2 / (2 k)`` rows
-(0.05 to 0.1 rows at H.264 crf 23). So the model is the exponential
-ramp convolved with a Gaussian of ``blur`` rows (the distribution function of an
-exponentially modified Gaussian), and the edge is its half point before the blur,
-``start + k ln 2``: the row whose exposure ended (leading) or started (trailing) when the
-flash had given half its light, the same instant in every camera.
+A row integrates light over its exposure window, so a flash of pulse shape ``p`` leaves in
+a row whose exposure ended ``z`` rows after the flash fired the share
+``R(z) - R(z - width)`` of its light, ``R`` the pulse's cumulative share and ``width`` the
+exposure in rows: the band. Where the exposure is longer than the pulse the band has a
+plateau, its leading edge is ``R`` rising and its trailing edge ``1 - R`` falling, one
+exposure later; where it is not (a 0.5 ms exposure, a xenon tail of 1 ms) the band never
+reaches its plateau and its half-level crossings are no longer one exposure apart nor at
+the same instant of the flash as in other cameras.
+
+The pulse is a hold of ``hold`` rows at full power followed by an exponential decay of
+``decay`` rows: an instant-rise flash (hold 0), a xenon tube (its rise of tens of
+microseconds is within the blur), an LED strobe (decay near 0); a slow rise is
+approximated by the hold. The codec (quantisation, deblocking) and the lens blur the
+band across rows, and blur moves the half point of an asymmetric ramp, so the model is
+convolved with a Gaussian of ``blur`` rows, in closed form (ramps and exponentially
+modified Gaussians).
+
+An edge is the half-light point of the pulse before the blur: the row whose exposure ended
+(leading) or started (trailing) when the flash had given half its light, the same instant
+in every camera whatever its exposure. A band whose two edges lie in one frame is fitted
+whole (:func:`fit_pulse_band`): its two edges are then exactly ``width`` rows apart, the
+exposure. An edge alone (a band split across frames) is fitted as a ramp
+(:func:`fit_pulse_edge`).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from flashsync.compiled import njit
 
-#: Bounds of the ramp's decay length and blur, rows.
-MIN_SCALE, MAX_SCALE = 0.1, 50.0
+#: Bounds of the pulse's hold and decay length and of the blur, rows.
+MIN_DECAY, MAX_LENGTH = 0.05, 200.0
 MAX_BLUR = 3.0
 #: Blur the fit starts from, rows.
 START_BLUR = 0.3
@@ -30,6 +43,19 @@ START_BLUR = 0.3
 #: as one row off by the loss scale. Without it the blur wanders where the ramp cannot tell
 #: it (a foot lost in a dead zone) and stalls short of 0 in sharp video.
 BLUR_PRIOR_STD = 2.0
+#: A hold is fitted where it lowers the cost by this many times the residual variance per
+#: row (Akaike's criterion asks for 2; a free hold trades with the blur and fits the noise
+#: of a blurred exponential ramp by 4-5 times).
+HOLD_EVIDENCE = 10.0
+#: Exposures tried between the 10th and 90th percentile of a camera's band widths
+#: (:func:`common_width`).
+WIDTH_GRID = 9
+#: What the fitted model is: a whole band, or its rising or falling edge alone.
+BAND, RISING, FALLING = 0, 1, 2
+#: Parameters of the model: (start, hold, decay, blur, width, level); ``start`` is the row
+#: whose exposure ended when the flash fired, ``width`` the exposure in rows, ``level`` the
+#: band's level for a row that saw the whole flash.
+N_PARAMETERS = 6
 
 
 def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, rising: bool) -> float:
@@ -56,22 +82,214 @@ def fit_pulse_edge(values: np.ndarray, row: float, rise: float, level: float, ri
     """
     if not (np.isfinite(row) and np.isfinite(rise) and np.isfinite(level) and level > 0):
         return float("nan")
-    k = max(rise / np.log(3.0), 0.3)  # 25 % -> 75 % of an exponential ramp: k ln 3
-    first, last = int(np.floor(row - 3 - 2 * k)), int(np.ceil(row + 2 + 6 * k))  # flat side, tail
-    x = np.arange(max(first, 0), min(last, len(values) - 1) + 1)
-    y = values[x]
-    keep = np.isfinite(y) & (x != _censored_foot(values, row, rising))
+    decay = _decay_guess(rise)
+    x = _window(len(values), [row], decay)
+    keep = np.isfinite(values[x]) & (x != _censored_foot(values, row, rising))
+    if not rising:
+        keep &= ~_censored_tail(values, x, row)
     if keep.sum() < 6:
         return row
-    fitted, converged = _fit_ramp(
-        x[keep].astype(np.float64),
-        y[keep].astype(np.float64),
-        np.array([row - k * np.log(2.0), k, START_BLUR, level]),
-        0.05 * level,
-        rising,
+    free = np.array([True, True, True, True, False, True])
+    x, y = x[keep].astype(np.float64), values[x[keep]].astype(np.float64)
+    fit = _best_fit(x, y, row, 0.0, rise, level, free, RISING if rising else FALLING)
+    refined = fit.p[0] + _half_light(fit.p[1], fit.p[2]) if fit is not None else np.nan
+    return float(refined) if abs(refined - row) <= 2.0 else row
+
+
+@dataclass(frozen=True)
+class BandFit:
+    """A band fitted whole (:func:`fit_pulse_band`).
+
+    Attributes
+    ----------
+    x, y : float arrays of shape (n,)
+        The rows fitted and their relative change.
+    p : float array of shape (6,)
+        The model's parameters (start, hold, decay, blur, width, level), rows but the level.
+    free : bool array of shape (6,)
+        The parameters that were fitted (the hold is fixed at 0 where an exponential pulse
+        explained the band).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    p: np.ndarray
+    free: np.ndarray
+
+    @property
+    def leading(self) -> float:
+        """The row whose exposure ended when the flash had given half its light."""
+        return float(self.p[0] + _half_light(self.p[1], self.p[2]))
+
+    @property
+    def trailing(self) -> float:
+        """The row whose exposure started then: one exposure after the leading edge."""
+        return self.leading + float(self.p[4])
+
+    @property
+    def width(self) -> float:
+        """The exposure, rows."""
+        return float(self.p[4])
+
+    @property
+    def variance(self) -> float:
+        """The cost per degree of freedom (about the variance of a row's change)."""
+        return _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)
+
+    def with_width(self, width: float) -> tuple[BandFit, float] | None:
+        """This band fitted again with its exposure fixed at ``width`` rows, and the fit's
+        cost; None where it does not converge."""
+        free = self.free.copy()
+        free[4] = False
+        p = self.p.copy()
+        p[4] = width
+        fitted, converged = _fit(self.x, self.y, p, free, _f_scale(self.p), BAND)
+        if not converged:
+            return None
+        return BandFit(self.x, self.y, fitted, self.free), _data_cost(self.x, self.y, fitted, _f_scale(self.p), BAND)
+
+
+def fit_pulse_band(values: np.ndarray, leading: float, trailing: float, rise: float, level: float) -> BandFit | None:
+    """A band whose two edges lie in one frame, fitted whole (the pulse integrated over the
+    exposure): its leading and trailing edges one exposure apart.
+
+    Parameters
+    ----------
+    values : float array of shape (rows,)
+        Relative change per readout row, the band positive; NaN where blind.
+    leading, trailing : float
+        The band's edges as located one by one (half-level crossings), rows.
+    rise : float
+        Rows from 25 % to 75 % of the band's level at its trailing edge (sets the window
+        and the first guess of the pulse's decay).
+    level : float
+        The band's plateau.
+
+    Returns
+    -------
+    BandFit, or None where the fit has too few rows or does not converge, or it would move
+    an edge further than the band's ramp could explain.
+    """
+    if not all(np.isfinite(v) for v in (leading, trailing, rise, level)) or level <= 0 or trailing <= leading:
+        return None
+    decay = _decay_guess(rise)
+    x = _window(len(values), [leading, trailing], decay)
+    keep = np.isfinite(values[x]) & (x != _censored_foot(values, leading, True)) & ~_censored_tail(values, x, trailing)
+    if keep.sum() < 8:
+        return None
+    x, y = x[keep].astype(np.float64), values[x[keep]].astype(np.float64)
+    level = max(level, float(np.percentile(y, 90)))  # a short band's peak, above its median
+    fit = _best_fit(x, y, leading, trailing - leading, rise, level, np.ones(N_PARAMETERS, dtype=np.bool_), BAND)
+    reach = 2.0 + 2.0 * decay
+    if fit is None or abs(fit.leading - leading) > reach or abs(fit.trailing - trailing) > reach:
+        return None
+    return fit
+
+
+def common_width(fits: list[BandFit]) -> float | None:
+    """The exposure, rows, that explains all of a camera's whole bands best: the minimum
+    of the sum of their costs (each in units of its own noise) refitted with the exposure
+    fixed, over the spread of their own estimates. One band alone cannot tell a short
+    exposure from the pulse's decay to better than a row or two (at 0.5-1 ms); the camera's
+    bands share the exposure. Bands whose own width is off the median by a factor of two
+    are left out; None with fewer than three bands."""
+    widths = np.array([fit.width for fit in fits])
+    middle = float(np.median(widths)) if widths.size else 0.0
+    used = [fit for fit in fits if 0.5 * middle <= fit.width <= 2.0 * middle]
+    if len(used) < 3 or middle <= 0:
+        return None
+    low, high = np.percentile([fit.width for fit in used], [10, 90])
+    if high - low < 0.02:
+        return middle
+    grid = np.linspace(low, high, WIDTH_GRID)
+    total = np.zeros(grid.size)
+    for fit in used:
+        scale = max(fit.variance, 1e-12)
+        for j, width in enumerate(grid):
+            refit = fit.with_width(width)
+            total[j] += (refit[1] if refit is not None else np.inf) / scale
+    j = int(np.argmin(total))
+    if not np.isfinite(total[j]):
+        return None
+    if 0 < j < grid.size - 1 and np.all(np.isfinite(total[j - 1 : j + 2])):  # the parabola's vertex
+        curvature = total[j - 1] - 2.0 * total[j] + total[j + 1]
+        if curvature > 0:
+            return float(grid[j] + 0.5 * (grid[1] - grid[0]) * (total[j - 1] - total[j + 1]) / curvature)
+    return float(grid[j])
+
+
+def _best_fit(
+    x: np.ndarray, y: np.ndarray, edge: float, width: float, rise: float, level: float, free: np.ndarray, mode: int
+) -> BandFit | None:
+    """Fit of the model (:func:`_fit`) to rows ``x``, values ``y`` (float64): an exponential
+    pulse (no hold), or where it explains the rows clearly better (its cost on the rows
+    lower by :data:`HOLD_EVIDENCE` times the residual variance), a pulse with a hold,
+    fitted from a rectangle. Both start with their half-light point at ``edge`` and a
+    25 %-to-75 % ramp of ``rise`` rows. A hold and the blur both round a ramp's foot, so a
+    hold that is free everywhere moves a blurred exponential edge; and a ramp fitted from
+    an exponential can stall in a local minimum where the pulse is a rectangle (an
+    exponential ramp blurred to look straight). None where neither converges."""
+    decay, hold = _decay_guess(rise), max(2.0 * rise, 0.3)
+    f_scale = 0.05 * level
+    no_hold = free.copy()
+    no_hold[1] = False
+    exponential, converged = _fit(
+        x, y, np.array([edge - decay * np.log(2.0), 0.0, decay, START_BLUR, width, level]), no_hold, f_scale, mode
     )
-    refined = fitted[0] + fitted[1] * np.log(2.0)
-    return float(refined) if converged and abs(refined - row) <= 2.0 else row
+    held, held_converged = _fit(
+        x, y, np.array([edge - 0.5 * hold, hold, MIN_DECAY, START_BLUR, width, level]), free, f_scale, mode
+    )
+    if held_converged:
+        cost = _data_cost(x, y, held, f_scale, mode)
+        if not converged or _data_cost(x, y, exponential, f_scale, mode) - cost > HOLD_EVIDENCE * cost / max(
+            x.size - free.sum(), 1
+        ):
+            return BandFit(x, y, held, free)
+    return BandFit(x, y, exponential, no_hold) if converged else None
+
+
+def _f_scale(p: np.ndarray) -> float:
+    """The robust loss's scale for the model ``p``: 5 % of its level."""
+    return 0.05 * float(p[5])
+
+
+def _data_cost(x: np.ndarray, y: np.ndarray, p: np.ndarray, f_scale: float, mode: int) -> float:
+    """The fit's cost without the blur's prior (the hold, which has none, can stand in for
+    the blur: with the prior counted, a hold would win where only the blur is there)."""
+    return _cost(x, y, p, f_scale, mode) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
+
+
+def _decay_guess(rise: float) -> float:
+    """First guess of the pulse's decay, rows, from the 25 %-to-75 % rise of a ramp
+    (``decay ln 3`` for an exponential one)."""
+    return max(rise / np.log(3.0), 0.3)
+
+
+def _window(n: int, edges: list[float], decay: float) -> np.ndarray:
+    """Rows around the edges that the fit uses: a few rows on the flat side, six decay
+    lengths of tail; the union for several edges, inside ``[0, n)``."""
+    rows = [np.arange(int(np.floor(e - 3 - 2 * decay)), int(np.ceil(e + 2 + 6 * decay)) + 1) for e in edges]
+    x = np.unique(np.concatenate(rows))
+    return x[(x >= 0) & (x < n)]
+
+
+def _half_light(hold: float, decay: float) -> float:
+    """Rows from the pulse's start to the instant it has given half its light."""
+    total = hold + decay
+    if hold >= decay:
+        return 0.5 * total
+    return hold + decay * np.log(2.0 * decay / total)
+
+
+def _censored_tail(values: np.ndarray, x: np.ndarray, trailing: float) -> np.ndarray:
+    """Which rows ``x`` lie past the last changed row after a trailing edge (bool, shape of
+    ``x``). A pulse's tail fades under the codec's dead zone and the detector's 1.5 DN step
+    floor and reads exactly 0 long before the light is gone: those rows only say "less than
+    that", and fitting them as 0 cuts the tail and with it the exposure short."""
+    last = max(int(np.floor(trailing)), -1)
+    while last + 1 < len(values) and values[last + 1] != 0 and np.isfinite(values[last + 1]):
+        last += 1
+    return x > last
 
 
 def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
@@ -88,10 +306,11 @@ def _censored_foot(values: np.ndarray, row: float, rising: bool) -> int:
 
 
 @njit
-def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
-    """Robust fit of ``y = plateau * ramp(x - start, scale, blur)`` (``rising``) or of
-    ``y = plateau * (1 - ramp(...))``; ``p`` = (start, scale, blur, plateau) is the first
-    guess. x, y: shape (n,).
+def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
+    """Robust fit of the band model ``p`` = (start, hold, decay, blur, width, level) of
+    ``mode`` (:data:`BAND`, :data:`RISING`, :data:`FALLING`) to ``y``; ``p`` is the first
+    guess, ``free`` (bool, shape (6,)) the parameters fitted (the others stay). x, y: shape
+    (n,).
 
     Levenberg-Marquardt on the soft-L1 cost ``sum 2 f^2 (sqrt(1 + (r / f)^2) - 1)`` (``f`` =
     ``f_scale``), the normal equations weighted by the loss's derivative (iteratively
@@ -101,34 +320,44 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
     model: a division by zero gives inf, it does not raise).
     """
     n = x.size
-    p = _clamp(p.copy())
+    p = _clamp(p.copy(), mode)
     if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
         return p, False
-    cost = _cost(x, y, p, f_scale, rising)
+    cost = _cost(x, y, p, f_scale, mode)
     if not np.isfinite(cost):
         return p, False
+    index = np.flatnonzero(free)
+    m = index.size
     damping = 1e-3
-    jacobian = np.empty((n, 4))
+    jacobian = np.empty((n, m))
     residual = np.empty(n)
-    for _ in range(200):
+    for _ in range(300):
         for i in range(n):
-            shape = _shape(x[i], p, rising)
-            residual[i] = p[3] * shape - y[i]
-            jacobian[i, 3] = shape
-        for j in range(3):  # forward differences; the plateau is linear
-            step = 1e-6 * max(1.0, abs(p[j]))
+            residual[i] = _model(x[i], p, mode) - y[i]
+        for j in range(m):
+            k = index[j]
             moved = p.copy()
-            moved[j] += step
+            if k == 5:  # the level is linear: d model / d level = model / level
+                moved[5] = p[5] + 1.0
+            else:  # forward differences
+                moved[k] += 1e-6 * max(1.0, abs(p[k]))
+            step = moved[k] - p[k]
             for i in range(n):
-                jacobian[i, j] = (moved[3] * _shape(x[i], moved, rising) - y[i] - residual[i]) / step
+                jacobian[i, j] = (_model(x[i], moved, mode) - y[i] - residual[i]) / step
         weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
         normal = jacobian.T @ (jacobian * weight[:, None])
         gradient = jacobian.T @ (weight * residual)
-        normal[2, 2] += (f_scale / BLUR_PRIOR_STD) ** 2  # the prior's residual and slope
-        gradient[2] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[2]
+        for j in range(m):
+            if index[j] == 3:  # the blur's prior: its residual and slope
+                normal[j, j] += (f_scale / BLUR_PRIOR_STD) ** 2
+                gradient[j] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[3]
         for _ in range(30):
-            trial = _clamp(p - _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient))
-            trial_cost = _cost(x, y, trial, f_scale, rising)
+            delta = _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient)
+            trial = p.copy()
+            for j in range(m):
+                trial[index[j]] -= delta[j]
+            trial = _clamp(trial, mode)
+            trial_cost = _cost(x, y, trial, f_scale, mode)
             if trial_cost <= cost:
                 break
             damping *= 10.0
@@ -144,36 +373,63 @@ def _fit_ramp(x, y, p, f_scale, rising):  # pragma: no cover - compiled
 
 
 @njit
-def _clamp(p):  # pragma: no cover - compiled
-    p[1] = min(max(p[1], MIN_SCALE), MAX_SCALE)
-    p[2] = min(max(p[2], 0.0), MAX_BLUR)
+def _clamp(p, mode):  # pragma: no cover - compiled
+    """``p`` within bounds; in a band no longer a hold than the exposure (a band is the
+    exposure convolved with the pulse: a rectangular pulse and an exposure trade places,
+    and the longer of them is taken to be the exposure)."""
+    p[1] = min(max(p[1], 0.0), MAX_LENGTH if mode != BAND else max(p[4], 0.0))
+    p[2] = min(max(p[2], MIN_DECAY), MAX_LENGTH)
+    p[3] = min(max(p[3], 0.0), MAX_BLUR)
+    p[4] = max(p[4], 0.0)
     return p
 
 
 @njit
-def _cost(x, y, p, f_scale, rising):  # pragma: no cover - compiled
-    """Soft-L1 cost of the ramp ``p`` = (start, scale, blur, plateau) against ``y``, plus the
-    blur's prior."""
+def _cost(x, y, p, f_scale, mode):  # pragma: no cover - compiled
+    """Soft-L1 cost of the model ``p`` against ``y``, plus the blur's prior."""
     total = 0.0
     for i in range(x.size):
-        residual = p[3] * _shape(x[i], p, rising) - y[i]
+        residual = _model(x[i], p, mode) - y[i]
         total += 2.0 * f_scale**2 * (math.sqrt(1.0 + (residual / f_scale) ** 2) - 1.0)
-    return total + (f_scale * p[2] / BLUR_PRIOR_STD) ** 2
+    return total + (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
 
 @njit
-def _shape(x, p, rising):  # pragma: no cover - compiled
-    """The band's level at row ``x`` relative to its plateau, for ``p`` = (start, scale,
-    blur, plateau): the ramp rising from 0, or falling from 1."""
-    share = _ramp(x - p[0], p[1], p[2])
-    return share if rising else 1.0 - share
+def _model(x, p, mode):  # pragma: no cover - compiled
+    """The band's relative change at row ``x`` for ``p`` = (start, hold, decay, blur,
+    width, level): the whole band, its rising edge (the light from 0 to ``level``) or its
+    falling edge."""
+    share = _share(x - p[0], p[1], p[2], p[3])
+    if mode == RISING:
+        return p[5] * share
+    if mode == FALLING:
+        return p[5] * (1.0 - share)
+    return p[5] * (share - _share(x - p[0] - p[4], p[1], p[2], p[3]))
+
+
+@njit
+def _share(z, hold, decay, blur):  # pragma: no cover - compiled
+    """Share of the pulse's light (a hold of ``hold`` rows, then an exponential decay of
+    ``decay`` rows) given ``z`` rows past its start, convolved with a Gaussian of ``blur``
+    rows."""
+    held = _blurred_ramp(z, blur) - _blurred_ramp(z - hold, blur) if hold > 0.0 else 0.0
+    return (held + decay * _ramp(z - hold, decay, blur)) / (hold + decay)
+
+
+@njit
+def _blurred_ramp(z, blur):  # pragma: no cover - compiled
+    """``max(z, 0)`` convolved with a Gaussian of ``blur`` rows."""
+    if blur <= 0.0:
+        return max(z, 0.0)
+    u = z / blur
+    return z * 0.5 * math.erfc(-u / math.sqrt(2.0)) + blur * math.exp(-0.5 * u * u) / math.sqrt(2.0 * math.pi)
 
 
 @njit
 def _ramp(z, scale, blur):  # pragma: no cover - compiled
-    """Share of the flash's light in a row ``z`` rows past its start: ``1 - exp(-z / scale)``
-    (0 before), convolved with a Gaussian of ``blur`` rows. The tail term
-    ``exp(a) Phi(b)`` is computed through ``erfcx`` where ``Phi(b)`` underflows."""
+    """Share of an exponential pulse's light in a row ``z`` rows past its start:
+    ``1 - exp(-z / scale)`` (0 before), convolved with a Gaussian of ``blur`` rows. The tail
+    term ``exp(a) Phi(b)`` is computed through ``erfcx`` where ``Phi(b)`` underflows."""
     if blur <= 0.0:
         return -math.expm1(-z / scale) if z > 0.0 else 0.0
     b = z / blur - blur / scale

@@ -88,7 +88,7 @@ def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
 
 def sync_table(model: SyncModel, report=None) -> str:
     """The per-camera table as aligned text; ``*`` marks the reference, ``^`` a camera that
-    reads bottom-up."""
+    reads bottom-up; a last line says what ``sync ± ms`` means (:data:`SIGMA_MEANING`)."""
     table = camera_table(model, report)
     lines = [
         f"{'camera':<12} {'drift ppm':>10} {'rows/s':>8} {'shift ms':>14} {'± ms':>7} "
@@ -108,7 +108,15 @@ def sync_table(model: SyncModel, report=None) -> str:
         if report is not None:
             line += f" {_stamps(row):>22}"
         lines.append(line)
+    lines.append(SIGMA_MEANING)
     return "\n".join(lines)
+
+
+#: What ``sync ± ms`` means, printed under the table.
+SIGMA_MEANING = (
+    "sync ± ms: 1σ of a camera's times against the flashes' instants (the reference's too: its edges "
+    "locate them no better); a camera against the reference: the root of the sum of both squares"
+)
 
 
 def _stamps(row) -> str:

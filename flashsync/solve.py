@@ -21,7 +21,7 @@ one, clock drift within a few tens of ppm) enter as pseudo-observations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sparse
@@ -76,7 +76,8 @@ class Priors:
 class CameraSolution:
     """One camera's solved clock: ``alpha``, ``beta_ms``, ``row_time_ms``, the warp of a
     clock whose rate changes (values ``warp_ms`` (k,) at the interior of ``knots_ms``
-    (k + 2,), both empty for an affine clock) and the covariance (3 + k, 3 + k) in that order."""
+    (k + 2,), both empty for an affine clock), the covariance (3 + k, 3 + k) in that order
+    and ``edge_sigma_ms``, the noise of its sync events (ms, a clean edge's; NaN without)."""
 
     alpha: float
     beta_ms: float
@@ -84,6 +85,7 @@ class CameraSolution:
     covariance: np.ndarray
     knots_ms: np.ndarray
     warp_ms: np.ndarray
+    edge_sigma_ms: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -151,7 +153,8 @@ def solve_clocks(
 
 def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float, iterations: int) -> Solution:
     """The robust iterations of :func:`solve_clocks` on a built system: Cauchy weights at
-    ``cauchy_k`` robust sigmas, ``iterations`` solves in all."""
+    ``cauchy_k`` robust sigmas, ``iterations`` solves in all; then the inliers weighed by
+    their groups' own noise (:meth:`_System.group_scales`), which the covariance states."""
     _, residual, _ = cauchy_irls(
         system.solve,
         system.residuals,
@@ -161,16 +164,25 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
     sigma = mad_sigma(residual, MIN_SCALE_MS)
     inlier = np.abs(residual) <= reject_sigma * sigma
-    x = system.solve(inlier.astype(np.float64))
+    weights = inlier.astype(np.float64)
+    x = system.solve(weights)
+    scale = np.full(system.n_equations, np.nan)
+    n_events = len(system.flash_index)
+    for _ in range(GROUP_SCALE_ROUNDS):
+        scale = system.group_scales(x, weights, inlier)
+        scale[:n_events] = np.maximum(scale[:n_events], _edge_floor_ms(system, x, n_cameras)[system.group[:n_events]])
+        weights = inlier * (system.event_sigma_ms / scale) ** 2
+        x = system.solve(weights)
+    edge_sigma = np.full(n_cameras, np.nan)
+    edge_sigma[system.group[:n_events]] = scale[:n_events]
     residual = system.residuals(x)
     sigma = mad_sigma(residual[inlier], MIN_SCALE_MS)
-    dof = max(int(inlier.sum()) + system.n_priors - system.n_unknowns, 1)
-    covariance = system.covariance(inlier.astype(np.float64), float(np.sum(residual[inlier] ** 2)) / dof)
+    covariance = system.covariance(weights, system.event_sigma_ms**2)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
     seen = np.bincount(system.flash_index[inlier[: len(system.flash_index)]], minlength=len(system.flash_ids)) > 0
     flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
     return Solution(
-        [system.camera_solution(x, covariance, c) for c in range(n_cameras)],
+        [replace(system.camera_solution(x, covariance, c), edge_sigma_ms=edge_sigma[c]) for c in range(n_cameras)],
         flash_ms,
         residual * system.sigma_factor,
         inlier,
@@ -178,6 +190,25 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
         system.n_unknowns,
         system.sigma_factor,
     )
+
+
+def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray:
+    """Each camera's least edge noise, ms (shape (n_cameras,)): :data:`EDGE_FLOOR_ROWS` of its
+    time per row. A camera of a few events fits them almost exactly and would claim a noise
+    no band edge has."""
+    columns = np.array([system.param_columns[c][2] for c in range(n_cameras)])
+    return EDGE_FLOOR_ROWS * np.where(columns >= 0, np.abs(x[np.maximum(columns, 0)]), 0.0)
+
+
+#: The least noise of a band edge, rows: clean edges are located to 0.10-0.16 rows RMS
+#: (`benchmarks/bench_edges.py`, README "Edge precision").
+EDGE_FLOOR_ROWS = 0.15
+#: Rounds of reweighting by the groups' noise scales (each camera's events, each camera's
+#: band durations): their edges differ (exposure, pulse, size, codec), by a factor of ten.
+GROUP_SCALE_ROUNDS = 3
+#: The pooled scale counts as this many equations of each group's own (a group of a few
+#: events does not get a scale from them alone).
+POOLED_EQUATIONS = 3.0
 
 
 #: Segments per camera tried for a clock whose rate changes (1 = affine).
@@ -294,6 +325,9 @@ class _System:
         )
         rhs.append(-durations.dt_frame_ms)
         self.n_equations = n_events + len(rows)
+        #: noise group of each equation: camera c's events are c, its durations n_cameras + c
+        self.group = np.concatenate([camera, n_cameras + np.asarray(durations.camera, dtype=np.int64)])
+        self.event_sigma_ms = event_sigma_ms
 
         prior_rows = []
         for c, (mean, std) in sorted(priors.row_time.items()):
@@ -367,6 +401,31 @@ class _System:
         x_cams = linalg.cho_solve(factor, right_cams - coupling @ (right_flashes / d))
         x_flashes = (right_flashes - coupling.T @ x_cams) / d
         return np.concatenate([x_cams, x_flashes]) * self.column_scale
+
+    def group_scales(self, x: np.ndarray, weights: np.ndarray, inlier: np.ndarray) -> np.ndarray:
+        """Each equation's noise (ms, a clean edge's; shape (n_equations,)): the RMS of its
+        group's inlier residuals over the degrees of freedom they leave (their count less
+        their leverages, i.e. the trace of the inverse normal matrix times the group's own),
+        shrunk towards the pooled scale with :data:`POOLED_EQUATIONS`; at least
+        :data:`~flashsync.robust.MIN_SCALE_MS`."""
+        residual = self.residuals(x)
+        w = np.concatenate([weights, np.ones(self.n_priors)])
+        weighted = (sparse.diags(np.sqrt(w)) @ self.matrix).tocsr()
+        try:
+            inverse = linalg.inv((weighted.T @ weighted).toarray(), check_finite=False)
+        except linalg.LinAlgError:
+            return np.full(self.n_equations, self.event_sigma_ms)
+        groups = self.group.max() + 1
+        leverage = np.zeros(groups)
+        for g in range(groups):
+            rows = weighted[np.flatnonzero(self.group == g)]
+            leverage[g] = (rows.T @ rows).multiply(inverse).sum()
+        squares = np.where(inlier, residual**2, 0.0)
+        sums = np.bincount(self.group, squares, minlength=groups)
+        dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
+        pooled = float(squares.sum() / max(dof.sum(), 1.0))
+        scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
+        return np.maximum(scale[self.group], MIN_SCALE_MS)
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """Residuals of the events and durations over their sigma factors, ms (what a clean

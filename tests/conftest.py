@@ -73,3 +73,12 @@ def synced_scenario(tmp_path_factory) -> Path:
     model, _ = synchronize(detect_videos([folder / "r.mp4", folder / "f.mkv", folder / "s.mp4"], estimate_readout=True))
     save_model(model, folder / "sync.json")
     return folder
+
+
+@pytest.fixture(scope="session")
+def local_cluster():
+    """A real Dask LocalCluster of two worker processes (the cluster extra); its scheduler's
+    tcp address."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        yield cluster.scheduler_address

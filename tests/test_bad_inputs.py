@@ -407,10 +407,10 @@ CASES = [
         ["l.csv: line 3 is not UTF-8", "save the file as UTF-8"],
     ),
     (
-        "detections a folder",
+        "detections a folder without tables",
         lambda t: ["restamp", _folder(t / "d.csv"), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv"],
         1,
-        ["d.csv: is a folder"],
+        ["d.csv: holds no .parquet or .csv tables"],
     ),
     # timestamps, homographies, scenario, videos
     (

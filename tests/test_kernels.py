@@ -23,7 +23,19 @@ from flashsync.flicker import (
     _row_pattern,
     _update_mean,
 )
-from flashsync.ramp import MAX_SCALE, MIN_SCALE, _fit_ramp, _solve_spd, fit_pulse_edge
+from flashsync.ramp import (
+    BAND,
+    FALLING,
+    MAX_BLUR,
+    MIN_DECAY,
+    N_PARAMETERS,
+    RISING,
+    _fit,
+    _solve_spd,
+    common_width,
+    fit_pulse_band,
+    fit_pulse_edge,
+)
 
 FAST = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 anything = st.floats(allow_nan=True, allow_infinity=True, width=32)
@@ -58,15 +70,15 @@ def ramps(draw):
 
 
 @FAST
-@given(ramps(), st.booleans(), st.floats(-1.0, 1.0))
-def test_ramp_fit_never_raises_and_stays_in_bounds(ramp, rising, f_scale):
+@given(ramps(), st.sampled_from([BAND, RISING, FALLING]), st.floats(-1.0, 1.0), st.floats(0.0, 30.0))
+def test_band_fit_never_raises_and_stays_in_bounds(ramp, mode, f_scale, width):
     x, y, level = ramp
-    p0 = np.array([x.mean() if x.size else 0.0, 2.0, 0.3, level])
-    p, converged = _fit_ramp(x, y, p0, f_scale, rising)
-    assert p.shape == (4,)
+    p0 = np.array([x.mean() if x.size else 0.0, 1.0, 2.0, 0.3, width, level])
+    p, converged = _fit(x, y, p0, np.ones(N_PARAMETERS, dtype=np.bool_), f_scale, mode)
+    assert p.shape == (N_PARAMETERS,)
     if converged:
         assert np.all(np.isfinite(p))
-        assert MIN_SCALE <= p[1] <= MAX_SCALE and 0.0 <= p[2]
+        assert p[1] >= 0.0 and p[2] >= MIN_DECAY and 0.0 <= p[3] <= MAX_BLUR and p[4] >= 0.0
 
 
 @FAST
@@ -78,6 +90,17 @@ def test_pulse_edge_is_a_row_near_the_guess_or_nan(ramp, row, rise, rising):
         assert abs(edge - row) <= 2.0 + 1e-9
     else:
         assert not (np.isfinite(row) and np.isfinite(rise) and level > 0)
+
+
+@FAST
+@given(ramps(), st.floats(-10, 70) | st.just(np.nan), st.floats(-5, 40), st.floats(-1, 20) | st.just(np.nan))
+def test_pulse_band_is_two_ordered_rows_near_the_guesses_or_none(ramp, leading, width, rise):
+    _, y, level = ramp
+    fit = fit_pulse_band(y, leading, leading + width, rise, level)
+    if fit is not None:
+        assert np.isfinite(fit.leading) and fit.leading <= fit.trailing
+        assert abs(fit.leading - leading) <= 2.0 + 2.0 * max(rise / np.log(3.0), 0.3) + 1e-9
+        assert common_width([fit] * 3) is not None or fit.width <= 0
 
 
 @FAST

@@ -14,9 +14,24 @@ Examples
 ...                   model_ticks_ms(model, 100.0)).tracks                      # doctest: +SKIP
 """
 
-from tracking_adapter.resample import Resampled, format_resampled, resample
-from tracking_adapter.restamp import RestampSummary, format_summary, restamp, restamp_file
-from tracking_adapter.validate import ErrorStats, PairValidation, ValidationReport, format_report, validate
+from flashsync.lazy import lazy_exports
+
+#: Each exported name and the module that defines it, imported on first use
+#: (:mod:`flashsync.lazy`): a command loads only the modules it needs.
+_EXPORTS = {
+    "ErrorStats": "tracking_adapter.validate",
+    "PairValidation": "tracking_adapter.validate",
+    "Resampled": "tracking_adapter.resample",
+    "RestampSummary": "tracking_adapter.restamp",
+    "ValidationReport": "tracking_adapter.validate",
+    "format_report": "tracking_adapter.validate",
+    "format_resampled": "tracking_adapter.resample",
+    "format_summary": "tracking_adapter.restamp",
+    "resample": "tracking_adapter.resample",
+    "restamp": "tracking_adapter.restamp",
+    "restamp_file": "tracking_adapter.restamp",
+    "validate": "tracking_adapter.validate",
+}
 
 __all__ = [
     "ErrorStats",
@@ -32,3 +47,5 @@ __all__ = [
     "restamp_file",
     "validate",
 ]
+
+lazy_exports(__name__, _EXPORTS)

@@ -22,6 +22,8 @@ the image's extent in pixel-centre coordinates.
 from __future__ import annotations
 
 import json
+import shutil
+import tempfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -198,6 +200,73 @@ def restamp_file(
         _restamp_batches(
             Path(in_path), kind, camera, Path(out_path), out_kind, model, exposures, with_std, block_bytes, summary
         )
+    return summary
+
+
+#: The files of a detections folder that are re-stamped: its tables (a partitioned dataset).
+FOLDER_TABLES = (".parquet", ".pq", ".csv")
+
+
+def restamp_folder(
+    in_folder: str | Path,
+    out_folder: str | Path,
+    model: SyncModel,
+    *,
+    exposure_ms: Mapping[str, float] | None = None,
+    with_std: bool = False,
+    scheduler: str | None = None,
+) -> RestampSummary:
+    """Re-stamp a folder of detections tables (a partitioned dataset) partition by partition.
+
+    Every ``.parquet``, ``.pq`` and ``.csv`` file under ``in_folder`` (sub-folders too, such as
+    ``camera=cam1/``) is re-stamped by :func:`restamp_file` into the same relative path
+    under ``out_folder``, in its own format; each file holds the required columns. The
+    output folder appears whole or not at all: it is written beside its place under a
+    temporary name and renamed once every partition is done, so it must not exist yet (or be
+    empty).
+
+    Parameters
+    ----------
+    in_folder, out_folder : str or Path
+    model, exposure_ms, with_std : as for :func:`restamp_file`.
+    scheduler : ``tcp://HOST:PORT`` or ``local:N``: the partitions are re-stamped on that Dask
+        cluster (:mod:`flashsync.cluster`), whose workers see both folders under the same paths.
+
+    Returns
+    -------
+    RestampSummary
+        Summed over the partitions.
+    """
+    in_folder, out_folder = Path(in_folder), Path(out_folder)
+    files = sorted(p.relative_to(in_folder) for p in in_folder.rglob("*") if p.suffix.lower() in FOLDER_TABLES)
+    if not files:
+        raise InputError(f"{in_folder}: holds no .parquet or .csv tables; give a folder of detections tables")
+    if out_folder.exists() and (not out_folder.is_dir() or any(out_folder.iterdir())):
+        raise InputError(f"{out_folder}: exists and is not an empty folder; give a new folder for the output")
+    out_folder.parent.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=f".{out_folder.name}.", dir=out_folder.parent))
+    options = {"exposure_ms": exposure_ms, "with_std": with_std}
+    try:
+        sources, targets = [in_folder / f for f in files], [scratch / f for f in files]
+        if scheduler is None:
+            parts = [restamp_file(source, target, model, **options) for source, target in zip(sources, targets)]
+        else:
+            from flashsync.cluster import connect
+
+            with connect(scheduler) as client:
+                shared = client.scatter(model, broadcast=True)
+                parts = client.gather(client.map(restamp_file, sources, targets, model=shared, **options))
+        if out_folder.exists():
+            out_folder.rmdir()
+        scratch.rename(out_folder)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    summary = RestampSummary(source=str(in_folder), output=str(out_folder))
+    for part in parts:
+        summary.rows += part.rows
+        summary.stamped += part.stamped
+        for reason, count in part.failed.items():
+            summary.failed[reason] = summary.failed.get(reason, 0) + count
     return summary
 
 

@@ -23,15 +23,30 @@ Each reader is the single entry point of its format: whatever reads that file ca
 Writers are atomic (:mod:`flashsync.atomic`).
 """
 
-from flashsync.io.detections import load_detections, load_mot, save_detections
-from flashsync.io.events import events_from_frame, events_to_frame, load_events, save_events
-from flashsync.io.homographies import load_homographies, load_plane_outline
-from flashsync.io.model_file import load_model, save_model
-from flashsync.io.scenario import load_scenario
-from flashsync.io.tables import write_table
-from flashsync.io.timestamps import load_timestamps
-from flashsync.io.truth import load_ground_truth, save_ground_truth
-from flashsync.io.validation import load_validation, save_validation
+from flashsync.lazy import lazy_exports
+
+#: Each exported name and the module that defines it, imported on first use
+#: (:mod:`flashsync.lazy`): a command loads only the modules it needs.
+_EXPORTS = {
+    "events_from_frame": "flashsync.io.events",
+    "events_to_frame": "flashsync.io.events",
+    "load_detections": "flashsync.io.detections",
+    "load_events": "flashsync.io.events",
+    "load_ground_truth": "flashsync.io.truth",
+    "load_homographies": "flashsync.io.homographies",
+    "load_model": "flashsync.io.model_file",
+    "load_mot": "flashsync.io.detections",
+    "load_plane_outline": "flashsync.io.homographies",
+    "load_scenario": "flashsync.io.scenario",
+    "load_timestamps": "flashsync.io.timestamps",
+    "load_validation": "flashsync.io.validation",
+    "save_detections": "flashsync.io.detections",
+    "save_events": "flashsync.io.events",
+    "save_ground_truth": "flashsync.io.truth",
+    "save_model": "flashsync.io.model_file",
+    "save_validation": "flashsync.io.validation",
+    "write_table": "flashsync.io.tables",
+}
 
 __all__ = [
     "events_from_frame",
@@ -53,3 +68,5 @@ __all__ = [
     "save_validation",
     "write_table",
 ]
+
+lazy_exports(__name__, _EXPORTS)

@@ -1,0 +1,138 @@
+"""Detection on a Dask cluster: videos decoded in segments on many machines, events identical.
+
+The unit of work is a (video, segment) (:mod:`flashsync.segments`): segments start at key
+frames, so each decodes on its own to the same row profiles as the whole video does. Decoding
+is nearly all of detection's cost, and the segments of all videos decode in parallel on the
+workers. What carries from frame to frame (the flicker model, the baselines, the recurrence
+filter, the event numbers: :class:`~flashsync.detect.VideoDetection`) is then handed from
+each segment to the next of its video, one small task per segment, so the events are those of
+the plain run by construction, not by a warm-up that only approximates its state. Workers read
+the videos by path: every worker must see them under the same path (a shared filesystem).
+
+``scheduler`` is ``tcp://HOST:PORT`` of a running scheduler (``dask scheduler``, with
+``dask worker tcp://HOST:PORT`` on each machine) or ``local:N`` for a
+:class:`distributed.LocalCluster` of N worker processes on this machine. Dask is an optional
+extra (``pip install 'flashsync[cluster]'``), imported here only.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+from flashsync.detect import CameraDetection, DetectorSettings, VideoDetection
+from flashsync.errors import InputError
+from flashsync.segments import SEGMENT_MS, check_complete, plan_segments, read_segment
+
+#: How long to wait for a scheduler to answer, s.
+CONNECT_TIMEOUT_S = 10
+
+
+def check_scheduler(scheduler: str) -> None:
+    """Raise an :class:`~flashsync.errors.InputError` (parameter ``scheduler``) unless the
+    address is ``tcp://HOST:PORT`` or ``local:N`` (N >= 1); imports nothing."""
+    local = re.fullmatch(r"local:(\d+)", scheduler)
+    if not (re.fullmatch(r"tcp://[^\s:/]+:\d+", scheduler) or (local and int(local.group(1)) >= 1)):
+        raise InputError(
+            f"{scheduler}: expected tcp://HOST:PORT of a running Dask scheduler or local:N for N worker "
+            "processes on this machine",
+            parameter="scheduler",
+        )
+
+
+@contextmanager
+def connect(scheduler: str) -> Iterator:
+    """A :class:`distributed.Client` of the scheduler (see the module's text); a cluster it
+    started is shut down on leaving."""
+    check_scheduler(scheduler)
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError(
+            f"{scheduler}: running on a Dask cluster needs the cluster extra: pip install 'flashsync[cluster]'",
+            parameter="scheduler",
+        ) from None
+    if scheduler.startswith("local:"):
+        n_workers = int(scheduler.partition(":")[2])
+        with (
+            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+            Client(cluster) as client,
+        ):
+            yield client
+        return
+    try:
+        client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+    except (OSError, TimeoutError) as error:
+        raise InputError(
+            f"{scheduler}: no Dask scheduler answers there ({error}); start one with 'dask scheduler' "
+            "and workers with 'dask worker ADDRESS', or give local:N",
+            parameter="scheduler",
+        ) from None
+    with client:
+        yield client
+
+
+def detect_on_cluster(
+    scheduler: str,
+    paths: Sequence[Path],
+    flipped: Sequence[bool | None],
+    settings: DetectorSettings | None = None,
+    progress: Callable[[str, int], Callable[[int], None] | None] | None = None,
+    segment_ms: float = SEGMENT_MS,
+) -> list[CameraDetection]:
+    """:func:`~flashsync.detect.detect_video` of each video, on the cluster ``scheduler``.
+
+    Parameters
+    ----------
+    scheduler : ``tcp://HOST:PORT`` or ``local:N``.
+    paths : videos, each readable by every worker under this path.
+    flipped : per video, as ``detect_video``'s ``flipped``.
+    settings, progress : as for ``detect_video``; progress counts the frames of each segment
+        once it is decoded.
+    segment_ms : segments of at least this long (ms), each starting at a key frame.
+
+    Returns
+    -------
+    list of CameraDetection, one per path, equal to what ``detect_video`` gives.
+    """
+    with connect(scheduler) as client:
+        from distributed import as_completed
+
+        futures = []
+        try:
+            plans = client.map(plan_segments, list(paths), segment_ms=segment_ms, pure=False)
+            futures += plans
+            results, counts = [], []
+            for (info, segments), direction in zip(client.gather(plans), flipped):
+                update = progress(info.camera, info.n_frames_hint) if progress else None
+                parts = client.map(read_segment, segments, pure=False)
+                state = client.submit(VideoDetection, info, direction, settings, pure=False)
+                futures += [*parts, state]
+                for index, part in enumerate(parts):
+                    state = client.submit(_detect_segment, state, part, index == len(parts) - 1, pure=False)
+                    futures.append(state)
+                    if update is not None:
+                        counts.append((client.submit(len, part, pure=False), update))
+                results.append(state)
+            futures += [count for count, _ in counts]
+            updates = dict(counts)
+            for count in as_completed(list(updates)):
+                updates[count](count.result())
+            return client.gather(results)
+        except BaseException:  # an error or an interrupt: nothing more runs for this call
+            client.cancel(futures)
+            raise
+
+
+def _detect_segment(state: VideoDetection, frames: list, last: bool) -> VideoDetection | CameraDetection:
+    """Push one segment's frames (:func:`~flashsync.segments.read_segment`) in order; after the
+    last segment, check the video is complete and return its detection. The state is the
+    previous task's result and nothing else uses it, so it is updated in place."""
+    for t_ms, profile, key in frames:
+        state.push(t_ms, profile, key)
+    if not last:
+        return state
+    check_complete(state.info.path, state.n_frames, [t_ms for t_ms, _, _ in frames[-2:]])
+    return state.finish()
