@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.compiled import njit
+from flashsync.compiled import cholesky_solve, njit
 
 #: Flicker frequencies of 50 Hz and 60 Hz mains, Hz.
 MAINS_FLICKER_HZ = (100.0, 120.0)
@@ -629,7 +629,7 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
         for j in range(p):
             for k in range(j + 1, p):
                 normal[j, k] = normal[k, j]
-        solved, ok = _cholesky_solve(normal, right)
+        solved, ok = cholesky_solve(normal, right)
         if not ok:
             return coef, scale, gn_num, gn_den, False
         coef = solved
@@ -643,7 +643,7 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
         slope[i] = 2.0 * math.pi * total
         for j in range(p):
             projection[j] += weight[i] * basis[rows[i], j] * slope[i]
-    along, ok = _cholesky_solve(normal, projection)  # what the other unknowns absorb of it
+    along, ok = cholesky_solve(normal, projection)  # what the other unknowns absorb of it
     if not ok:
         return coef, scale, gn_num, gn_den, False
     for i in range(n):
@@ -656,38 +656,6 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
         gn_num[strip] += weight[i] * slope[i] * (y[r] - fitted)
         gn_den[strip] += weight[i] * slope[i] * slope[i]
     return coef, scale, gn_num, gn_den, True
-
-
-@njit
-def _cholesky_solve(a, b):  # pragma: no cover - compiled
-    """``a^-1 b`` for a small symmetric positive definite ``a``; (zeros, False) if it is not."""
-    n = b.size
-    low = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1):
-            total = a[i, j]
-            for m in range(j):
-                total -= low[i, m] * low[j, m]
-            if i != j:
-                low[i, j] = total / low[j, j]
-            elif total > 1e-300 and np.isfinite(total):
-                low[i, i] = math.sqrt(total)
-            else:
-                return np.zeros(n), False
-    out = b.copy()
-    for i in range(n):
-        for m in range(i):
-            out[i] -= low[i, m] * out[m]
-        out[i] /= low[i, i]
-    for i in range(n - 1, -1, -1):
-        for m in range(i + 1, n):
-            out[i] -= low[m, i] * out[m]
-        out[i] /= low[i, i]
-    ok = True
-    for i in range(n):
-        if not np.isfinite(out[i]):
-            ok = False
-    return out, ok
 
 
 @njit

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.compiled import njit
+from flashsync.compiled import cholesky_solve, njit
 
 #: Bounds of the pulse's hold and decay length and of the blur, rows.
 MIN_DECAY, MAX_LENGTH = 0.05, 200.0
@@ -352,7 +352,7 @@ def _fit(x, y, p, free, f_scale, mode):  # pragma: no cover - compiled
                 normal[j, j] += (f_scale / BLUR_PRIOR_STD) ** 2
                 gradient[j] += (f_scale / BLUR_PRIOR_STD) ** 2 * p[3]
         for _ in range(30):
-            delta = _solve_spd(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient)
+            delta, _ = cholesky_solve(normal + damping * np.diag(np.diag(normal) + 1e-12), gradient)
             trial = p.copy()
             for j in range(m):
                 trial[index[j]] -= delta[j]
@@ -447,31 +447,3 @@ def _erfcx(t):  # pragma: no cover - compiled
         return math.exp(t * t) * math.erfc(t)
     u = 1.0 / (t * t)
     return (1.0 - 0.5 * u + 0.75 * u * u) / (t * math.sqrt(math.pi))
-
-
-@njit
-def _solve_spd(a, b):  # pragma: no cover - compiled
-    """``a^-1 b`` for a symmetric positive definite ``a`` by Cholesky; zeros if it is not."""
-    n = b.size
-    low = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1):
-            total = a[i, j]
-            for m in range(j):
-                total -= low[i, m] * low[j, m]
-            if i != j:
-                low[i, j] = total / low[j, j]
-            elif total > 0.0:
-                low[i, i] = math.sqrt(total)
-            else:
-                return np.zeros(n)
-    out = b.copy()
-    for i in range(n):  # forward: low z = b
-        for m in range(i):
-            out[i] -= low[i, m] * out[m]
-        out[i] /= low[i, i]
-    for i in range(n - 1, -1, -1):  # back: low^T x = z
-        for m in range(i + 1, n):
-            out[i] -= low[m, i] * out[m]
-        out[i] /= low[i, i]
-    return out
