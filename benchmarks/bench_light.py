@@ -46,6 +46,24 @@ def irregular_flashes(seed: int, count: int, duration_ms: float) -> tuple[FlashS
     return tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.3, 0.7)), 3)) for t in instants)
 
 
+def crowd_camera(name: str, fps: float, y_m: float, **changes) -> CameraSpec:
+    """A 320x240 camera with an 8 ms exposure close to the crowd, on the rink's long side at
+    ``y_m`` (m)."""
+    return CameraSpec(
+        name,
+        320,
+        240,
+        fps,
+        r0=8,
+        r1=12,
+        exposure_ms=8.0,
+        noise_std=1.5,
+        position_m=(30.0, y_m, 10.0),
+        **CLOSE,
+        **changes,
+    )
+
+
 def rig(name: str, minutes: float) -> Scenario:
     if name == "rolling-flicker":
         cameras = (
@@ -78,56 +96,22 @@ def rig(name: str, minutes: float) -> Scenario:
             seed=31,
         )
     if name == "flash-free":
-        cameras = (
-            CameraSpec(
-                "cam1",
-                320,
-                240,
-                25.0,
-                r0=8,
-                r1=12,
-                exposure_ms=8.0,
-                noise_std=1.5,
-                position_m=(30.0, -6.0, 10.0),
-                **CLOSE,
-            ),
-            CameraSpec(
-                "cam2",
-                320,
-                240,
-                30.0,
-                r0=8,
-                r1=12,
-                exposure_ms=8.0,
-                noise_std=1.5,
-                position_m=(30.0, 36.0, 10.0),
-                **CLOSE,
-            ),
-        )
+        cameras = (crowd_camera("cam1", 25.0, -6.0), crowd_camera("cam2", 30.0, 36.0))
         return Scenario(
             name, cameras, duration_ms=30_000.0, flicker_depth=0.05, flicker_hz=100.0, n_players=20, seed=32
         )
     duration_ms = minutes * 60_000.0
     cameras = (
-        CameraSpec(
-            "cam1", 320, 240, 25.0, r0=8, r1=12, exposure_ms=8.0, noise_std=1.5, position_m=(30.0, -6.0, 10.0), **CLOSE
-        ),
-        CameraSpec(
+        crowd_camera("cam1", 25.0, -6.0),
+        crowd_camera(
             "cam2",
-            320,
-            240,
             30.0,
-            r0=8,
-            r1=12,
-            exposure_ms=8.0,
-            noise_std=1.5,
+            36.0,
             start_ms=3000.0,
             offset_ms=-2713.0,
             drift_ppm=12.0,
             drift_rate_ppm_per_s=0.01,
             container="mkv",
-            position_m=(30.0, 36.0, 10.0),
-            **CLOSE,
         ),
     )
     return Scenario(

@@ -128,43 +128,29 @@ def test_reasons_of_the_solved_model_match_the_sensor_away_from_boundaries(synce
 
 def test_frames_command_writes_csv_and_parquet(synced_scenario, tmp_path, capsys):
     model = synced_scenario / "sync.json"
-    code, _, err = run(
-        capsys,
-        "frames",
-        "--model",
-        model,
-        "--rate",
-        100,
-        "--start-ms",
-        1000,
-        "--end-ms",
-        2000,
-        "-o",
-        tmp_path / "frames.csv",
-    )
-    assert code == 0, err
-    assert "100 ticks x 3 cameras" in err
+    for name in ("frames.csv", "frames.parquet"):
+        code, _, err = run(
+            capsys,
+            "frames",
+            "--model",
+            model,
+            "--rate",
+            100,
+            "--start-ms",
+            1000,
+            "--end-ms",
+            2000,
+            "-o",
+            tmp_path / name,
+        )
+        assert code == 0, err
+        assert "100 ticks x 3 cameras" in err
     table = pd.read_csv(tmp_path / "frames.csv", keep_default_na=False)
     assert list(table.columns) == ["t_global_ms", "camera", "frame", "row", "reason"]
     assert len(table) == 300 and table["t_global_ms"].iloc[0] == 1000.0
     assert set(table["reason"]) <= set(REASONS)
     assert ((table["frame"] == "") == (table["reason"] != "")).all()
     assert ((table["row"] == "") == (table["reason"] != "")).all()
-    code, _, err = run(
-        capsys,
-        "frames",
-        "--model",
-        model,
-        "--rate",
-        100,
-        "--start-ms",
-        1000,
-        "--end-ms",
-        2000,
-        "-o",
-        tmp_path / "frames.parquet",
-    )
-    assert code == 0, err
     parquet = pd.read_parquet(tmp_path / "frames.parquet")
     assert str(parquet["frame"].dtype) == "Int64"
     csv = pd.read_csv(tmp_path / "frames.csv")
