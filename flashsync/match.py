@@ -9,8 +9,8 @@ vote for the shift (flashes fired by hand are irregular, so only the true shift 
 them up); each leading candidate is refined into an affine map (shift and drift) by
 alternating one-to-one matching and fitting. Pairs sharing at least
 :data:`MIN_SHARED_FLASHES` events without a rival shift are then merged, strongest first,
-into flashes: groups of at most one event per camera (:func:`match_events`). Cameras are tied together through chains of shared flashes
-(:meth:`Matching.tied_to`).
+into flashes: groups of at most one event per camera (:func:`match_events`). Cameras are
+tied together through chains of shared flashes (:meth:`Matching.tied_to`).
 """
 
 from __future__ import annotations
