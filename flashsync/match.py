@@ -146,10 +146,11 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     up at least :data:`MIN_SHARED_FLASHES` (fewer never count).
 
     A shift's votes are the event-time differences within ``window`` of it. They are
-    counted only where a histogram of the differences (bins one window wide) allows enough
-    of them: first where the bins allow as many as the ``8 n_candidates``-th fullest bin
-    does; where that cannot be told to give the same candidates as counting every
-    difference, everywhere a shift could line up :data:`MIN_SHARED_FLASHES`."""
+    counted only in bins (one window wide) whose differences can have at least ``floor``
+    votes (the bin and its two neighbours hold that many): first the floor of the
+    (:data:`FLOOR_RANK` x ``n_candidates``)-th fullest bin, lowered until the last shift
+    chosen has at least ``floor`` votes, so that no shift under the floor could rank among
+    them: the candidates are those of counting every difference."""
     differences = (times_a[:, None] - times_b[None, :]).ravel()
     span = max(np.ptp(times_a), np.ptp(times_b))
     window = tolerance_ms + MAX_DRIFT * span
@@ -177,8 +178,8 @@ def _strongest_shifts(
 ) -> tuple[list[float], int]:
     """Up to ``n_candidates`` differences (ms) with most votes, at least
     :data:`MIN_SHARED_FLASHES`, each more than two windows from a stronger one, among those
-    in bins whose ``bound`` reaches ``floor`` (their votes counted exactly: the bins two
-    either side are counted too); and the votes of the last one chosen."""
+    in bins whose ``bound`` reaches ``floor`` (their votes counted exactly: the bins either
+    side are counted too); and the votes of the last one chosen."""
     counted = bound >= floor
     subset = np.sort(differences[np.convolve(counted, np.ones(3), mode="same")[bins] > 0])
     votes = np.searchsorted(subset, subset + window) - np.searchsorted(subset, subset - window)
