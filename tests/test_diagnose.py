@@ -265,17 +265,7 @@ SECOND_WORLD = {
 }
 
 
-#: Known, issue 17 open: after the whole-band edge fit was merged, the workflow on this rig
-#: takes a drift-rate change of 327 ppm/s on cam2 and its model is 1.4 ms off (0.024 before).
-KNOWN_MISS = pytest.mark.xfail(
-    strict=True, reason="diagnose -o 1.4 ms off on the second world's 1.2 ms jitter since the whole-band edges"
-)
-
-
-@pytest.mark.parametrize(
-    "case",
-    [pytest.param(case, marks=KNOWN_MISS) if case == "stamps jittered 1.2 ms" else case for case in SECOND_WORLD],
-)
+@pytest.mark.parametrize("case", SECOND_WORLD)
 def test_second_world_stamp_faults_are_named_first_and_sync_and_diagnose_o_agree(tmp_path, case):
     """The simulator's second world (``recipe(name)``: xenon or LED pulses, tone curves, crf
     18-30, players), its 25 fps camera and the 30 fps one with the stamp fault, 6 s: the
