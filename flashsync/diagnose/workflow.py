@@ -11,11 +11,12 @@ or on two (the reference's time per row and another camera's exposure both move 
 between its edges) alike: the pair of the lowest BIC wins, wherever it is (trying one
 camera's pairs first took a drift-rate change on a camera whose stamps jitter, where the
 reference's time per row and the camera's exposure fit to the noise), and without such a
-pair the residuals hold nothing the catalogue can explain and the loop stops. After each addition, an effect added earlier
-whose evidence has fallen to :data:`THRESHOLD` or less (a later one explains its structure
-better) is taken out again, for good. The final residuals are then tested against the edge
-noise the band lengths show (:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where
-an excess is). The data never say which effect is there: the workflow sees frame stamps and band edges."""
+pair the residuals hold nothing the catalogue can explain and the loop stops. After each
+addition, an effect added earlier whose evidence has fallen to :data:`THRESHOLD` or less (a
+later one explains its structure better) is taken out again, for good. The final residuals
+are then tested against the edge noise the band lengths show
+(:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is). The data never
+say which effect is there: the workflow sees frame stamps and band edges."""
 
 from __future__ import annotations
 
