@@ -409,23 +409,50 @@ class _System:
         shrunk towards the pooled scale with :data:`POOLED_EQUATIONS`; at least
         :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
-        w = np.concatenate([weights, np.ones(self.n_priors)])
-        weighted = (sparse.diags(np.sqrt(w)) @ self.matrix).tocsr()
-        try:
-            inverse = linalg.inv((weighted.T @ weighted).toarray(), check_finite=False)
-        except linalg.LinAlgError:
+        leverages = self._leverages(weights)
+        if leverages is None:
             return np.full(self.n_equations, self.event_sigma_ms)
         groups = self.group.max() + 1
-        leverage = np.zeros(groups)
-        for g in range(groups):
-            rows = weighted[np.flatnonzero(self.group == g)]
-            leverage[g] = (rows.T @ rows).multiply(inverse).sum()
+        leverage = np.bincount(self.group, leverages, minlength=groups)
         squares = np.where(inlier, residual**2, 0.0)
         sums = np.bincount(self.group, squares, minlength=groups)
         dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
         pooled = float(squares.sum() / max(dof.sum(), 1.0))
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
         return np.maximum(scale[self.group], MIN_SCALE_MS)
+
+    def _leverages(self, weights: np.ndarray) -> np.ndarray | None:
+        """Each equation's leverage ``w_i a_i' N^-1 a_i`` (shape (n_equations,)) for the normal
+        matrix ``N`` of ``weights``, from its flash-eliminated form (:meth:`_reduced`): with
+        ``M = B / d`` (coupling over the flash diagonal), an equation of camera part ``c`` and
+        flash coefficient ``f`` on flash ``k`` has ``a' N^-1 a = (c - f M_k)' S^-1 (c - f M_k)
+        + f^2 / d_k``. None where ``N`` is singular: a flash whose every equation has weight 0,
+        or a singular ``S``."""
+        w = np.concatenate([weights, np.ones(self.n_priors)])
+        if np.any(np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel() == 0):
+            return None
+        try:
+            factor, coupling, d, _, _ = self._reduced(weights)
+        except NotEnoughDataError:
+            return None
+        inverse = linalg.cho_solve(factor, np.eye(self.n_camera_columns))
+        moved = coupling / d
+        spread = inverse @ moved
+        flash_term = 1.0 / d + np.sum(moved * spread, axis=0)
+        cams = self.cams[: self.n_equations]
+        flashes = self.flashes[: self.n_equations].tocoo()
+        f = np.zeros(self.n_equations)
+        k = np.zeros(self.n_equations, dtype=np.int64)
+        f[flashes.row], k[flashes.row] = flashes.data, flashes.col
+        counts = np.diff(cams.indptr)
+        width = int(counts.max()) if counts.size else 0
+        slot = np.arange(width) < counts[:, None]
+        columns = np.zeros((self.n_equations, width), dtype=np.int64)
+        values = np.zeros((self.n_equations, width))
+        columns[slot], values[slot] = cams.indices, cams.data
+        own = np.einsum("ia,ib,iab->i", values, values, inverse[columns[:, :, None], columns[:, None, :]])
+        cross = np.einsum("ia,ia->i", values, spread[columns, k[:, None]])
+        return w[: self.n_equations] * (own - 2 * f * cross + f**2 * flash_term[k])
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """Residuals of the events and durations over their sigma factors, ms (what a clean
