@@ -130,8 +130,8 @@ def _detect_segment(state: VideoDetection, frames: list, last: bool) -> VideoDet
     """Push one segment's frames (:func:`~flashsync.segments.read_segment`) in order; after the
     last segment, check the video is complete and return its detection. The state is the
     previous task's result and nothing else uses it, so it is updated in place."""
-    for t_ms, profile, key in frames:
-        state.push(t_ms, profile, key)
+    for t_ms, profile, picture in frames:
+        state.push(t_ms, profile, picture)
     if not last:
         return state
     check_complete(state.info.path, state.n_frames, [t_ms for t_ms, _, _ in frames[-2:]])

@@ -614,8 +614,8 @@ def detect_video(
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
     detection = VideoDetection(info, flipped, settings)
-    for t_ms, profile, key in profiles:
-        detection.push(t_ms, profile, key)
+    for t_ms, profile, picture in profiles:
+        detection.push(t_ms, profile, picture)
         if update is not None:
             update(1)
     return detection.finish()
@@ -650,10 +650,10 @@ class VideoDetection:
         """Frames pushed so far."""
         return self._remove_flicker.n_seen
 
-    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> None:
+    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P") -> None:
         """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`)
-        and whether it is a key frame."""
-        self._detect(self._remove_flicker.push(t_ms, profile, key))
+        and picture type (``"I"``, ``"P"`` or ``"B"``, :func:`~flashsync.profiles.read_profiles`)."""
+        self._detect(self._remove_flicker.push(t_ms, profile, picture))
 
     def finish(self) -> CameraDetection:
         """The detection, once every frame is pushed."""

@@ -129,9 +129,13 @@ MAX_AMPLITUDE_FACTOR = 2.5
 #: Time constant of each row's own gain on the pattern, frames, and its largest size.
 ROW_GAIN_FRAMES = 32.0
 MAX_ROW_GAIN = 1.5
-#: Frames a corrected frame waits for those after it: a B-frame's blocks may be copies of a
-#: reference frame up to this many frames later (x264's longest run of B-frames is 3) or earlier.
+#: Frames a corrected frame waits for those after it: a B-frame's blocks may be copies of
+#: the reference frame after it, up to this many frames later (x264's runs of B-frames are
+#: at most 3 long).
 COPY_FRAMES = 4
+#: Reference frames before a frame whose blocks it may copy (x264 predicts from up to 3,
+#: and a run of frozen blocks carries its source's correction from frame to frame).
+COPY_REFERENCES = 4
 #: Fewest rows a frame needs for its flicker to be looked for.
 MIN_ROWS = 16
 #: Gauss-Newton steps on the learning frames.
@@ -165,12 +169,13 @@ class FlickerRemover:
         self._evidence = _Evidence()
         self._mean_phasor = 0j
         self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
-        self._pending: deque[tuple[float, np.ndarray, bool, np.ndarray]] = deque()  # corrections, not yet applied
-        self._recent: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_FRAMES)  # applied: (profile, log correction)
+        self._pending: deque[tuple[float, np.ndarray, str, np.ndarray]] = deque()  # corrections not yet applied
+        self._references: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
+        self._previous_b: tuple[np.ndarray, np.ndarray] | None = None  # the B-frame just before
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
-        for t_ms, profile, *key in frames:
-            yield from self.push(t_ms, profile, bool(key and key[0]))
+        for t_ms, profile, *picture in frames:
+            yield from self.push(t_ms, profile, *picture)
         yield from self.flush()
 
     @property
@@ -178,13 +183,14 @@ class FlickerRemover:
         """Frames taken so far."""
         return self._n_seen
 
-    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> list[tuple[float, np.ndarray]]:
-        """Take one frame (``key``: a key frame); return the frames it lets out, corrected
+    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P") -> list[tuple[float, np.ndarray]]:
+        """Take one frame (``picture``: ``"I"``, ``"P"`` or ``"B"``, how it was coded,
+        :func:`~flashsync.profiles.read_profiles`); return the frames it lets out, corrected
         (none while the lookahead fills, then one). The state between calls is all in the
         object, which pickles: a video can be fed in parts, on different machines."""
         settings = self.settings
         profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
-        self._queue.append((t_ms, profile, key))
+        self._queue.append((t_ms, profile, picture))
         if self._n_seen % settings.reservoir_step == 0:
             self._reservoir.append((t_ms, profile))
         self._n_seen += 1
@@ -242,7 +248,7 @@ class FlickerRemover:
             )
         self._lock = lock
 
-    def _correct(self, t_ms: float, profile: np.ndarray, key: bool) -> tuple[float, np.ndarray, bool, np.ndarray]:
+    def _correct(self, t_ms: float, profile: np.ndarray, picture: str) -> tuple[float, np.ndarray, str, np.ndarray]:
         """Fit the frame's pattern against the running mean, learn from it; the frame with its
         log correction per row (shape (height,)), divided out by :meth:`_apply`.
 
@@ -253,7 +259,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, profile, key, np.zeros(len(profile))
+            return t_ms, profile, picture, np.zeros(len(profile))
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -273,19 +279,18 @@ class FlickerRemover:
             1.0 / ROW_GAIN_FRAMES,
             2.0 * lock.amplitude**2,
         )
-        if key:
+        if picture == "I":
             lock.key_pattern = lock.basis[:, 1:] @ coef[1:]
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
-        return t_ms, profile, key, pattern
+        return t_ms, profile, picture, pattern
 
     def _apply(self) -> tuple[float, np.ndarray]:
         """The oldest pending frame (shape (height, blocks)) with its log correction divided
         out of its rows, except in the blocks that the codec copied from another frame (the
         same value to the last bit: sensor noise never repeats): they hold that frame's light
-        and get that frame's correction. The sources, first match first: the last key frame,
-        the :data:`COPY_FRAMES` frames before (nearest first) and those after.
+        and get that frame's correction.
 
         Between key frames x264 predicts a frame from one at the same phase of a rolling
         flicker (three frames back at 30 fps under 50 Hz mains), so flat rows follow the
@@ -295,24 +300,38 @@ class FlickerRemover:
         group of pictures hold the key frame's in the next: no row's share of the pattern
         learned over the frames before can tell (5 % bands at rows that had followed it).
 
-        A B-frame is also predicted from the reference frame after it: the one just before a
-        key frame copies the key frame's blocks, and those just after one copy the rows that
-        the next P-frame codes again at its own phase. Their light is that later frame's, so
-        the division waits :data:`COPY_FRAMES` frames for its correction."""
-        t_ms, profile, key, pattern = self._pending.popleft()
+        A block's light is that of the frame that coded it, the first in decoding order of a
+        run of equal blocks: a reference frame (I or P) before a B-frame shown before it. So
+        the sources, first match first: for a P-frame the last key frame and the
+        :data:`COPY_REFERENCES` reference frames before it (nearest first); for a B-frame
+        also the next reference frame (the division waits :data:`COPY_FRAMES` frames for
+        it) and then the B-frame before (x264 predicts B-frames from B-frames too). A
+        B-frame just before a key frame copies the key frame's blocks, and one just after an
+        auto-exposure step or a key frame copies the rows the next P-frame codes again, at
+        its own phase: 6 % bands where the B-frame got the correction of the frame it was
+        shown after."""
+        t_ms, profile, picture, pattern = self._pending.popleft()
         applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
-        if not key:
-            later = [(p, np.repeat(c.astype(np.float32)[:, None], p.shape[1], axis=1)) for _, p, _, c in self._pending]
-            sources = ([self._key] if self._key is not None else []) + list(reversed(self._recent)) + later
+        if picture != "I":
+            sources = ([self._key] if self._key is not None else []) + list(reversed(self._references))
+            if picture == "B":
+                after = next(((p, c) for _, p, kind, c in self._pending if kind != "B"), None)
+                if after is not None:
+                    sources.append((after[0], np.repeat(after[1].astype(np.float32)[:, None], profile.shape[1], axis=1)))
+                if self._previous_b is not None:
+                    sources.append(self._previous_b)
             free = np.ones(profile.shape, dtype=bool)
             for source, correction in sources:
                 if source.shape == profile.shape:
                     copied = free & (profile == source)
                     applied[copied] = correction[copied]
                     free &= ~copied
-        else:
+        if picture == "I":
             self._key = (profile, applied)
-        self._recent.append((profile, applied))
+        if picture == "B":
+            self._previous_b = (profile, applied)
+        else:
+            self._references.append((profile, applied))
         return t_ms, profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
