@@ -133,8 +133,8 @@ MAX_ROW_GAIN = 1.5
 #: the reference frame after it, up to this many frames later (x264's runs of B-frames are
 #: at most 3 long).
 COPY_FRAMES = 4
-#: Reference frames before a frame whose blocks it may copy (x264 predicts from up to 3,
-#: and a run of frozen blocks carries its source's correction from frame to frame).
+#: Frames before a frame whose blocks it may copy (a run of frozen blocks carries its
+#: source's correction from frame to frame).
 COPY_REFERENCES = 4
 #: Fewest rows a frame needs for its flicker to be looked for.
 MIN_ROWS = 16
@@ -170,8 +170,7 @@ class FlickerRemover:
         self._mean_phasor = 0j
         self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
         self._pending: deque[tuple[float, np.ndarray, str, np.ndarray]] = deque()  # corrections not yet applied
-        self._references: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
-        self._previous_b: tuple[np.ndarray, np.ndarray] | None = None  # the B-frame just before
+        self._before: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
         for t_ms, profile, *picture in frames:
@@ -300,26 +299,21 @@ class FlickerRemover:
         group of pictures hold the key frame's in the next: no row's share of the pattern
         learned over the frames before can tell (5 % bands at rows that had followed it).
 
-        A block's light is that of the frame that coded it, the first in decoding order of a
-        run of equal blocks: a reference frame (I or P) before a B-frame shown before it. So
-        the sources, first match first: for a P-frame the last key frame and the
-        :data:`COPY_REFERENCES` reference frames before it (nearest first); for a B-frame
-        also the next reference frame (the division waits :data:`COPY_FRAMES` frames for
-        it) and then the B-frame before (x264 predicts B-frames from B-frames too). A
-        B-frame just before a key frame copies the key frame's blocks, and one just after an
-        auto-exposure step or a key frame copies the rows the next P-frame codes again, at
-        its own phase: 6 % bands where the B-frame got the correction of the frame it was
-        shown after."""
+        A block's light is that of the frame that coded it, and a B-frame is decoded after
+        the reference frame (I or P) shown next, so it may copy from it. The sources, first
+        match first: the last key frame, the :data:`COPY_REFERENCES` frames before (nearest
+        first) and, for a B-frame, the next reference frame (the division waits
+        :data:`COPY_FRAMES` frames for it). A B-frame just before a key frame copies the key
+        frame's blocks, and one just after an auto-exposure step copies the rows that the
+        next P-frame codes again at its own phase."""
         t_ms, profile, picture, pattern = self._pending.popleft()
         applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
         if picture != "I":
-            sources = ([self._key] if self._key is not None else []) + list(reversed(self._references))
+            sources = ([self._key] if self._key is not None else []) + list(reversed(self._before))
             if picture == "B":
                 after = next(((p, c) for _, p, kind, c in self._pending if kind != "B"), None)
                 if after is not None:
                     sources.append((after[0], np.repeat(after[1].astype(np.float32)[:, None], profile.shape[1], axis=1)))
-                if self._previous_b is not None:
-                    sources.append(self._previous_b)
             free = np.ones(profile.shape, dtype=bool)
             for source, correction in sources:
                 if source.shape == profile.shape:
@@ -328,10 +322,7 @@ class FlickerRemover:
                     free &= ~copied
         if picture == "I":
             self._key = (profile, applied)
-        if picture == "B":
-            self._previous_b = (profile, applied)
-        else:
-            self._references.append((profile, applied))
+        self._before.append((profile, applied))
         return t_ms, profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
