@@ -249,7 +249,8 @@ class FlickerRemover:
 
     def _correct(self, t_ms: float, profile: np.ndarray, picture: str) -> tuple[float, np.ndarray, str, np.ndarray]:
         """Fit the frame's pattern against the running mean, learn from it; the frame with its
-        log correction per row (shape (height,)), divided out by :meth:`_apply`.
+        log correction (per row, repeated over the blocks: shape (height, blocks), float32),
+        divided out by :meth:`_apply`.
 
         What the codec keeps from frame to frame (a row whose blocks it skips) holds the
         pattern of the last key frame, where it refreshes everything: each row removes its
@@ -258,7 +259,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, profile, picture, np.zeros(len(profile))
+            return t_ms, profile, picture, np.zeros(profile.shape, np.float32)
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -283,7 +284,7 @@ class FlickerRemover:
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
-        return t_ms, profile, picture, pattern
+        return t_ms, profile, picture, np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
 
     def _apply(self) -> tuple[float, np.ndarray]:
         """The oldest pending frame (shape (height, blocks)) with its log correction divided
@@ -306,14 +307,11 @@ class FlickerRemover:
         :data:`COPY_FRAMES` frames for it). A B-frame just before a key frame copies the key
         frame's blocks, and one just after an auto-exposure step copies the rows that the
         next P-frame codes again at its own phase."""
-        t_ms, profile, picture, pattern = self._pending.popleft()
-        applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
+        t_ms, profile, picture, applied = self._pending.popleft()
         if picture != "I":
             sources = ([self._key] if self._key is not None else []) + list(reversed(self._before))
             if picture == "B":
-                after = next(((p, c) for _, p, kind, c in self._pending if kind != "B"), None)
-                if after is not None:
-                    sources.append((after[0], np.repeat(after[1].astype(np.float32)[:, None], profile.shape[1], axis=1)))
+                sources += [(p, c) for _, p, kind, c in self._pending if kind != "B"][:1]
             free = np.ones(profile.shape, dtype=bool)
             for source, correction in sources:
                 if source.shape == profile.shape:

@@ -16,7 +16,6 @@ from flashsync.flicker import FlickerRemover
 from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
-
 #: Real H.264 clips cut from longer renderings at key frames, without re-encoding.
 CLIPS = Path(__file__).parent / "clips"
 
