@@ -1,6 +1,7 @@
 """False events in long clips without flashes: the detector must find none.
 
-Run: python benchmarks/bench_false_events.py [--minutes 10] [--cases rink,crowd-16ms,...] [--dir DIR]
+Run: python benchmarks/bench_false_events.py [--minutes 10] [--cases rink,crowd-16ms,...] [--keep DIR]
+     python benchmarks/bench_false_events.py --minutes 10 --keep DIR --render-only
 
 Renders one camera per case watching the rink for ``--minutes`` with everything that is not
 a flash, and counts the detected events (the target is 0 in every case):
@@ -14,19 +15,27 @@ a flash, and counts the detected events (the target is 0 in every case):
   30 fps, or 120 Hz, rolling at 25 fps), auto-exposure steps.
 
 All H.264 (crf 23-26, a key frame every 250 frames), sensor noise. Prints per case the
-frames, the false events and the detection throughput; the events themselves if any.
+frames, the false events and the detection throughput; the events themselves if any. With
+``--keep DIR`` the clips are rendered into ``DIR/<case>`` and a clip kept there of exactly
+the same scenario is reused (ten minutes of seven cases take ~45 min to render, seconds
+to detect); ``--render-only`` renders them, one at a time, and detects nothing.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
 
-from flashsync.detect import detect_video
-from flashsync.io import events_to_frame
-from flashsync.simulation import CameraSpec, Scenario, render_scenario
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_rigs import rendered  # noqa: E402
+
+from flashsync.detect import detect_video  # noqa: E402
+from flashsync.io import events_to_frame  # noqa: E402
+from flashsync.simulation import CameraSpec, Scenario  # noqa: E402
 
 #: name: (fps, exposure ms, flicker depth, flicker Hz)
 CROWD_CASES = {
@@ -108,15 +117,19 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=10.0)
     names = ", ".join(CASES).replace("%", "%%")  # argparse formats help with %
     parser.add_argument("--cases", default=",".join(CASES), help=f"comma-separated, of {names}")
-    parser.add_argument("--dir", type=Path, help="where to write the clips (default: a temp dir)")
+    parser.add_argument("--keep", type=Path, help="render into (and reuse from) this folder (default: a temp dir)")
+    parser.add_argument("--render-only", action="store_true", help="render the clips, detect nothing")
     args = parser.parse_args()
-    root = args.dir or Path(tempfile.mkdtemp(prefix="flashsync-quiet-"))
-    print(f"{'case':<22} {'frames':>7} {'false events':>12} {'detect fps':>10}")
+    root = args.keep or Path(tempfile.mkdtemp(prefix="flashsync-quiet-"))
+    if not args.render_only:
+        print(f"{'case':<22} {'frames':>7} {'false events':>12} {'detect fps':>10}")
     for case in args.cases.split(","):
         folder = root / case
+        rendered(flash_free_scenario(case, args.minutes), folder)
+        if args.render_only:
+            print(f"{case}: rendered in {folder}", flush=True)
+            continue
         video = folder / "quiet.mp4"
-        if not video.exists():
-            render_scenario(flash_free_scenario(case, args.minutes), folder)
         start = time.perf_counter()
         detection = detect_video(video)
         elapsed = time.perf_counter() - start

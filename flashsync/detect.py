@@ -81,6 +81,14 @@ class DetectorSettings:
         darker rows are blind.
     min_step : float
         Smallest brightness step (fraction of white; 1.5 DN) that counts as a change.
+    min_band_step : float
+        Smallest brightness step of a band (fraction of white; 2 DN), the median over its
+        rows and blocks; a fainter band is held for the recurrence filter (its repeats are
+        evidence) but is not an event. The codec rounds a dark flat area to a DN or two, and
+        differently in a frame it codes afresh than in the key frame that the frames around
+        it copy: in rows 24 DN above black, a B-frame two frames after a key frame stood
+        1.6 DN (6.6 %) above its neighbours. A band of 20 % passes in rows from 10 DN (0.046
+        of white) up.
     step_frames : int
         Whole frames a change must fill to be a light switched on or off.
     agreement : float
@@ -102,6 +110,7 @@ class DetectorSettings:
     min_rows: int = 3
     min_level: float = 0.035
     min_step: float = 1.5 / 219.0
+    min_band_step: float = 2.0 / 219.0
     step_frames: int = 2
     agreement: float = 0.6
     clutter_factor: float = 2.5
@@ -122,6 +131,7 @@ class _Segment:
     saturated: bool
     sigma: float
     stripe: Stripe
+    step: float
 
 
 @dataclass
@@ -161,6 +171,7 @@ class EventDetector:
         self.exposure_rows: float | None = None
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
+        self.n_faint = 0
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
         """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
@@ -219,6 +230,7 @@ class EventDetector:
                         bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
                         sigma,
                         stripe,
+                        _step(readout[start:stop], float(np.median(signed[start:stop])), sign),
                     )
                 )
         self._remember(readout)
@@ -251,7 +263,11 @@ class EventDetector:
     def _number(self, released: list[tuple[list[tuple], BandFit | None]]) -> None:
         """Number the events that passed the recurrence filter and keep their edges (and
         the fits of the bands fitted whole)."""
-        for edges, whole in released:
+        for payload in released:
+            if payload is None:
+                self.n_faint += 1
+                continue
+            edges, whole = payload
             if whole is not None:
                 self._whole.append(whole)
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
@@ -340,7 +356,16 @@ class EventDetector:
                 )
             )
         stripes = [segment.stripe for segment in event.segments]
-        self._recurrence.hold(stripes, first.sign * plateau, (found, whole), checked=kind is Band.PULSE)
+        faint = max(segment.step for segment in event.segments) < self.settings.min_band_step
+        payload = None if faint else (found, whole)  # still held: its repeats count as recurrence
+        self._recurrence.hold(stripes, first.sign * plateau, payload, checked=kind is Band.PULSE)
+
+
+def _step(rows: np.ndarray, strength: float, sign: int) -> float:
+    """A band's brightness step (fraction of white): its ``strength`` (relative change, made
+    positive by ``sign``) times the level before it of its ``rows`` (shape (rows, blocks),
+    the median over them)."""
+    return float(np.median(rows)) * strength / (1.0 + sign * strength)
 
 
 @njit
@@ -614,8 +639,8 @@ def detect_video(
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
     detection = VideoDetection(info, flipped, settings)
-    for t_ms, profile, key in profiles:
-        detection.push(t_ms, profile, key)
+    for t_ms, profile, picture in profiles:
+        detection.push(t_ms, profile, picture)
         if update is not None:
             update(1)
     return detection.finish()
@@ -650,10 +675,10 @@ class VideoDetection:
         """Frames pushed so far."""
         return self._remove_flicker.n_seen
 
-    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> None:
+    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P") -> None:
         """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`)
-        and whether it is a key frame."""
-        self._detect(self._remove_flicker.push(t_ms, profile, key))
+        and picture type (``"I"``, ``"P"`` or ``"B"``, :func:`~flashsync.profiles.read_profiles`)."""
+        self._detect(self._remove_flicker.push(t_ms, profile, picture))
 
     def finish(self) -> CameraDetection:
         """The detection, once every frame is pushed."""

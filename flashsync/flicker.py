@@ -129,6 +129,9 @@ MAX_AMPLITUDE_FACTOR = 2.5
 #: Time constant of each row's own gain on the pattern, frames, and its largest size.
 ROW_GAIN_FRAMES = 32.0
 MAX_ROW_GAIN = 1.5
+#: Frames before a frame whose blocks it may copy (a run of frozen blocks carries its
+#: source's correction from frame to frame).
+COPY_REFERENCES = 4
 #: Fewest rows a frame needs for its flicker to be looked for.
 MIN_ROWS = 16
 #: Gauss-Newton steps on the learning frames.
@@ -140,8 +143,8 @@ class FlickerRemover:
 
     Call it on an iterable of ``(t_frame_ms, profile)`` (profile: float array (height, blocks),
     stored rows, light-linear as :func:`flashsync.profiles.row_profile` gives it); it yields
-    the same pairs with the flicker divided out, ``settings.lookahead`` frames later (memory
-    stays constant). :meth:`estimate` gives what it found once the iterator is exhausted.
+    the same pairs with the flicker divided out, ``settings.lookahead`` frames
+    later (memory stays constant). :meth:`estimate` gives what it found once the iterator is exhausted.
 
     Examples
     --------
@@ -162,10 +165,11 @@ class FlickerRemover:
         self._evidence = _Evidence()
         self._mean_phasor = 0j
         self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
+        self._before: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
-        for t_ms, profile, *key in frames:
-            yield from self.push(t_ms, profile, bool(key and key[0]))
+        for t_ms, profile, *picture in frames:
+            yield from self.push(t_ms, profile, *picture)
         yield from self.flush()
 
     @property
@@ -173,25 +177,28 @@ class FlickerRemover:
         """Frames taken so far."""
         return self._n_seen
 
-    def push(self, t_ms: float, profile: np.ndarray, key: bool = False) -> list[tuple[float, np.ndarray]]:
-        """Take one frame (``key``: a key frame); return the frames it lets out, corrected
+    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P") -> list[tuple[float, np.ndarray]]:
+        """Take one frame (``picture``: ``"I"``, ``"P"`` or ``"B"``, how it was coded,
+        :func:`~flashsync.profiles.read_profiles`); return the frames it lets out, corrected
         (none while the lookahead fills, then one). The state between calls is all in the
         object, which pickles: a video can be fed in parts, on different machines."""
         settings = self.settings
         profile = np.asarray(profile, dtype=np.float32).reshape(self.height, -1)
-        self._queue.append((t_ms, profile, key))
+        self._queue.append((t_ms, profile, picture))
         if self._n_seen % settings.reservoir_step == 0:
             self._reservoir.append((t_ms, profile))
         self._n_seen += 1
         if self._lock is None and self._n_seen >= self._next_attempt:
             self._learn()
-        return [self._correct(*self._queue.popleft())] if len(self._queue) > settings.lookahead else []
+        if len(self._queue) > settings.lookahead:
+            return [self._apply(*self._correct(*self._queue.popleft()))]
+        return []
 
     def flush(self) -> list[tuple[float, np.ndarray]]:
         """The frames still held back, corrected: call once after the last :meth:`push`."""
         if self._lock is None and self._attempts == 0 and len(self._queue) >= 8:
             self._learn()
-        return [self._correct(*self._queue.popleft()) for _ in range(len(self._queue))]
+        return [self._apply(*self._correct(*self._queue.popleft())) for _ in range(len(self._queue))]
 
     def _learn(self) -> None:
         """Look for a rolling flicker in the held-back and reservoir frames; lock onto it.
@@ -234,8 +241,10 @@ class FlickerRemover:
             )
         self._lock = lock
 
-    def _correct(self, t_ms: float, profile: np.ndarray, key: bool) -> tuple[float, np.ndarray]:
-        """Fit the frame's pattern against the running mean, divide it out, learn from it.
+    def _correct(self, t_ms: float, profile: np.ndarray, picture: str) -> tuple[float, np.ndarray, str, np.ndarray]:
+        """Fit the frame's pattern against the running mean, learn from it; the frame with its
+        log correction (per row, repeated over the blocks: shape (height, blocks), float32),
+        divided out by :meth:`_apply`.
 
         What the codec keeps from frame to frame (a row whose blocks it skips) holds the
         pattern of the last key frame, where it refreshes everything: each row removes its
@@ -244,7 +253,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, self._divide(profile, np.zeros(len(profile)), key)
+            return t_ms, profile, picture, np.zeros(profile.shape, np.float32)
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -264,18 +273,18 @@ class FlickerRemover:
             1.0 / ROW_GAIN_FRAMES,
             2.0 * lock.amplitude**2,
         )
-        if key:
+        if picture == "I":
             lock.key_pattern = lock.basis[:, 1:] @ coef[1:]
         pattern += (1.0 - np.clip(follows, 0.0, 1.0)) * lock.key_pattern
         _update_mean(lock.mean, profile, 1.0 / self.settings.memory_frames, MEAN_CLIP)
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
-        return t_ms, self._divide(profile, pattern, key)
+        return t_ms, profile, picture, np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
 
-    def _divide(self, profile: np.ndarray, pattern: np.ndarray, key: bool) -> np.ndarray:
-        """``profile`` (shape (height, blocks)) with the log ``pattern`` (shape (height,))
-        divided out of its rows, except in the blocks that the codec copied from the last key
-        frame (the same value to the last bit: sensor noise never repeats): they hold the key
-        frame's light and get the key frame's correction.
+    def _apply(self, t_ms: float, profile: np.ndarray, picture: str, applied: np.ndarray) -> tuple[float, np.ndarray]:
+        """The frame (shape (height, blocks)) with its log correction ``applied`` divided
+        out of its rows, except in the blocks that the codec copied from another frame (the
+        same value to the last bit: sensor noise never repeats): they hold that frame's light
+        and get that frame's correction.
 
         Between key frames x264 predicts a frame from one at the same phase of a rolling
         flicker (three frames back at 30 fps under 50 Hz mains), so flat rows follow the
@@ -283,14 +292,25 @@ class FlickerRemover:
         phase, and their flat blocks are copies of it, as are those of the frames predicted
         from them, until the codec codes them again. Rows that follow the pattern in one
         group of pictures hold the key frame's in the next: no row's share of the pattern
-        learned over the frames before can tell (5 % bands at rows that had followed it)."""
-        applied = np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
-        if key:
+        learned over the frames before can tell (5 % bands at rows that had followed it).
+
+        The sources, first match first: the last key frame and the :data:`COPY_REFERENCES`
+        frames before (nearest first). A B-frame is decoded after the reference frame shown
+        next and may copy from it too; giving such blocks that frame's correction removed
+        false bands in ``bench_false_events`` but read a rig of ``tests/test_random_rigs.py``
+        upside down (README, "Real light"): not done."""
+        if picture != "I":
+            sources = ([self._key] if self._key is not None else []) + list(reversed(self._before))
+            free = np.ones(profile.shape, dtype=bool)
+            for source, correction in sources:
+                if source.shape == profile.shape:
+                    copied = free & (profile == source)
+                    applied[copied] = correction[copied]
+                    free &= ~copied
+        if picture == "I":
             self._key = (profile, applied)
-        elif self._key is not None and self._key[0].shape == profile.shape:
-            copied = profile == self._key[0]
-            applied[copied] = self._key[1][copied]
-        return profile / np.exp(applied)
+        self._before.append((profile, applied))
+        return t_ms, profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
         """The flicker found (None: no rolling flicker), once the frames are all through.

@@ -101,11 +101,23 @@ def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
+#: Picture types of :func:`read_profiles`: key, predicted from before, from both sides.
+PICTURES = ("I", "P", "B")
+
+
+def picture_type(frame: av.VideoFrame) -> str:
+    """``"I"`` for a key frame (or any intra-coded one), ``"B"`` for a bidirectionally
+    predicted frame, ``"P"`` otherwise (:data:`PICTURES`)."""
+    if frame.key_frame or frame.pict_type == av.video.frame.PictureType.I:
+        return "I"
+    return "B" if frame.pict_type == av.video.frame.PictureType.B else "P"
+
+
 def read_profiles(
     path: str | Path, start_pts: int | None = None, stop_pts: int | None = None
-) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, bool]]]:
+) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, str]]]:
     """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile,
-    key)`` per decoded frame, presentation order (the file closes when the iterator ends).
+    picture)`` per decoded frame, presentation order (the file closes when the iterator ends).
 
     ``start_pts``, ``stop_pts`` (stream time-base units) read a segment only: the frames
     whose stamps are in ``[start_pts, stop_pts)``, decoded from the key frame at or before
@@ -115,8 +127,10 @@ def read_profiles(
 
     ``profile`` is the float32 mean luma per row and column block, shape (height, blocks),
     as a fraction of the way from black (0) to white (1), so that light scales it: a flash
-    multiplies it by the same factor whatever the row's content. ``key``: the frame is a key
-    frame (coded on its own; the codec refreshes there what it kept from frame to frame).
+    multiplies it by the same factor whatever the row's content. ``picture``: how the frame
+    was coded, ``"I"`` a key frame (on its own; the codec refreshes there what it kept from
+    frame to frame), ``"P"`` predicted from frames before it, ``"B"`` from frames before and
+    after it (:data:`PICTURES`).
     Frames without a timestamp are an error naming the file.
     """
     path = Path(path)
@@ -131,7 +145,7 @@ def read_profiles(
 
 def _profiles(
     container: av.container.InputContainer, path: Path, start_pts: int | None, stop_pts: int | None
-) -> Iterator[tuple[float, np.ndarray, bool]]:
+) -> Iterator[tuple[float, np.ndarray, str]]:
     whole = start_pts is None and stop_pts is None
     with container:
         stream = container.streams.video[0]
@@ -150,7 +164,7 @@ def _profiles(
                 time_ms = float(frame.pts * frame.time_base) * 1000.0
                 decoded += 1
                 times = [*times[-1:], time_ms]
-                yield time_ms, row_profile(luma_plane(frame), *luma_range(frame)), bool(frame.key_frame)
+                yield time_ms, row_profile(luma_plane(frame), *luma_range(frame)), picture_type(frame)
         except av.FFmpegError as error:
             cut = cut_short(container, decoded, times) if whole else None
             if cut:

@@ -2,7 +2,7 @@
 
 A segment is the frames whose stamps lie in ``[start_pts, stop_pts)`` (stream time-base
 units), where both ends are key frames: decoded from its first key frame, a segment gives the
-same pixels, stamps and key-frame flags as the whole video decoded in one go (a key frame
+same pixels, stamps and picture types as the whole video decoded in one go (a key frame
 refreshes all the decoder keeps; frames an open GOP puts before the key frame in
 presentation order are decoded by the segment before, which reads on past its end until
 its stop stamp). :func:`read_segment` decodes one; :mod:`flashsync.cluster` decodes them
@@ -60,8 +60,8 @@ def plan_segments(path: str | Path, segment_ms: float = SEGMENT_MS) -> tuple[Vid
     return info, [Segment(path, start, stop) for start, stop in zip(ends[:-1], ends[1:])]
 
 
-def read_segment(segment: Segment) -> list[tuple[float, np.ndarray, bool]]:
-    """``(t_frame_ms, profile, key)`` of every frame of the segment, presentation order
+def read_segment(segment: Segment) -> list[tuple[float, np.ndarray, str]]:
+    """``(t_frame_ms, profile, picture)`` of every frame of the segment, presentation order
     (:func:`~flashsync.profiles.read_profiles`)."""
     _, profiles = read_profiles(segment.path, segment.start_pts, segment.stop_pts)
     return list(profiles)

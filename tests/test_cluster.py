@@ -94,7 +94,7 @@ def test_segments_start_at_key_frames_and_decode_as_the_whole_video(clips):
         assert len(segments) == 8 and segments[0].start_pts is None and segments[-1].stop_pts is None
         whole = list(read_profiles(path)[1])
         parts = [read_segment(segment) for segment in segments]
-        assert all(part[0][2] for part in parts)  # each starts at a key frame
+        assert all(part[0][2] == "I" for part in parts)  # each starts at a key frame
         joined = [frame for part in parts for frame in part]
         assert len(joined) == len(whole) == 300
         for (t_a, p_a, k_a), (t_b, p_b, k_b) in zip(joined, whole):

@@ -6,6 +6,8 @@ under a rolling 100 Hz flicker, where every frame used to hold three false bands
 flash on top of the flicker, whose edge must not move.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,9 @@ from flashsync.detect import detect_video
 from flashsync.flicker import FlickerRemover
 from flashsync.io import events_to_frame
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
+
+#: Real H.264 clips cut from longer renderings at key frames, without re-encoding.
+CLIPS = Path(__file__).parent / "clips"
 
 
 def synthetic_profiles(hz, fps, period_rows, depth, frames=240, height=240, blocks=8, flashes=(), seed=0):
@@ -131,6 +136,23 @@ def test_key_frame_under_rolling_flicker(tmp_path):
     assert len(detection.events) == 0, events_to_frame(detection.events)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="known miss: B-frames' blocks copied from the next reference frame keep the correction of the "
+    "frames before (taking that frame's removed these bands but read rig-20 of test_random_rigs upside down)",
+)
+def test_b_frames_take_the_correction_of_the_reference_frame_they_copy():
+    """18 s of ``bench_false_events``' ``rink-0.5ms-3%`` (30 fps, 0.5 ms, 3 % 100 Hz
+    flicker, ten players, no flash): frames 8500-9030 of its 10-minute clip. x264 decodes a
+    B-frame after the reference frame shown next and copies blocks from it, which then hold
+    that frame's light, at another phase of the flicker than the frames shown before. Given
+    the correction of a frame before instead, they make two 4 % bands (frames 511 and 529)."""
+    detection = detect_video(CLIPS / "rink_b_frames.mp4")
+    assert len(detection.frame_times_ms) == 531
+    assert detection.flicker.hz == 100.0
+    assert len(detection.events) == 0, events_to_frame(detection.events)
+
+
 FPS_GRID = (25.0, 30000 / 1001, 30.0, 50.0, 60000 / 1001, 60.0)
 
 
@@ -168,10 +190,9 @@ def test_flicker_grid(fps, hz, exposure_ms):
 def test_shortest_exposure_fastest_rate_deepest_flicker(tmp_path):
     """The corner of the issue's range, rendered: 60 fps under 50 Hz mains (the pattern
     rolls two thirds of a period a frame), a 0.25 ms exposure and lamps 10 % deep, players,
-    H.264 (no key frame inside: with one at 120, a B-frame before it, predicted from it, was
-    sometimes reported, see the README). Flashes of 50 % (a band of about 20 %: the
-    exposure holds 40 % of a 0.5 ms decay) are all found, nothing else, and the flicker is
-    measured."""
+    H.264 (no key frame inside: with one, see the next test). Flashes of 50 % (a band of
+    about 20 %: the exposure holds 40 % of a 0.5 ms decay) are all found, nothing else, and
+    the flicker is measured."""
     fps, height, r0, r1 = 60.0, 240, 8, 12
     row_ms = 1000.0 / fps / (r0 + height + r1)
     rows = [70.5, 160.2, 120.7, 30.3, 200.1]
@@ -187,3 +208,15 @@ def test_shortest_exposure_fastest_rate_deepest_flicker(tmp_path):
     assert list(events[events["edge"] == "leading"]["frame"]) == frames, events
     assert detection.flicker.hz == 100.0
     assert detection.flicker.period_rows == pytest.approx(10.0 / row_ms, rel=0.03)
+
+
+def test_a_key_frame_that_rounds_dark_rows_otherwise_is_no_flash():
+    """The rendering of the test above with a key frame inside (``keyint=120``, seed 5; x264
+    put it at frame 119), kept as rendered once: the renderer's x264 output is not the same
+    from run to run, and only some renderings show this. The key frame rounds the dark flat
+    rows at the top (12-25 DN above black) otherwise than the frames before it, which had
+    copied them: a band of under 2 DN (``DetectorSettings.min_band_step``) that was reported
+    as a flash. The five flashes (bands of about 20 %) are all found, nothing else."""
+    detection = detect_video(CLIPS / "corner_key_frame.mp4")
+    events = events_to_frame(detection.events)
+    assert list(events[events["edge"] == "leading"]["frame"]) == [20, 65, 110, 155, 200], events
