@@ -5,15 +5,18 @@ every candidate (an effect of the catalogue on one camera, added to the current 
 keeps the one that lowers the Bayesian information criterion most, among those that lower
 it by more than :data:`THRESHOLD` and shrink the gap (the RMS of the edge residuals, or of
 the stamps about the model's frame clocks: a stamp fault the plain frame index hides);
-without such a candidate, pairs of effects on one camera are tried the same way (a camera's
-time per row and exposure both change its band lengths, so one alone may not show), then
-pairs on two cameras (the reference's time per row and another camera's exposure both move
-the gap between its edges), and without such a pair the residuals hold nothing the
-catalogue can explain and the loop stops. After each addition, an effect added earlier
-whose evidence has fallen to :data:`THRESHOLD` or less (a later one explains its structure
-better) is taken out again, for good. The final residuals are then tested against the edge
-noise the band lengths show (:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where
-an excess is). The data never say which effect is there: the workflow sees frame stamps and band edges."""
+without such a candidate, pairs of effects are tried the same way, on one camera (a
+camera's time per row and exposure both change its band lengths, so one alone may not show)
+or on two (the reference's time per row and another camera's exposure both move the gap
+between its edges) alike: the pair of the lowest BIC wins, wherever it is (trying one
+camera's pairs first took a drift-rate change on a camera whose stamps jitter, where the
+reference's time per row and the camera's exposure fit to the noise), and without such a
+pair the residuals hold nothing the catalogue can explain and the loop stops. After each
+addition, an effect added earlier whose evidence has fallen to :data:`THRESHOLD` or less (a
+later one explains its structure better) is taken out again, for good. The final residuals
+are then tested against the edge noise the band lengths show
+(:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is). The data never
+say which effect is there: the workflow sees frame stamps and band edges."""
 
 from __future__ import annotations
 
@@ -212,14 +215,12 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
 def _best_addition(
     measurement: Measurement, current: Candidate, removed: set[Term]
 ) -> tuple[tuple[Term, ...], Candidate] | None:
-    """The effect, else the pair of effects on one camera, else the pair on two cameras,
-    whose model has the lowest BIC among those that lower it by more than :data:`THRESHOLD`
-    and shrink the gap: the RMS of the edges, or of the stamps about their clocks."""
+    """The effect, else the pair of effects (on one camera or two), whose model has the
+    lowest BIC among those that lower it by more than :data:`THRESHOLD` and shrink the gap:
+    the RMS of the edges, or of the stamps about their clocks."""
     singles = _candidates(measurement, current.terms | removed)
     pairs = [(a, b) for a, b in combinations(singles, 2) if b not in _with_implied(a) and a not in _with_implied(b)]
-    one_camera = [(a, b) for a, b in pairs if a.camera == b.camera]
-    two_cameras = [(a, b) for a, b in pairs if a.camera != b.camera]
-    for groups in ([(term,) for term in singles], one_camera, two_cameras):
+    for groups in ([(term,) for term in singles], pairs):
         best = None
         for group in groups:
             trial = fit_candidate(measurement, current.terms.union(*map(_with_implied, group)))
