@@ -197,6 +197,7 @@ def distribution(values: pd.Series, unit: str = "", scale: float = 1.0) -> str:
 def camera_block(cameras: pd.DataFrame) -> list[str]:
     """Distribution lines of the accuracy of solved cameras."""
     others = cameras[~cameras["reference"]]
+    z = others["z_rms"].dropna()
     lines = [
         f"  sync RMS ms              {distribution(cameras['rms_ms'], 'ms')}",
         f"  sync max ms              {distribution(cameras['max_ms'], 'ms')}",
@@ -214,6 +215,8 @@ def camera_block(cameras: pd.DataFrame) -> list[str]:
     lines += [
         f"  error/σ RMS (non-ref)    {distribution(others['z_rms'])}",
         f"  within 2σ % (non-ref)    {distribution(others['within_2sigma'], '%', 100)}",
+        f"  error/σ over all non-ref cameras: RMS {np.sqrt(np.mean(z**2)):.2f}; cameras under 0.5: "
+        f"{int((z < 0.5).sum())}, over 2: {int((z > 2).sum())} of {len(z)}",
         f"  pair error/σ RMS         {distribution(cameras['pair_z_rms'])}",
         f"  pair within 2σ %         {distribution(cameras['pair_within_2sigma'], '%', 100)}",
         f"  predicted σ RMS ms       {distribution(cameras['sigma_rms_ms'], 'ms')}",

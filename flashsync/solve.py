@@ -164,14 +164,17 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
     sigma = mad_sigma(residual, MIN_SCALE_MS)
     inlier = np.abs(residual) <= reject_sigma * sigma
-    weights = inlier.astype(np.float64)
+    n_events = len(system.flash_index)
+    idle = np.zeros(system.n_equations)
+    idle[n_events:] = IDLE_WEIGHT * _all_rejected(system.group[n_events:], inlier[n_events:])
+    weights = inlier + idle
     x = system.solve(weights)
     scale = np.full(system.n_equations, np.nan)
-    n_events = len(system.flash_index)
     for _ in range(GROUP_SCALE_ROUNDS):
         scale = system.group_scales(x, weights, inlier)
         scale[:n_events] = np.maximum(scale[:n_events], _edge_floor_ms(system, x, n_cameras)[system.group[:n_events]])
-        weights = inlier * (system.event_sigma_ms / scale) ** 2
+        scale[n_events:] = np.maximum(scale[n_events:], _duration_floor_ms(system, scale, n_cameras))
+        weights = inlier * (system.event_sigma_ms / scale) ** 2 + idle
         x = system.solve(weights)
     edge_sigma = np.full(n_cameras, np.nan)
     edge_sigma[system.group[:n_events]] = scale[:n_events]
@@ -192,6 +195,27 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
 
 
+def _all_rejected(group: np.ndarray, inlier: np.ndarray) -> np.ndarray:
+    """The equations of groups (shape (n,) each) none of whose equations is an inlier. A
+    camera's band durations all rejected would leave its duration unknown undetermined and
+    fail the whole solve (rig-5 read the right way up: one camera's durations off by
+    0.2-7 ms); they stay in the fit with :data:`IDLE_WEIGHT`, not as inliers."""
+    kept = np.bincount(group, inlier, minlength=group.max() + 1 if group.size else 0) > 0
+    return ~kept[group]
+
+
+def _duration_floor_ms(system: _System, scale: np.ndarray, n_cameras: int) -> np.ndarray:
+    """Each band duration's least noise, ms (shape (n_durations,)): two edges', each as noisy
+    as its camera's sync events (``scale``: each equation's noise, ms). A camera of a few
+    bands fits its durations almost exactly (rig-20: two bands, a scale of 3 microseconds)
+    and its time per row, which the split bands tie to the frame period, would claim a
+    precision of 0.02 % while 1.6 % off."""
+    n_events = len(system.flash_index)
+    edge = np.zeros(n_cameras)
+    edge[system.group[:n_events]] = scale[:n_events]
+    return np.sqrt(2.0) * edge[system.group[n_events:] - n_cameras]
+
+
 def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray:
     """Each camera's least edge noise, ms (shape (n_cameras,)): :data:`EDGE_FLOOR_ROWS` of its
     time per row. A camera of a few events fits them almost exactly and would claim a noise
@@ -200,6 +224,9 @@ def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray
     return EDGE_FLOOR_ROWS * np.where(columns >= 0, np.abs(x[np.maximum(columns, 0)]), 0.0)
 
 
+#: Weight of equations kept only to determine an unknown (:func:`_all_rejected`); an inlier
+#: weighs 1 to 100: they move nothing else.
+IDLE_WEIGHT = 1e-6
 #: The least noise of a band edge, rows: clean edges are located to 0.10-0.16 rows RMS
 #: (`benchmarks/bench_edges.py`, README "Edge precision").
 EDGE_FLOOR_ROWS = 0.15
@@ -414,7 +441,8 @@ class _System:
         """Each equation's noise (ms, a clean edge's; shape (n_equations,)): the RMS of its
         group's inlier residuals over the degrees of freedom they leave (their count less
         their leverages, i.e. the trace of the inverse normal matrix times the group's own),
-        shrunk towards the pooled scale with :data:`POOLED_EQUATIONS`; at least
+        shrunk towards the pooled scale of its kind (sync events, band durations: trailing
+        edges are noisier) with :data:`POOLED_EQUATIONS`; at least
         :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
         leverages = self._leverages(weights)
@@ -425,7 +453,10 @@ class _System:
         squares = np.where(inlier, residual**2, 0.0)
         sums = np.bincount(self.group, squares, minlength=groups)
         dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
-        pooled = float(squares.sum() / max(dof.sum(), 1.0))
+        n_cameras = len(self.param_columns)
+        pooled = np.zeros(groups)
+        for kind in (slice(0, n_cameras), slice(n_cameras, groups)):  # events, then durations
+            pooled[kind] = sums[kind].sum() / max(dof[kind].sum(), 1.0)
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
         return np.maximum(scale[self.group], MIN_SCALE_MS)
 
@@ -434,11 +465,10 @@ class _System:
         matrix ``N`` of ``weights``, from its flash-eliminated form (:meth:`_reduced`): with
         ``M = B / d`` (coupling over the flash diagonal), an equation of camera part ``c`` and
         flash coefficient ``f`` on flash ``k`` has ``a' N^-1 a = (c - f M_k)' S^-1 (c - f M_k)
-        + f^2 / d_k``. None where ``N`` is singular: a flash whose every equation has weight 0,
-        or a singular ``S``."""
+        + f^2 / d_k``. A flash whose every equation has weight 0 is left out (its equations'
+        leverages are 0; :meth:`_reduced` keeps it from the factor): returning None there sent
+        every scale to ``event_sigma_ms``. None where ``S`` is singular."""
         w = np.concatenate([weights, np.ones(self.n_priors)])
-        if np.any(np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel() == 0):
-            return None
         try:
             factor, coupling, d, _, _ = self._reduced(weights)
         except NotEnoughDataError:
@@ -506,8 +536,10 @@ def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
 
 
 def _informative(durations: Durations | None, n_cameras: int) -> Durations:
-    """The durations of cameras whose bands span at least two different frame gaps (else
-    the duration and ``T_row`` cannot be told apart)."""
+    """The durations of cameras with :data:`MIN_BANDS_PER_GAP` bands at least within one
+    frame and as many split across frames (else the duration and ``T_row`` cannot be told
+    apart, or a single split band ties ``T_row`` with nothing to check it: rig-20's did,
+    1.6 % off)."""
     if durations is None or len(durations.camera) == 0:
         return Durations(np.empty(0, np.int64), np.empty(0), np.empty(0))
     camera = np.asarray(durations.camera, dtype=np.int64)
@@ -515,9 +547,15 @@ def _informative(durations: Durations | None, n_cameras: int) -> Durations:
     keep = np.zeros(len(camera), dtype=bool)
     for c in range(n_cameras):
         mine = camera == c
-        if mine.any() and np.ptp(dt[mine]) > 0:
+        split = dt[mine] > dt[mine].min() if mine.any() else np.zeros(0, dtype=bool)
+        if min(int(split.sum()), int((~split).sum())) >= MIN_BANDS_PER_GAP:
             keep |= mine
     return Durations(camera[keep], dt[keep], np.asarray(durations.dq, dtype=np.float64)[keep])
+
+
+#: Fewest bands within one frame, and fewest split across frames, for a camera's band
+#: durations to tell its time per row.
+MIN_BANDS_PER_GAP = 2
 
 
 class _Triplets:

@@ -34,8 +34,9 @@ def test_anchors_naming_two_events_of_one_camera_are_an_error():
 
 
 def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
-    """A third camera read both ways up whose bottom-up reading has one leading edge fewer:
-    the search reads it bottom-up (one event fewer unexplained raises the likelihood), but it
+    """A third camera read both ways up whose bottom-up reading has two leading edges fewer:
+    the search reads it bottom-up (two events fewer unexplained raise the likelihood by more
+    than a choice needs), but it
     is left out (too few events) and must not be reported as mounted upside down."""
     detections = detect_videos([tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv"], estimate_readout=False)
 
@@ -45,7 +46,7 @@ def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
             [Band.PULSE] * count, [1.0] * count, [0.5] * count, [50.0] * count, [frozenset()] * count,
         )  # fmt: skip
 
-    lonely = CameraDetection("cam3", tiny_scenario / "cam3.mp4", 160, 120, np.arange(50) * 40.0, one_edge(1),
+    lonely = CameraDetection("cam3", tiny_scenario / "cam3.mp4", 160, 120, np.arange(50) * 40.0, one_edge(2),
                              one_edge(0))  # fmt: skip
     model, report = synchronize([*detections, lonely])
     assert "cam3" not in model.cameras and any("cam3.mp4: 0 usable flash events" in w for w in report.warnings)

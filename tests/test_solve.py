@@ -208,5 +208,8 @@ def test_the_flash_eliminated_leverages_and_covariance_are_the_dense_normal_equa
         rtol=1e-9,
         atol=1e-12 * np.max(np.abs(inverse)),
     )
-    weights[np.flatnonzero(system.flash_index == 0)] = 0.0  # a flash with no equation left: N is singular
-    assert system._leverages(weights) is None
+    weights[np.flatnonzero(system.flash_index == 0)] = 0.0  # a flash with no equation left: left out
+    dense = system.matrix.toarray() * np.sqrt(np.concatenate([weights, np.ones(system.n_priors)]))[:, None]
+    pseudo = np.linalg.pinv(dense.T @ dense)
+    expected = np.einsum("ij,jk,ik->i", dense, pseudo, dense)[: system.n_equations]
+    np.testing.assert_allclose(system._leverages(weights), expected, atol=1e-9)
