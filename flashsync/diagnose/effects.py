@@ -41,15 +41,25 @@ stamp_rate      from one frame on, edges run away at a      frame times at one r
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
                                                             frame_clock (segments fitted)
+pulse_shape     a band longer than the camera's others has  columns ``[trailing] * w`` and
+                its trailing edge late and its leading      ``-[leading] * w`` (``w``: the band's
+                edge early, by shares of the excess ``w``   excess length, ms): the shares of it
+                                                            on the trailing and the leading edge
 ==============  ==========================================  ======================================
 
 ``dropped_frames``, ``frame_clock`` and ``stamp_rate`` switch on parts of the pipeline's frame clock
 (:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
 fitted model's :class:`CameraEstimate` of the camera, never from the fit itself.
 
-Flash decay is not in the catalogue: the detector marks each edge at half of the band's
-own rise, the same instant of the flash in every camera whatever its decay, so the decay
-leaves no event residual, and the detections keep no band profiles to compare shapes with.
+The flash's pulse shape: the detector marks each edge at half of the band's own rise, the
+same instant of the flash in every camera whatever its decay, as long as the exposure holds
+the whole pulse at the level the detector takes for the band's plateau. Where it does not (a
+xenon tail of 0.8-1.3 ms on a 3 ms exposure under a tone curve, in the simulator's second
+world), the band of that flash on that camera comes out longer than the camera's others,
+its trailing edge late (0.4-1.8 ms) and its leading one early (0.2-0.3 ms), while the other
+cameras' bands of the flash are as long as ever: a per-flash, per-camera widening. Its
+evidence is each band's own excess length (:attr:`~flashsync.diagnose.measure.Edges.excess_ms`),
+so ``pulse_shape`` fits one share of it per edge kind and camera, not one offset per flash.
 """
 
 from __future__ import annotations
@@ -68,6 +78,7 @@ DRIFT_RATE = "drift_rate"
 EXPOSURE = "exposure"
 STAMP_RATE = "stamp_rate"
 SATURATION = "saturation"
+PULSE_SHAPE = "pulse_shape"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -91,6 +102,8 @@ class Features:
         Trailing edge under the model's readout direction.
     saturated : bool array
         The edge's band clipped at white.
+    excess_ms : float array
+        The edge's band's length minus its camera's median of its kind, ms.
     """
 
     camera: np.ndarray
@@ -98,6 +111,7 @@ class Features:
     q: np.ndarray
     trailing: np.ndarray
     saturated: np.ndarray
+    excess_ms: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -128,6 +142,11 @@ class CameraEstimate:
     exposure_ms : float
     saturation_ms : float
         How far the edges of a clipped band move out (leading earlier, trailing later), ms.
+    pulse_trailing, pulse_leading : float
+        Shares of a band's excess length that its trailing edge is late and its leading edge
+        early by.
+    longest_excess_ms : float
+        The largest excess length of the camera's bands, ms.
     effects : list of str
         The effects the model has on this camera.
     """
@@ -147,6 +166,9 @@ class CameraEstimate:
     nominal_row_time_ms: float
     exposure_ms: float
     saturation_ms: float
+    pulse_trailing: float
+    pulse_leading: float
+    longest_excess_ms: float
     effects: list[str]
 
     @property
@@ -176,8 +198,10 @@ class Effect:
         reference.
     column : callable or None
         ``column(features)``: the design column it adds for a camera (before restricting it
-        to that camera's edges), scaled so that its coefficient is the parameter; None for
-        an effect that changes how the model's quantities are computed.
+        to that camera's edges), scaled so that its coefficient is the parameter, shape
+        (n_edges,), or several as shape (n_edges, k) (the parameters keyed by the name,
+        then by the name and ``.1``, ``.2``...); None for an effect that changes how the
+        model's quantities are computed.
     implies : tuple of str
         Effects added with it.
     """
@@ -206,6 +230,13 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
 
 def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
     return f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later)"
+
+
+def _describe_pulse_shape(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return (
+        f"bands up to {camera.longest_excess_ms:.3f} ms longer than the camera's others: trailing edges "
+        f"{camera.pulse_trailing:.2f} of it late, leading edges {camera.pulse_leading:.2f} of it early"
+    )
 
 
 def _describe_stamp_rate(camera: CameraEstimate, reference: CameraEstimate) -> str:
@@ -309,6 +340,19 @@ CATALOGUE: dict[str, Effect] = {
             EVERY_CAMERA,
             _describe_saturation,
             column=lambda f: np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0),
+        ),
+        Effect(
+            PULSE_SHAPE,
+            "flash pulse shape",
+            "bands longer than the camera's others (a pulse's tail the exposure does not hold "
+            "whole): their trailing edges late, their leading edges early",
+            "adds the shares of each band's excess length (ms) that its trailing edge is late "
+            "and its leading edge early by",
+            EVERY_CAMERA,
+            _describe_pulse_shape,
+            column=lambda f: np.column_stack(
+                [np.where(f.trailing, f.excess_ms, 0.0), np.where(f.trailing, 0.0, -f.excess_ms)]
+            ),
         ),
         Effect(
             STAMP_RATE,
