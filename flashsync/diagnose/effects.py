@@ -52,14 +52,19 @@ pulse_shape     a band longer than the camera's others has  columns ``[trailing]
 fitted model's :class:`CameraEstimate` of the camera, never from the fit itself.
 
 The flash's pulse shape: the detector marks each edge at half of the band's own rise, the
-same instant of the flash in every camera whatever its decay, as long as the exposure holds
-the whole pulse at the level the detector takes for the band's plateau. Where it does not (a
-xenon tail of 0.8-1.3 ms on a 3 ms exposure under a tone curve, in the simulator's second
-world), the band of that flash on that camera comes out longer than the camera's others,
-its trailing edge late (0.4-1.8 ms) and its leading one early (0.2-0.3 ms), while the other
-cameras' bands of the flash are as long as ever: a per-flash, per-camera widening. Its
-evidence is each band's own excess length (:attr:`~flashsync.diagnose.measure.Edges.excess_ms`),
-so ``pulse_shape`` fits one share of it per edge kind and camera, not one offset per flash.
+same instant of the flash in every camera whatever its decay, as long as the band shows the
+plateau the detector takes for its level. On the simulator's second world (xenon tails of
+0.2-1.3 ms, tone curves) that fails on some bands: on its HD rig (320x180, 12 s) two of the
+59.94 fps camera's bands come out 0.6 and 2.1 ms longer than its others, their trailing
+edges 0.44 and 1.75 ms late against the truth and their leading edges 0.2-0.3 ms early,
+while the other cameras' bands of the same flashes are as long as ever: neither a pulse
+length shared by the cameras that saw the flash nor a rise/fall difference per camera, but
+a widening per band. Its evidence is each band's own excess length
+(:attr:`~flashsync.diagnose.measure.Edges.excess_ms`), so ``pulse_shape`` fits the shares
+of it on the trailing and on the leading edge per camera. Every late trailing edge seen
+there belongs to a band split across two frames (its trailing edge in the next frame's
+top 35 rows); where such a band is no longer than the camera's other split bands, the
+excess does not show its delay and the effect cannot take it up.
 """
 
 from __future__ import annotations
