@@ -59,8 +59,8 @@ plateau the detector takes for its level. On the simulator's second world (xenon
 edges 0.44 and 1.75 ms late against the truth and their leading edges 0.2-0.3 ms early,
 while the other cameras' bands of the same flashes are as long as ever: neither a pulse
 length shared by the cameras that saw the flash nor a rise/fall difference per camera, but
-a widening per band. Its evidence is each band's own excess length
-(:attr:`~flashsync.diagnose.measure.Edges.excess_ms`), so ``pulse_shape`` fits the shares
+a widening per band. Its evidence is each band's own excess length where it is beyond an
+ordinary band's (:attr:`~flashsync.diagnose.measure.Edges.excess_ms`), so ``pulse_shape`` fits the shares
 of it on the trailing and on the leading edge per camera. Every late trailing edge seen
 there belongs to a band split across two frames (its trailing edge in the next frame's
 top 35 rows); where such a band is no longer than the camera's other split bands, the

@@ -38,6 +38,12 @@ EDGE_MARGIN_ROWS = 6
 #: deviation of an ordinary band seen on the shipped sample and the second world's rigs is
 #: 10 robust sigmas (the median absolute deviation is small: a median band deviates by 0).
 OUTLIER_BAND_SIGMAS = 20.0
+#: A band longer than its camera's others of its kind by more than this many robust standard
+#: deviations is widened (the ``pulse_shape`` effect's evidence): beyond the largest
+#: deviation of an ordinary band (above). On the second world's HD rig the 59.94 fps
+#: camera's widened bands are 17 and 58 robust sigmas long; on the shipped sample the
+#: longest band is 8 (cam2, 0.12 ms).
+WIDE_BAND_SIGMAS = 10.0
 
 
 @dataclass(frozen=True)
@@ -61,8 +67,9 @@ class Edges:
     saturated : bool array
         The edge's band clipped at white (:data:`~flashsync.events.Flag.SATURATED`).
     excess_ms : float array
-        The edge's band's length minus the median length of its camera's bands of its kind
-        (:func:`_length_excess_ms`), ms; 0 where its kind has fewer than three bands.
+        How much longer the edge's band is than the median of its camera's bands of its kind
+        (:func:`_length_excess_ms`), ms, where that is more than :data:`WIDE_BAND_SIGMAS`
+        robust standard deviations of the camera's band lengths (a widened band); else 0.
     """
 
     camera: np.ndarray
@@ -174,13 +181,13 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
     excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
-    edges = _edges(pulses, matching.flashes, cameras, excess)
+    deviations = [e[np.isfinite(e)] for e in excess]
+    edges = _edges(pulses, matching.flashes, cameras, [_widening_ms(e, d) for e, d in zip(excess, deviations)])
     if len(edges) == 0:
         raise NotEnoughDataError(
             "no flash band with both edges inside the image is seen by two cameras; "
             "record more flashes, away from the top and bottom of the image"
         )
-    deviations = [e[np.isfinite(e)] for e in excess]
     pooled = _edge_noise_ms(np.concatenate(deviations))
     own = np.array([_edge_noise_ms(d) for d in deviations])
     return Measurement(
@@ -263,7 +270,7 @@ def _edges(
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
                 saturated.append(bool(clipped[edge]))
-                excess.append(float(longer[band]) if np.isfinite(longer[band]) else 0.0)
+                excess.append(float(longer[band]))
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -296,6 +303,14 @@ def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
             scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
             excess[clean[kind]] = (rows - np.median(rows)) * scale
     return excess
+
+
+def _widening_ms(excess_ms: np.ndarray, deviations: np.ndarray) -> np.ndarray:
+    """Each band's excess length where it is more than :data:`WIDE_BAND_SIGMAS` robust
+    standard deviations of the camera's band lengths ``deviations``, else 0, ms, shape of
+    ``excess_ms``; all 0 where those do not scatter."""
+    spread = mad_sigma(deviations) if deviations.size else 0.0
+    return np.where((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread), excess_ms, 0.0)
 
 
 def _edge_noise_ms(deviations: np.ndarray) -> float:
