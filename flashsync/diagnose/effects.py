@@ -349,8 +349,8 @@ CATALOGUE: dict[str, Effect] = {
         Effect(
             PULSE_SHAPE,
             "flash pulse shape",
-            "bands longer than the camera's others (a pulse's tail the exposure does not hold "
-            "whole): their trailing edges late, their leading edges early",
+            "bands widened beyond any ordinary band of the camera (seen under xenon tails on "
+            "bands split across two frames): their trailing edges late, their leading edges early",
             "adds the shares of each band's excess length (ms) that its trailing edge is late "
             "and its leading edge early by",
             EVERY_CAMERA,
