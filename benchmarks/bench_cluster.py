@@ -6,8 +6,9 @@ Run: python benchmarks/bench_cluster.py [--seconds 120] [--size 1080p] [--segmen
 Writes a clip (``bench_detect``'s scene: textured, moving blobs, a flash every 40 frames;
 25 fps, x264 veryfast, a key frame every 250 frames), then times whole ``flashsync detect``
 commands on it: plain (local threads), and with ``--scheduler tcp://127.0.0.1:PORT`` against
-``dask scheduler`` + ``dask worker --nworkers W --nthreads 1`` processes started here for
-W = 1 and 2 (their start-up is not timed: a cluster runs before a job comes), each run's
+``dask scheduler`` + ``dask worker --nworkers W --nthreads 1 --preload flashsync.cluster``
+processes started here for W = 1 and 2 (their start-up, the detector's imports and compiled
+kernels included, is not timed: a cluster runs before a job comes), each run's
 events compared with the plain run's byte for byte (on 2 workers with segments of a quarter
 the length too). Then the cost of a segment: decoding the video in segments of a quarter
 the length, one after the other in this process, against decoding it whole (seeking, the
@@ -82,7 +83,8 @@ def free_port() -> int:
 
 
 class DaskProcesses:
-    """``dask scheduler`` and ``dask worker --nworkers W`` on 127.0.0.1, stopped on exit."""
+    """``dask scheduler`` and ``dask worker --nworkers W --preload flashsync.cluster`` on
+    127.0.0.1, stopped on exit."""
 
     def __init__(self, workers: int):
         self.workers = workers
@@ -100,7 +102,8 @@ class DaskProcesses:
         )
         self.processes.append(
             subprocess.Popen(
-                [dask, "worker", self.address, "--nworkers", str(self.workers), "--nthreads", "1", "--no-dashboard"],
+                [dask, "worker", self.address, "--nworkers", str(self.workers), "--nthreads", "1", "--no-dashboard"]
+                + ["--preload", "flashsync.cluster"],
                 **quiet,
             )
         )

@@ -9,6 +9,10 @@ each segment to the next of its video, one small task per segment, so the events
 the plain run by construction, not by a warm-up that only approximates its state. Workers read
 the videos by path: every worker must see them under the same path (a shared filesystem).
 
+Workers started with ``dask worker --preload flashsync.cluster`` import the detector and
+load its compiled kernels when they start (:func:`dask_setup`); otherwise the first step of
+a job's chain does it, on the job's time.
+
 ``scheduler`` is ``tcp://HOST:PORT`` of a running scheduler (``dask scheduler``, with
 ``dask worker tcp://HOST:PORT`` on each machine) or ``local:N`` for a
 :class:`distributed.LocalCluster` of N worker processes on this machine. Dask is an optional
@@ -18,16 +22,25 @@ extra (``pip install 'flashsync[cluster]'``), imported here only.
 from __future__ import annotations
 
 import re
+import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
+
 from flashsync.detect import CameraDetection, DetectorSettings, VideoDetection
-from flashsync.errors import InputError
+from flashsync.errors import FlashsyncError, InputError
+from flashsync.profiles import VideoInfo
 from flashsync.segments import SEGMENT_MS, check_complete, plan_segments, read_segment
 
 #: How long to wait for a scheduler to answer, s.
 CONNECT_TIMEOUT_S = 10
+#: Dask priority of a video's chain of detection steps over the decoding of segments (0): a
+#: segment's step runs as soon as the segment and the step before are done, overlapping the
+#: decoding of the later segments, instead of queueing behind every segment's decoding and
+#: running one after the other at the end.
+CHAIN_PRIORITY = 1
 
 
 def check_scheduler(scheduler: str) -> None:
@@ -108,10 +121,12 @@ def detect_on_cluster(
             for (info, segments), direction in zip(client.gather(plans), flipped):
                 update = progress(info.camera, info.n_frames_hint) if progress else None
                 parts = client.map(read_segment, segments, pure=False)
-                state = client.submit(VideoDetection, info, direction, settings, pure=False)
-                futures += [*parts, state]
+                state = (info, direction, settings)  # the first step starts the pass where its segment decoded
+                futures += parts
                 for index, part in enumerate(parts):
-                    state = client.submit(_detect_segment, state, part, index == len(parts) - 1, pure=False)
+                    state = client.submit(
+                        _detect_segment, state, part, index == len(parts) - 1, pure=False, priority=CHAIN_PRIORITY
+                    )
                     futures.append(state)
                     if update is not None:
                         counts.append((client.submit(len, part, pure=False), update))
@@ -126,13 +141,35 @@ def detect_on_cluster(
             raise
 
 
-def _detect_segment(state: VideoDetection, frames: list, last: bool) -> VideoDetection | CameraDetection:
+def _detect_segment(state: VideoDetection | tuple, frames: list, last: bool) -> VideoDetection | CameraDetection:
     """Push one segment's frames (:func:`~flashsync.segments.read_segment`) in order; after the
     last segment, check the video is complete and return its detection. The state is the
-    previous task's result and nothing else uses it, so it is updated in place."""
+    previous task's result and nothing else uses it, so it is updated in place; the first
+    segment's is ``VideoDetection``'s arguments."""
+    if not isinstance(state, VideoDetection):
+        state = VideoDetection(*state)
     for t_ms, profile, key in frames:
         state.push(t_ms, profile, key)
     if not last:
         return state
     check_complete(state.info.path, state.n_frames, [t_ms for t_ms, _, _ in frames[-2:]])
     return state.finish()
+
+
+def dask_setup(worker=None) -> float:
+    """Warm a worker up (``dask worker --preload flashsync.cluster`` calls it at start): one
+    small synthetic video's detection, flash included, loads or compiles every kernel a
+    segment's step uses. Returns the time it took, s."""
+    start = time.perf_counter()
+    rng = np.random.default_rng(0)
+    state = VideoDetection(VideoInfo(Path("warm-up.mkv"), 64, 48, 60), None)
+    for frame in range(60):
+        profile = 0.5 + 0.01 * rng.standard_normal((48, 8)).astype(np.float32)
+        if frame == 30:
+            profile[20:] *= 1.5  # a flash band from row 20 down
+        state.push(frame * 40.0, profile, frame % 20 == 0)
+    try:
+        state.finish()
+    except FlashsyncError:  # too little to detect anything is fine: the kernels ran
+        pass
+    return time.perf_counter() - start

@@ -3,13 +3,14 @@ matcher of the pipeline and of ``diagnose``.
 
 Every camera's events get an approximate time on its own clock, ``t_frame + q * T_nominal``
 (``T_nominal`` = frame period / height, a few per cent off: good to a few ms). For each pair
-of cameras, the offsets between all their event times vote for the shift (flashes fired by
-hand are irregular, so only the true shift lines many of them up); each leading candidate is
-refined into an affine map (shift and drift) by alternating one-to-one matching and fitting.
-Pairs sharing at least :data:`MIN_SHARED_FLASHES` events without a rival shift are then
-merged, strongest first, into flashes: groups of at most one event per camera
-(:func:`match_events`). Cameras are tied together through chains of shared flashes
-(:meth:`Matching.tied_to`).
+of cameras aligned (every pair in rigs of a few cameras, else a spanning structure with a few
+partners per camera: :mod:`flashsync.partners`), the offsets between all their event times
+vote for the shift (flashes fired by hand are irregular, so only the true shift lines many of
+them up); each leading candidate is refined into an affine map (shift and drift) by
+alternating one-to-one matching and fitting. Pairs sharing at least
+:data:`MIN_SHARED_FLASHES` events without a rival shift are then merged, strongest first,
+into flashes: groups of at most one event per camera (:func:`match_events`). Cameras are
+tied together through chains of shared flashes (:meth:`Matching.tied_to`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Events
 from flashsync.model import readout_rows
+from flashsync.partners import occupancy_spectrum, planned_pairs, shared_flash_estimate, spectrum_length
 from flashsync.timestamps import median_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
@@ -44,6 +46,9 @@ MAX_CHANCE = 1e-3
 #: camera read the wrong way up misplaces a band by up to a frame.
 TOLERANCE_FRAMES = {True: 0.25, False: 1.0}
 MIN_TOLERANCE_MS = 5.0
+#: Shift votes are counted first in the bins as full as the (FLOOR_RANK x n_candidates)-th
+#: fullest (:func:`_candidate_shifts`).
+FLOOR_RANK = 8
 #: Rows read per visible row, nominally: sensors read some hidden rows too, so the frame
 #: period over the height is always a few per cent long as a time per row.
 NOMINAL_HIDDEN_ROWS = 1.05
@@ -138,18 +143,56 @@ def align_pair(
 
 def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float, n_candidates: int) -> np.ndarray:
     """The shifts (ms) that line up most event pairs, strongest first; only those that line
-    up at least :data:`MIN_SHARED_FLASHES` (fewer never count)."""
-    differences = np.sort((times_a[:, None] - times_b[None, :]).ravel())
+    up at least :data:`MIN_SHARED_FLASHES` (fewer never count).
+
+    A shift's votes are the event-time differences within ``window`` of it. They are
+    counted only in bins (one window wide) whose differences can have at least ``floor``
+    votes (the bin and its two neighbours hold that many): first the floor of the
+    (:data:`FLOOR_RANK` x ``n_candidates``)-th fullest bin, lowered until the last shift
+    chosen has at least ``floor`` votes, so that no shift under the floor could rank among
+    them: the candidates are those of counting every difference."""
+    differences = (times_a[:, None] - times_b[None, :]).ravel()
     span = max(np.ptp(times_a), np.ptp(times_b))
     window = tolerance_ms + MAX_DRIFT * span
-    votes = np.searchsorted(differences, differences + window) - np.searchsorted(differences, differences - window)
+    width = window * (1.0 + 1e-9)  # differences within a window of each other are in neighbouring bins
+    bins = ((differences - differences.min()) // width).astype(np.int64)
+    counts = np.pad(np.bincount(bins), 1)
+    bound = counts[:-2] + counts[1:-1] + counts[2:]  # most votes of a difference in each bin
+    floor = max(int(np.sort(bound)[-min(len(bound), FLOOR_RANK * n_candidates)]), MIN_SHARED_FLASHES)
+    while True:
+        chosen, last = _strongest_shifts(differences, bins, bound, floor, window, width, n_candidates)
+        if floor == MIN_SHARED_FLASHES or (len(chosen) == n_candidates and last >= floor):
+            break  # every difference with more votes than the last one chosen was counted
+        floor = max(min(last, floor - 1), MIN_SHARED_FLASHES)
+    return np.asarray(chosen)
+
+
+def _strongest_shifts(
+    differences: np.ndarray,
+    bins: np.ndarray,
+    bound: np.ndarray,
+    floor: int,
+    window: float,
+    width: float,
+    n_candidates: int,
+) -> tuple[list[float], int]:
+    """Up to ``n_candidates`` differences (ms) with most votes, at least
+    :data:`MIN_SHARED_FLASHES`, each more than two windows from a stronger one, among those
+    in bins whose ``bound`` reaches ``floor`` (their votes counted exactly: the bins either
+    side are counted too); and the votes of the last one chosen."""
+    counted = bound >= floor
+    subset = np.sort(differences[np.convolve(counted, np.ones(3), mode="same")[bins] > 0])
+    votes = np.searchsorted(subset, subset + window) - np.searchsorted(subset, subset - window)
+    votes[~counted[((subset - differences.min()) // width).astype(np.int64)]] = 0  # not all their votes counted
     chosen: list[float] = []
+    last = 0
     for index in np.argsort(-votes, kind="stable"):
         if votes[index] < MIN_SHARED_FLASHES or len(chosen) == n_candidates:
             break
-        if all(abs(differences[index] - shift) > 2 * window for shift in chosen):
-            chosen.append(differences[index])
-    return np.asarray(chosen)
+        if all(abs(subset[index] - shift) > 2 * window for shift in chosen):
+            chosen.append(subset[index])
+            last = int(votes[index])
+    return chosen, last
 
 
 def _refine(
@@ -226,7 +269,7 @@ def group_flashes(
     for (camera_a, camera_b), alignment in ranked:
         for i, j in alignment.matches:
             ra, rb = root((camera_a, int(i))), root((camera_b, int(j)))
-            if ra == rb or set(members[ra]) & set(members[rb]):
+            if ra == rb or not members[ra].keys().isdisjoint(members[rb]):
                 continue
             parent[rb] = ra
             members[ra].update(members.pop(rb))
@@ -276,9 +319,13 @@ class Matching:
 
 
 def match_events(
-    times_ms: dict[str, np.ndarray], tolerance_ms: float, anchors: dict[str, int] | None = None
+    times_ms: dict[str, np.ndarray],
+    tolerance_ms: float,
+    anchors: dict[str, int] | None = None,
+    memo: dict | None = None,
 ) -> Matching:
-    """Align every pair of cameras and merge the pairs that count into flashes.
+    """Align pairs of cameras along a spanning structure (every pair in rigs of a few
+    cameras; :mod:`flashsync.partners`) and merge the pairs that count into flashes.
 
     Parameters
     ----------
@@ -288,22 +335,47 @@ def match_events(
         See :func:`align_pair` and :func:`match_tolerance_ms`.
     anchors : dict of str to int, optional
         Per camera, the index of an event known to be one flash with the other cameras'.
+    memo : dict, optional
+        Alignments and estimates of earlier calls, by the pair's event times: give the same
+        dict to calls that differ in a few cameras' times (readout directions tried one
+        camera at a time) and only those cameras' pairs are aligned again.
 
     Returns
     -------
     Matching
-        With the pairs that share at least :data:`MIN_SHARED_FLASHES` events and have no
-        rival shift.
+        With the pairs aligned that share at least :data:`MIN_SHARED_FLASHES` events and
+        have no rival shift.
     """
     anchors = anchors or {}
+    memo = {} if memo is None else memo
     names = list(times_ms)
-    alignments = {}
-    for i, name_a in enumerate(names):
-        for name_b in names[i + 1 :]:
-            anchor = (anchors[name_a], anchors[name_b]) if name_a in anchors and name_b in anchors else None
-            alignment = align_pair(times_ms[name_a], times_ms[name_b], tolerance_ms, anchor)
-            if alignment is not None and alignment.convincing:
-                alignments[(name_a, name_b)] = alignment
+    keys = {name: times.tobytes() for name, times in times_ms.items()}
+    span = max((np.ptp(times) for times in times_ms.values() if len(times)), default=0.0)
+    window = tolerance_ms + MAX_DRIFT * span
+    length = spectrum_length([np.ptp(times) for times in times_ms.values() if len(times)], window)
+
+    def spectrum(name: str) -> np.ndarray:
+        key = ("spectrum", keys[name], window, length)
+        if key not in memo:
+            memo[key] = occupancy_spectrum(times_ms[name], window, length)
+        return memo[key]
+
+    def estimate(a: str, b: str) -> int:
+        key = ("estimate", keys[a], keys[b], window, length)
+        if key not in memo:
+            memo[key] = shared_flash_estimate(spectrum(a), spectrum(b))
+        return memo[key]
+
+    def aligned(a: str, b: str) -> PairAlignment | None:
+        anchor = (anchors[a], anchors[b]) if a in anchors and b in anchors else None
+        key = ("alignment", keys[a], keys[b], tolerance_ms, anchor)
+        if key not in memo:
+            alignment = align_pair(times_ms[a], times_ms[b], tolerance_ms, anchor)
+            memo[key] = alignment if alignment is not None and alignment.convincing else None
+        return memo[key]
+
+    pairs = planned_pairs(names, estimate, lambda a, b: aligned(a, b) is not None, MIN_SHARED_FLASHES)
+    alignments = {pair: aligned(*pair) for pair in pairs if aligned(*pair) is not None}
     return Matching(alignments, group_flashes({name: len(times) for name, times in times_ms.items()}, alignments))
 
 

@@ -202,9 +202,10 @@ def synchronize(
     undecided = [name for name, d in cameras.items() if d.undecided]
 
     rate_std = {name: clock.rate_std for name, clock in report.frame_clocks.items()}
+    memo: dict = {}  # pair alignments shared by the attempts (a flip changes only that camera's pairs)
 
     def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
-        return _attempt(trial, reference, row_times, anchors, rate_std)
+        return _attempt(trial, reference, row_times, anchors, rate_std, memo)
 
     best, rivals = _best_readout(cameras, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
@@ -551,10 +552,11 @@ def _attempt(
     row_times: dict[str, float] | None,
     anchors: Sequence[str],
     rate_std: dict[str, float] | None = None,
+    memo: dict | None = None,
 ) -> _Attempt:
     """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
     the relative standard error of its frame clock's rate (it and the reference's widen the
-    prior on its drift)."""
+    prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
     warnings = [
@@ -571,7 +573,7 @@ def _attempt(
     anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
     matching = match_events(
-        {n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events
+        {n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events, memo
     )
     tied = matching.tied_to(reference)
     connected = [name for name in usable if name in tied]

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import av
 import numpy as np
 import pytest
 from cli_run import one_error_line, run
@@ -30,10 +31,10 @@ ROW_MS = 1000.0 / FPS / (R0 + HEIGHT + R1)
 SEGMENT_TEST_MS = 1000.0
 
 
-@pytest.fixture(scope="module")
-def clips(tmp_path_factory) -> list[Path]:
+def render_clips(folder: Path, open_gop: bool = False) -> list[Path]:
     """Two 10 s clips, 320x240 at 30 fps with a 3 % 100 Hz rolling flicker, a key frame
-    every 40 frames (x264's B-frames on), 17 flashes, players: an MKV and an MP4."""
+    every 40 frames (x264's B-frames on; ``open_gop``: its open GOPs), 17 flashes, players:
+    an MKV and an MP4."""
     from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
     flashes = tuple(
@@ -51,15 +52,20 @@ def clips(tmp_path_factory) -> list[Path]:
             n_frames=300,
             noise_std=1.5,
             keyint=40,
+            open_gop=open_gop,
             container=container,
             start_ms=start_ms,
         )
         for name, container, start_ms in (("a", "mkv", 0.0), ("b", "mp4", 40.0))
     )
-    folder = tmp_path_factory.mktemp("segments")
     scenario = Scenario("segments", cameras, flashes=flashes, flicker_depth=0.03, flicker_hz=100.0, n_players=6, seed=3)
     render_scenario(scenario, folder)
     return [folder / "a.mkv", folder / "b.mp4"]
+
+
+@pytest.fixture(scope="module")
+def clips(tmp_path_factory) -> list[Path]:
+    return render_clips(tmp_path_factory.mktemp("segments"))
 
 
 @pytest.fixture(scope="module")
@@ -101,8 +107,14 @@ def test_detection_state_handed_from_segment_to_segment_gives_the_same_events(cl
     """The flicker model, baselines, recurrence filter and numbering survive pickling at
     every seam (flashes at frames 44, 78 and 163 are 2 to 4 frames from one: the baseline,
     the flicker's lookahead and the recurrence filter's hold all span it)."""
+    assert_identical(detect_in_segments(clips), plain)
+
+
+def detect_in_segments(paths: list[Path]) -> list:
+    """Each video detected segment by segment as :mod:`flashsync.cluster` does, the state
+    pickled at every seam."""
     found = []
-    for path in clips:
+    for path in paths:
         info, segments = plan_segments(path, SEGMENT_TEST_MS)
         state = VideoDetection(info, None)
         for segment in segments:
@@ -110,7 +122,7 @@ def test_detection_state_handed_from_segment_to_segment_gives_the_same_events(cl
                 state.push(*frame)
             state = pickle.loads(pickle.dumps(state))
         found.append(state.finish())
-    assert_identical(found, plain)
+    return found
 
 
 def test_local_cluster_gives_the_plain_events(clips, plain, local_cluster):
@@ -127,6 +139,31 @@ def test_local_cluster_gives_the_plain_events(clips, plain, local_cluster):
     found = detect_videos(clips, scheduler=local_cluster, segment_ms=SEGMENT_TEST_MS, progress=progress)
     assert_identical(found, plain)
     assert seen == {"a": 300, "b": 300}  # the segments' frames came back to the progress bar
+
+
+def test_open_gop_segments_give_the_plain_events(tmp_path):
+    """With open GOPs the B-frames shown before a key frame are coded after it and reference
+    the GOP before: the segment before decodes them (it reads on to its stop stamp), the
+    segment that starts at the key frame skips them."""
+    videos = render_clips(tmp_path, open_gop=True)
+    for path in videos:
+        with av.open(str(path)) as container:
+            packets = [(p.pts, p.is_keyframe) for p in container.demux(container.streams.video[0]) if p.pts is not None]
+        leading = [
+            pts
+            for i, (key_pts, key) in enumerate(packets)
+            if key and i
+            for pts, _ in packets[i + 1 : i + 4]
+            if pts < key_pts
+        ]
+        assert len(leading) >= 4  # the hard case is there: frames coded after a key frame, shown before it
+        _, segments = plan_segments(path, SEGMENT_TEST_MS)
+        assert len(segments) == 8
+        whole = list(read_profiles(path)[1])
+        joined = [frame for segment in segments for frame in read_segment(segment)]
+        assert len(joined) == len(whole) == 300
+        assert all(a[0] == b[0] and a[2] == b[2] and np.array_equal(a[1], b[1]) for a, b in zip(joined, whole))
+    assert_identical(detect_in_segments(videos), [detect_video(path, flipped=None) for path in videos])
 
 
 def test_detect_command_on_local_n(clips, tmp_path, capsys):

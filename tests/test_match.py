@@ -156,3 +156,78 @@ def test_anchors_name_the_detectors_event_numbers():
     with pytest.raises(InputError, match="cam1:2: cam1 has no event 2") as error:
         parse_anchors(["cam1:2"], numbers)
     assert error.value.parameter == "anchors"
+
+
+def many_cameras(rng, tau_of_camera):
+    """Per camera ``c0, c1, ...``: approximate times of the flashes it sees (random shift up to
+    a minute, drift up to 50 ppm, 25-50 fps, 10 % missed, 2 spurious) and the true flash of
+    each (-1 spurious)."""
+    times, truth = {}, {}
+    for c, tau in enumerate(tau_of_camera):
+        alpha, beta = 1 + rng.uniform(-50e-6, 50e-6), rng.uniform(-60_000.0, 60_000.0)
+        times[f"c{c}"], truth[f"c{c}"] = seen_by(rng, tau, alpha, beta, rng.choice([20.0, 40.0]), 0.1, 2)
+    return times, truth
+
+
+def assert_true_flashes(matching, truth, tau_index):
+    """Every flash holds events of one true flash (``tau_index`` maps a camera's truth to
+    the rig's flash numbers)."""
+    groups = {}
+    for (camera, event), flash in matching.flashes.items():
+        groups.setdefault(flash, set()).add(
+            tau_index[camera][truth[camera][event]] if truth[camera][event] >= 0 else -1
+        )
+    assert groups and all(len(true) == 1 and -1 not in true for true in groups.values())
+
+
+def test_a_large_rig_aligns_a_spanning_structure_not_every_pair():
+    """12 cameras: each aligned with a few partners (66 pairs otherwise), all tied, every
+    flash one true flash."""
+    from flashsync.match import match_events
+    from flashsync.partners import PARTNERS
+
+    rng = np.random.default_rng(5)
+    tau = flashes(rng, n=60)
+    times, truth = many_cameras(rng, [tau] * 12)
+    matching = match_events(times, TOLERANCE_MS)
+    assert len(matching.alignments) <= len(times) * PARTNERS < 66
+    assert all(sum(name in pair for pair in matching.alignments) >= PARTNERS for name in times)
+    assert matching.tied_to("c0") == set(times)
+    assert_true_flashes(matching, truth, {name: np.arange(60) for name in times})
+
+
+def test_two_groups_sharing_a_few_flashes_stay_tied():
+    """c0-c4 see one half's flashes, c5-c9 the other's, and all see 6 more: each camera's best
+    partners are in its own group, the spanning forest links the groups."""
+    from flashsync.match import match_events
+
+    rng = np.random.default_rng(6)
+    tau = flashes(rng, n=66)
+    order = rng.permutation(66)
+    halves = [np.sort(np.concatenate([order[:30], order[60:]])), np.sort(np.concatenate([order[30:60], order[60:]]))]
+    times, truth = many_cameras(rng, [tau[halves[c // 5]] for c in range(10)])
+    matching = match_events(times, TOLERANCE_MS)
+    assert matching.tied_to("c0") == set(times)
+    assert any(int(a[1:]) // 5 != int(b[1:]) // 5 for a, b in matching.alignments)
+    assert_true_flashes(matching, truth, {f"c{c}": halves[c // 5] for c in range(10)})
+
+
+def test_alignments_are_remembered_between_calls(monkeypatch):
+    """With the same memo, a call where one camera's times changed (read the other way up)
+    aligns only that camera's pairs again."""
+    import flashsync.match as match
+
+    rng = np.random.default_rng(7)
+    tau = flashes(rng, n=40)
+    times, _ = many_cameras(rng, [tau] * 8)
+    aligned = []
+    original = match.align_pair
+    monkeypatch.setattr(match, "align_pair", lambda a, b, *rest: aligned.append(1) or original(a, b, *rest))
+    memo = {}
+    first = match.match_events(times, TOLERANCE_MS, memo=memo)
+    n_first = len(aligned)
+    again = match.match_events(dict(times), TOLERANCE_MS, memo=memo)
+    assert len(aligned) == n_first and again.flashes == first.flashes
+    times["c3"] = times["c3"] + 1.0
+    match.match_events(times, TOLERANCE_MS, memo=memo)
+    assert 0 < len(aligned) - n_first <= len(times) - 1

@@ -67,13 +67,18 @@ def container_stamps(
 
 
 def x264_options(
-    crf: int = 23, keyint: int | None = None, bframes: int | None = None, preset: str | None = None
+    crf: int = 23,
+    keyint: int | None = None,
+    bframes: int | None = None,
+    preset: str | None = None,
+    open_gop: bool = False,
 ) -> dict[str, str]:
     """libx264 options for PyAV's ``stream.options``: x264's defaults where None."""
     options = {"crf": str(crf)}
     if preset is not None:
         options["preset"] = preset
-    params = [f"{name}={value}" for name, value in (("keyint", keyint), ("bframes", bframes)) if value is not None]
+    given = (("keyint", keyint), ("bframes", bframes), ("open_gop", 1 if open_gop else None))
+    params = [f"{name}={value}" for name, value in given if value is not None]
     if params:
         options["x264-params"] = ":".join(params)
     return options
@@ -89,6 +94,7 @@ def write_video(
     keyint: int | None = None,
     bframes: int | None = None,
     preset: str | None = None,
+    open_gop: bool = False,
 ) -> int:
     """Encode frames with libx264 (yuv420p) and explicit presentation stamps.
 
@@ -110,6 +116,9 @@ def write_video(
         Longest GOP and most consecutive B-frames; x264's defaults (250, 3) if None.
     preset : str, optional
         x264 speed preset; ``medium`` if None.
+    open_gop : bool
+        x264's open GOPs (B-frames before a key frame in presentation order reference the
+        GOP before it).
 
     Returns
     -------
@@ -138,7 +147,7 @@ def write_video(
                     stream.pix_fmt = "yuv420p"
                     stream.time_base = time_base
                     stream.codec_context.time_base = time_base
-                    stream.options = x264_options(crf, keyint, bframes, preset)
+                    stream.options = x264_options(crf, keyint, bframes, preset, open_gop)
                 frame = av.VideoFrame.from_ndarray(image, format="gray" if image.ndim == 2 else "bgr24")
                 frame.pts = stamp
                 frame.time_base = time_base

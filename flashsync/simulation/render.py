@@ -376,6 +376,7 @@ def render_scenario(
             keyint=cam.keyint,
             bframes=cam.bframes,
             preset=cam.x264_preset,
+            open_gop=cam.open_gop,
         )
         homographies[cam.name] = view.homography.tolist()
         xy, visible = puck_track(view, scene.puck, t_true)

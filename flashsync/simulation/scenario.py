@@ -185,6 +185,9 @@ class CameraSpec:
         Most consecutive B-frames; None: x264's default (3, placed adaptively); 0: none.
     x264_preset : str or None
         x264 speed preset (``ultrafast`` .. ``veryslow``); None: ``medium``.
+    open_gop : bool
+        x264's open GOPs: key frames are recovery points (not IDR), and the B-frames shown
+        before one are coded after it, referencing the GOP before.
     tone : {'linear', 'srgb', 'gamma'}
         Tone curve applied to linear light before quantisation (see `sensor`).
     black_level : float
@@ -235,6 +238,7 @@ class CameraSpec:
     keyint: int | None = None
     bframes: int | None = None
     x264_preset: str | None = None
+    open_gop: bool = False
     tone: str = "linear"
     black_level: float = 0.0
     white_level: float = 255.0
