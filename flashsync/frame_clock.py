@@ -569,7 +569,7 @@ def _robust_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, np.ndarray
     the points kept (those within :data:`OUTLIER_SIGMAS` sigma of it)."""
     keep = np.ones(len(x), dtype=bool)
     for _ in range(3):
-        slope, intercept = np.polyfit(x[keep], y[keep], 1)
+        slope, intercept = _line(x[keep], y[keep])
         residual = y - (intercept + slope * x)
         sigma = mad_sigma(residual[keep], 1e-6)
         keep = np.abs(residual) <= 3 * sigma + 0.5
@@ -577,6 +577,15 @@ def _robust_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, np.ndarray
             keep = np.ones(len(x), dtype=bool)
     keep = np.abs(residual) <= OUTLIER_SIGMAS * sigma + 0.5
     return float(intercept), float(slope), keep
+
+
+def _line(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """Slope and intercept of the least-squares line through (x, y) (x not all equal), from
+    the centred sums: what ``np.polyfit(x, y, 1)`` gives, without its SVD."""
+    x_mean, y_mean = np.mean(x), np.mean(y)
+    dx = x - x_mean
+    slope = float(np.sum(dx * (y - y_mean)) / np.sum(dx * dx))
+    return slope, float(y_mean - slope * x_mean)
 
 
 def _grid(stamps: np.ndarray) -> float:

@@ -353,6 +353,8 @@ class _System:
             )
         self.column_scale = 1.0 / norms
         self.matrix = (matrix @ sparse.diags(self.column_scale)).tocsc()
+        self.matrix.eliminate_zeros()  # a warp's hats are 0 beyond their two knots
+        self._last_reduced = (None, None)
         self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
         self.flashes = self.matrix[:, self.n_camera_columns :].tocsr()
 
@@ -365,14 +367,19 @@ class _System:
         has weight 0 (all rejected) gets ``d = 1``: it solves to 0 instead of making the
         system singular (its time is reported as NaN).
 
-        Returns the Cholesky factor of ``S`` and what back-substitution needs.
+        Returns the Cholesky factor of ``S`` and what back-substitution needs; the last
+        weights' are kept (a solve, then its leverages and covariance, use the same).
         """
+        last_weights, last = self._last_reduced
+        if last_weights is not None and np.array_equal(last_weights, weights):
+            return last
         w = np.concatenate([weights, np.ones(self.n_priors)])
         weighted_cams = self.cams.multiply(w[:, None]).tocsr()
         d = np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel()
         d = np.where(d > 0, d, 1.0)
         coupling = (weighted_cams.T @ self.flashes).toarray()
-        schur = (self.cams.T @ weighted_cams).toarray() - (coupling / d) @ coupling.T
+        scaled = coupling / np.sqrt(d)
+        schur = (self.cams.T @ weighted_cams).toarray() - scaled @ scaled.T  # a @ a.T: one BLAS syrk
         right_cams = self.cams.T @ (w * self.rhs)
         right_flashes = self.flashes.T @ (w * self.rhs)
         try:
@@ -385,7 +392,8 @@ class _System:
                 "(too few flashes, or all at the same rows); record more flashes seen by several "
                 "cameras, or give the cameras' times per row (datasheet)"
             )
-        return factor, coupling, d, right_cams, right_flashes
+        self._last_reduced = (weights.copy(), (factor, coupling, d, right_cams, right_flashes))
+        return self._last_reduced[1]
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
         """Weighted least-squares solution (unscaled units); a clear error where the
@@ -409,23 +417,50 @@ class _System:
         shrunk towards the pooled scale with :data:`POOLED_EQUATIONS`; at least
         :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
-        w = np.concatenate([weights, np.ones(self.n_priors)])
-        weighted = (sparse.diags(np.sqrt(w)) @ self.matrix).tocsr()
-        try:
-            inverse = linalg.inv((weighted.T @ weighted).toarray(), check_finite=False)
-        except linalg.LinAlgError:
+        leverages = self._leverages(weights)
+        if leverages is None:
             return np.full(self.n_equations, self.event_sigma_ms)
         groups = self.group.max() + 1
-        leverage = np.zeros(groups)
-        for g in range(groups):
-            rows = weighted[np.flatnonzero(self.group == g)]
-            leverage[g] = (rows.T @ rows).multiply(inverse).sum()
+        leverage = np.bincount(self.group, leverages, minlength=groups)
         squares = np.where(inlier, residual**2, 0.0)
         sums = np.bincount(self.group, squares, minlength=groups)
         dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
         pooled = float(squares.sum() / max(dof.sum(), 1.0))
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
         return np.maximum(scale[self.group], MIN_SCALE_MS)
+
+    def _leverages(self, weights: np.ndarray) -> np.ndarray | None:
+        """Each equation's leverage ``w_i a_i' N^-1 a_i`` (shape (n_equations,)) for the normal
+        matrix ``N`` of ``weights``, from its flash-eliminated form (:meth:`_reduced`): with
+        ``M = B / d`` (coupling over the flash diagonal), an equation of camera part ``c`` and
+        flash coefficient ``f`` on flash ``k`` has ``a' N^-1 a = (c - f M_k)' S^-1 (c - f M_k)
+        + f^2 / d_k``. None where ``N`` is singular: a flash whose every equation has weight 0,
+        or a singular ``S``."""
+        w = np.concatenate([weights, np.ones(self.n_priors)])
+        if np.any(np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel() == 0):
+            return None
+        try:
+            factor, coupling, d, _, _ = self._reduced(weights)
+        except NotEnoughDataError:
+            return None
+        inverse = _cho_inverse(factor)
+        moved = coupling / d
+        spread = inverse @ moved
+        flash_term = 1.0 / d + np.sum(moved * spread, axis=0)
+        cams = self.cams[: self.n_equations]
+        flashes = self.flashes[: self.n_equations].tocoo()
+        f = np.zeros(self.n_equations)
+        k = np.zeros(self.n_equations, dtype=np.int64)
+        f[flashes.row], k[flashes.row] = flashes.data, flashes.col
+        counts = np.diff(cams.indptr)
+        width = int(counts.max()) if counts.size else 0
+        slot = np.arange(width) < counts[:, None]
+        columns = np.zeros((self.n_equations, width), dtype=np.int64)
+        values = np.zeros((self.n_equations, width))
+        columns[slot], values[slot] = cams.indices, cams.data
+        own = np.einsum("ia,ib,iab->i", values, values, inverse[columns[:, :, None], columns[:, None, :]])
+        cross = np.einsum("ia,ia->i", values, spread[columns, k[:, None]])
+        return w[: self.n_equations] * (own - 2 * f * cross + f**2 * flash_term[k])
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
         """Residuals of the events and durations over their sigma factors, ms (what a clean
@@ -436,7 +471,7 @@ class _System:
         """Covariance of the camera unknowns (unscaled units) for residual variance ``scale``:
         the inverse of the Schur complement."""
         factor = self._reduced(weights)[0]
-        inverse = linalg.cho_solve(factor, np.eye(self.n_camera_columns))
+        inverse = _cho_inverse(factor)
         column_scale = self.column_scale[: self.n_camera_columns]
         return scale * inverse * np.outer(column_scale, column_scale)
 
@@ -460,6 +495,14 @@ class _System:
             self.knots.get(c, np.zeros(0)),
             values[3:],
         )
+
+
+def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
+    """The inverse of a symmetric positive-definite matrix from its :func:`scipy.linalg.cho_factor`."""
+    inverse, info = linalg.lapack.dpotri(factor[0], lower=factor[1])
+    if info != 0:
+        raise linalg.LinAlgError("the Cholesky factor is singular")
+    return np.triu(inverse) + np.triu(inverse, 1).T if not factor[1] else np.tril(inverse) + np.tril(inverse, -1).T
 
 
 def _informative(durations: Durations | None, n_cameras: int) -> Durations:

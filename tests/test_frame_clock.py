@@ -169,3 +169,13 @@ def test_the_frame_clock_uncertainty_is_in_sigma():
     assert clock.t_global_std_ms(np.array([3]), np.array([5.0]))[0] == 0.0
     noisy = dataclasses.replace(clock, alpha=2.0, frame_std_ms=np.full(10, 0.25))
     assert noisy.t_global_std_ms(np.array([3]), np.array([5.0]))[0] == pytest.approx(0.5)
+
+
+def test_the_robust_line_is_the_least_squares_line_of_polyfit():
+    from flashsync.frame_clock import _line
+
+    rng = np.random.default_rng(3)
+    x = np.cumsum(rng.integers(1, 3, 5000)).astype(np.float64)
+    y = 1_234.5 + 33.3667 * x + rng.normal(0.0, 0.3, len(x))
+    slope, intercept = np.polyfit(x, y, 1)
+    np.testing.assert_allclose(_line(x, y), (slope, intercept), rtol=1e-12)

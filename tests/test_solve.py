@@ -179,3 +179,34 @@ def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_
     np.testing.assert_allclose(parameters, [2.0, 0.5], atol=0.01)
     assert residual[7] > 4.9 and scale < 0.02
     assert cauchy_fit(np.column_stack([x, 2 * x]), observed) is None
+
+
+def test_the_flash_eliminated_leverages_and_covariance_are_the_dense_normal_equations():
+    """Group scales' leverages and the covariance come from the Schur complement of the flash
+    block; on a small system (warp knots, durations, priors, weights with rejections) they are
+    those of the dense normal matrix's inverse."""
+    from flashsync.solve import Durations, Priors, _System
+
+    (camera, flash, t_frame, q), _ = observations(np.random.default_rng(11), n_flashes=30)
+    knots = {2: np.linspace(t_frame[camera == 2].min(), t_frame[camera == 2].max(), 4)}
+    durations = Durations(
+        np.array([1, 1, 1, 2, 2]), np.array([0.0, 33.3, 0.0, 20.0, 0.0]), np.array([50.0, -950, 52, -930, 49])
+    )
+    priors = Priors({0: (0.037, 0.003)}, drift_std=50e-6)
+    system = _System(Observations(camera, flash, t_frame, q), 3, 0, durations, priors, knots, 0.05)
+    rng = np.random.default_rng(12)
+    weights = rng.uniform(0.5, 2.0, system.n_equations) * (rng.uniform(size=system.n_equations) > 0.05)
+    weights[np.flatnonzero(system.flash_index == 0)[1:]] = 0.0  # a flash left with one equation
+    dense = system.matrix.toarray() * np.sqrt(np.concatenate([weights, np.ones(system.n_priors)]))[:, None]
+    inverse = np.linalg.inv(dense.T @ dense)
+    hat = np.einsum("ij,jk,ik->i", dense, inverse, dense)[: system.n_equations]
+    np.testing.assert_allclose(system._leverages(weights), hat, rtol=1e-9, atol=1e-12)
+    scale = system.column_scale[: system.n_camera_columns]
+    np.testing.assert_allclose(
+        system.covariance(weights, 1.0),
+        inverse[: system.n_camera_columns, : system.n_camera_columns] * np.outer(scale, scale),
+        rtol=1e-9,
+        atol=1e-12 * np.max(np.abs(inverse)),
+    )
+    weights[np.flatnonzero(system.flash_index == 0)] = 0.0  # a flash with no equation left: N is singular
+    assert system._leverages(weights) is None
