@@ -32,6 +32,7 @@ from flashsync.diagnose.effects import (
     EXPOSURE,
     FLIPPED,
     FRAME_CLOCK,
+    PULSE_SHAPE,
     ROW_TIME,
     SATURATION,
     STAMP_RATE,
@@ -142,6 +143,9 @@ class Candidate:
                 nominal_row_time_ms=self.nominal_row_time_ms(c),
                 exposure_ms=self.exposure_ms(c),
                 saturation_ms=self.coefficient(SATURATION, c),
+                pulse_trailing=self.coefficient(PULSE_SHAPE, c),
+                pulse_leading=self.coefficient(f"{PULSE_SHAPE}.1", c),
+                longest_excess_ms=float(np.max(self.features.excess_ms[self.features.camera == c], initial=0.0)),
                 effects=sorted(t.effect for t in self.terms if t.camera == c),
             )
             for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
@@ -294,7 +298,9 @@ def _fit(
         q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
         observed[mine] = frame_ms[mine] + q[mine] * times.period_ms / camera.height
         frame_ms[mine] -= 0.5 * (times.times_ms[0] + times.times_ms[-1])
-    features = Features(edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera], edges.saturated)
+    features = Features(
+        edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera], edges.saturated, edges.excess_ms
+    )
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
     weight = _edge_weights(measurement)
@@ -346,8 +352,10 @@ def _design(
     for term in sorted(terms):
         column = CATALOGUE[term.effect].column
         if column is not None:
-            keys.append((term.effect, term.camera))
-            columns.append(np.where(features.camera == term.camera, column(features), 0.0))
+            values = column(features).reshape(len(features.camera), -1)
+            for i, values in enumerate(values.T):
+                keys.append((f"{term.effect}.{i}" if i else term.effect, term.camera))
+                columns.append(np.where(features.camera == term.camera, values, 0.0))
     flash = measurement.edges.flash
     columns += list((flash[None, :] == np.arange(measurement.n_flashes)[:, None]).astype(np.float64))
     return keys, np.column_stack(columns)

@@ -41,15 +41,30 @@ stamp_rate      from one frame on, edges run away at a      frame times at one r
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
                                                             frame_clock (segments fitted)
+pulse_shape     a band longer than the camera's others has  columns ``[trailing] * w`` and
+                its trailing edge late and its leading      ``-[leading] * w`` (``w``: the band's
+                edge early, by shares of the excess ``w``   excess length, ms): the shares of it
+                                                            on the trailing and the leading edge
 ==============  ==========================================  ======================================
 
 ``dropped_frames``, ``frame_clock`` and ``stamp_rate`` switch on parts of the pipeline's frame clock
 (:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
 fitted model's :class:`CameraEstimate` of the camera, never from the fit itself.
 
-Flash decay is not in the catalogue: the detector marks each edge at half of the band's
-own rise, the same instant of the flash in every camera whatever its decay, so the decay
-leaves no event residual, and the detections keep no band profiles to compare shapes with.
+The flash's pulse shape: the detector marks each edge at half of the band's own rise, the
+same instant of the flash in every camera whatever its decay, as long as the band shows the
+plateau the detector takes for its level. On the simulator's second world (xenon tails of
+0.2-1.3 ms, tone curves) that fails on some bands: on its HD rig (320x180, 12 s) two of the
+59.94 fps camera's bands come out 0.6 and 2.1 ms longer than its others, their trailing
+edges 0.44 and 1.75 ms late against the truth and their leading edges 0.2-0.3 ms early,
+while the other cameras' bands of the same flashes are as long as ever: neither a pulse
+length shared by the cameras that saw the flash nor a rise/fall difference per camera, but
+a widening per band. Its evidence is each band's own excess length where it is beyond an
+ordinary band's (:attr:`~flashsync.diagnose.measure.Edges.excess_ms`), so ``pulse_shape`` fits the shares
+of it on the trailing and on the leading edge per camera. Every late trailing edge seen
+there belongs to a band split across two frames (its trailing edge in the next frame's
+top 35 rows); where such a band is no longer than the camera's other split bands, the
+excess does not show its delay and the effect cannot take it up.
 """
 
 from __future__ import annotations
@@ -68,6 +83,7 @@ DRIFT_RATE = "drift_rate"
 EXPOSURE = "exposure"
 STAMP_RATE = "stamp_rate"
 SATURATION = "saturation"
+PULSE_SHAPE = "pulse_shape"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -91,6 +107,8 @@ class Features:
         Trailing edge under the model's readout direction.
     saturated : bool array
         The edge's band clipped at white.
+    excess_ms : float array
+        The edge's band's length minus its camera's median of its kind, ms.
     """
 
     camera: np.ndarray
@@ -98,6 +116,7 @@ class Features:
     q: np.ndarray
     trailing: np.ndarray
     saturated: np.ndarray
+    excess_ms: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -128,6 +147,11 @@ class CameraEstimate:
     exposure_ms : float
     saturation_ms : float
         How far the edges of a clipped band move out (leading earlier, trailing later), ms.
+    pulse_trailing, pulse_leading : float
+        Shares of a band's excess length that its trailing edge is late and its leading edge
+        early by.
+    longest_excess_ms : float
+        The largest excess length of the camera's bands, ms.
     effects : list of str
         The effects the model has on this camera.
     """
@@ -147,6 +171,9 @@ class CameraEstimate:
     nominal_row_time_ms: float
     exposure_ms: float
     saturation_ms: float
+    pulse_trailing: float
+    pulse_leading: float
+    longest_excess_ms: float
     effects: list[str]
 
     @property
@@ -176,8 +203,10 @@ class Effect:
         reference.
     column : callable or None
         ``column(features)``: the design column it adds for a camera (before restricting it
-        to that camera's edges), scaled so that its coefficient is the parameter; None for
-        an effect that changes how the model's quantities are computed.
+        to that camera's edges), scaled so that its coefficient is the parameter, shape
+        (n_edges,), or several as shape (n_edges, k) (the parameters keyed by the name,
+        then by the name and ``.1``, ``.2``...); None for an effect that changes how the
+        model's quantities are computed.
     implies : tuple of str
         Effects added with it.
     """
@@ -206,6 +235,13 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
 
 def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
     return f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later)"
+
+
+def _describe_pulse_shape(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return (
+        f"bands up to {camera.longest_excess_ms:.3f} ms longer than the camera's others: trailing edges "
+        f"{camera.pulse_trailing:.2f} of it late, leading edges {camera.pulse_leading:.2f} of it early"
+    )
 
 
 def _describe_stamp_rate(camera: CameraEstimate, reference: CameraEstimate) -> str:
@@ -309,6 +345,19 @@ CATALOGUE: dict[str, Effect] = {
             EVERY_CAMERA,
             _describe_saturation,
             column=lambda f: np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0),
+        ),
+        Effect(
+            PULSE_SHAPE,
+            "flash pulse shape",
+            "bands widened beyond any ordinary band of the camera (seen under xenon tails on "
+            "bands split across two frames): their trailing edges late, their leading edges early",
+            "adds the shares of each band's excess length (ms) that its trailing edge is late "
+            "and its leading edge early by",
+            EVERY_CAMERA,
+            _describe_pulse_shape,
+            column=lambda f: np.column_stack(
+                [np.where(f.trailing, f.excess_ms, 0.0), np.where(f.trailing, 0.0, -f.excess_ms)]
+            ),
         ),
         Effect(
             STAMP_RATE,

@@ -38,6 +38,12 @@ EDGE_MARGIN_ROWS = 6
 #: deviation of an ordinary band seen on the shipped sample and the second world's rigs is
 #: 10 robust sigmas (the median absolute deviation is small: a median band deviates by 0).
 OUTLIER_BAND_SIGMAS = 20.0
+#: A band longer than its camera's others of its kind by more than this many robust standard
+#: deviations is widened (the ``pulse_shape`` effect's evidence): beyond the largest
+#: deviation of an ordinary band (above). On the second world's HD rig the 59.94 fps
+#: camera's widened bands are 17 and 58 robust sigmas long; on the shipped sample the
+#: longest band is 8 (cam2, 0.12 ms).
+WIDE_BAND_SIGMAS = 10.0
 
 
 @dataclass(frozen=True)
@@ -60,6 +66,10 @@ class Edges:
         Trailing edge in the readout direction the detection was told.
     saturated : bool array
         The edge's band clipped at white (:data:`~flashsync.events.Flag.SATURATED`).
+    excess_ms : float array
+        How much longer the edge's band is than the median of its camera's bands of its kind
+        (:func:`_length_excess_ms`), ms, where that is more than :data:`WIDE_BAND_SIGMAS`
+        robust standard deviations of the camera's band lengths (a widened band); else 0.
     """
 
     camera: np.ndarray
@@ -69,6 +79,7 @@ class Edges:
     row: np.ndarray
     trailing: np.ndarray
     saturated: np.ndarray
+    excess_ms: np.ndarray
 
     def __len__(self) -> int:
         return len(self.camera)
@@ -169,13 +180,14 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     )
     cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
-    edges = _edges(pulses, matching.flashes, cameras)
+    excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
+    deviations = [e[np.isfinite(e)] for e in excess]
+    edges = _edges(pulses, matching.flashes, cameras, [_widening_ms(e, d) for e, d in zip(excess, deviations)])
     if len(edges) == 0:
         raise NotEnoughDataError(
             "no flash band with both edges inside the image is seen by two cameras; "
             "record more flashes, away from the top and bottom of the image"
         )
-    deviations = _length_deviations_ms(cameras, pulses)
     pooled = _edge_noise_ms(np.concatenate(deviations))
     own = np.array([_edge_noise_ms(d) for d in deviations])
     return Measurement(
@@ -237,10 +249,15 @@ def _pulses(detection: CameraDetection) -> _Pulses:
     return _Pulses(events, bands, time_ms, clean)
 
 
-def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras: tuple[CameraDetection, ...]) -> Edges:
+def _edges(
+    pulses: list[_Pulses],
+    flash_of: dict[tuple[str, int], int],
+    cameras: tuple[CameraDetection, ...],
+    excess_ms: list[np.ndarray],
+) -> Edges:
     """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    camera, flash, event, frame, row, trailing, saturated = [], [], [], [], [], [], []
-    for index, (named, mine) in enumerate(zip(cameras, pulses)):
+    camera, flash, event, frame, row, trailing, saturated, excess = [], [], [], [], [], [], [], []
+    for index, (named, mine, longer) in enumerate(zip(cameras, pulses, excess_ms)):
         clipped = mine.events.has_flag(Flag.SATURATED)
         for band in np.flatnonzero(mine.clean):
             if (named.camera, band) not in flash_of:
@@ -253,6 +270,7 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
                 row.append(mine.events.row[edge])
                 trailing.append(is_trailing)
                 saturated.append(bool(clipped[edge]))
+                excess.append(float(longer[band]))
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -262,28 +280,37 @@ def _edges(pulses: list[_Pulses], flash_of: dict[tuple[str, int], int], cameras:
         np.asarray(row, dtype=np.float64)[keep],
         np.asarray(trailing, dtype=bool)[keep],
         np.asarray(saturated, dtype=bool)[keep],
+        np.asarray(excess, dtype=np.float64)[keep],
     )
 
 
-def _length_deviations_ms(cameras: tuple[CameraDetection, ...], pulses: list[_Pulses]) -> list[np.ndarray]:
-    """Per camera, each band's length minus the median length of the camera's bands that
-    span the same number of frames and are clipped at white or not as it is (with at least
-    three of them), ms. Every band counts here, one whose edge a codec artefact moved too
-    (:func:`_edge_noise_ms` leaves out the outliers)."""
-    per_camera = []
-    for camera, mine in zip(cameras, pulses):
-        bands = mine.bands.take(mine.clean)
-        frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
-        lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
-        clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
-        deviations = [np.zeros(0)]
-        for span, saturated in sorted({(int(f), bool(c)) for f, c in zip(frames, clipped)}):
-            rows = lengths[(frames == span) & (clipped == saturated)]
-            if len(rows) >= 3:
-                scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
-                deviations.append((rows - np.median(rows)) * scale)
-        per_camera.append(np.concatenate(deviations))
-    return per_camera
+def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
+    """Each band's length minus the median length of the camera's clean bands that span the
+    same number of frames and are clipped at white or not as it is (with at least three of
+    them), ms, shape (n_bands,); NaN for a band that is not clean or has no such kind. Every
+    clean band counts here, one whose edge a codec artefact moved too (:func:`_edge_noise_ms`
+    leaves out the outliers)."""
+    excess = np.full(len(mine.clean), np.nan)
+    clean = np.flatnonzero(mine.clean)
+    bands = mine.bands.take(mine.clean)
+    frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
+    lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
+    clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
+    for span, saturated in sorted({(int(f), bool(c)) for f, c in zip(frames, clipped)}):
+        kind = (frames == span) & (clipped == saturated)
+        if np.count_nonzero(kind) >= 3:
+            rows = lengths[kind]
+            scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
+            excess[clean[kind]] = (rows - np.median(rows)) * scale
+    return excess
+
+
+def _widening_ms(excess_ms: np.ndarray, deviations: np.ndarray) -> np.ndarray:
+    """Each band's excess length where it is more than :data:`WIDE_BAND_SIGMAS` robust
+    standard deviations of the camera's band lengths ``deviations``, else 0, ms, shape of
+    ``excess_ms``; all 0 where those do not scatter."""
+    spread = mad_sigma(deviations) if deviations.size else 0.0
+    return np.where((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread), excess_ms, 0.0)
 
 
 def _edge_noise_ms(deviations: np.ndarray) -> float:
