@@ -31,6 +31,7 @@ import pandas as pd
 
 from flashsync import CameraDetection, detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
+from flashsync.io.scenario import scenario_from_dict
 from flashsync.io.truth import load_ground_truth
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import RECIPES, random_rig, recipe
@@ -90,10 +91,11 @@ def shared_flashes(truth) -> dict[str, int]:
 
 def rendered(scenario, folder: Path):
     """The truth of `scenario` rendered into `folder`: an earlier rendering of exactly this
-    scenario kept there (same name, seed, size cap and duration) or a new one."""
+    scenario kept there (same name, seed, size cap and duration; a field added since, at its
+    default, counts as the same) or a new one."""
     try:
         truth = load_ground_truth(folder)
-        if truth.scenario == scenario.to_dict():
+        if scenario_from_dict(truth.scenario) == scenario:
             return truth
     except Exception:  # noqa: BLE001 - nothing usable kept: render
         pass
