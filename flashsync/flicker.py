@@ -129,6 +129,10 @@ MAX_AMPLITUDE_FACTOR = 2.5
 #: Time constant of each row's own gain on the pattern, frames, and its largest size.
 ROW_GAIN_FRAMES = 32.0
 MAX_ROW_GAIN = 1.5
+#: Frames a corrected frame waits for those after it: a B-frame's blocks may be copies of
+#: the reference frame after it, up to this many frames later (x264's runs of B-frames are
+#: at most 3 long).
+COPY_FRAMES = 4
 #: Frames before a frame whose blocks it may copy (a run of frozen blocks carries its
 #: source's correction from frame to frame).
 COPY_REFERENCES = 4
@@ -143,7 +147,7 @@ class FlickerRemover:
 
     Call it on an iterable of ``(t_frame_ms, profile)`` (profile: float array (height, blocks),
     stored rows, light-linear as :func:`flashsync.profiles.row_profile` gives it); it yields
-    the same pairs with the flicker divided out, ``settings.lookahead`` frames
+    the same pairs with the flicker divided out, ``settings.lookahead + COPY_FRAMES`` frames
     later (memory stays constant). :meth:`estimate` gives what it found once the iterator is exhausted.
 
     Examples
@@ -165,6 +169,7 @@ class FlickerRemover:
         self._evidence = _Evidence()
         self._mean_phasor = 0j
         self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
+        self._pending: deque[tuple[float, np.ndarray, str, np.ndarray]] = deque()  # corrections not yet applied
         self._before: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
@@ -191,14 +196,15 @@ class FlickerRemover:
         if self._lock is None and self._n_seen >= self._next_attempt:
             self._learn()
         if len(self._queue) > settings.lookahead:
-            return [self._apply(*self._correct(*self._queue.popleft()))]
-        return []
+            self._pending.append(self._correct(*self._queue.popleft()))
+        return [self._apply()] if len(self._pending) > COPY_FRAMES else []
 
     def flush(self) -> list[tuple[float, np.ndarray]]:
         """The frames still held back, corrected: call once after the last :meth:`push`."""
         if self._lock is None and self._attempts == 0 and len(self._queue) >= 8:
             self._learn()
-        return [self._apply(*self._correct(*self._queue.popleft())) for _ in range(len(self._queue))]
+        self._pending.extend(self._correct(*self._queue.popleft()) for _ in range(len(self._queue)))
+        return [self._apply() for _ in range(len(self._pending))]
 
     def _learn(self) -> None:
         """Look for a rolling flicker in the held-back and reservoir frames; lock onto it.
@@ -280,8 +286,8 @@ class FlickerRemover:
         self._mean_phasor += complex(coef[1], -coef[2]) / self.settings.memory_frames
         return t_ms, profile, picture, np.repeat(pattern.astype(np.float32)[:, None], profile.shape[1], axis=1)
 
-    def _apply(self, t_ms: float, profile: np.ndarray, picture: str, applied: np.ndarray) -> tuple[float, np.ndarray]:
-        """The frame (shape (height, blocks)) with its log correction ``applied`` divided
+    def _apply(self) -> tuple[float, np.ndarray]:
+        """The oldest pending frame (shape (height, blocks)) with its log correction divided
         out of its rows, except in the blocks that the codec copied from another frame (the
         same value to the last bit: sensor noise never repeats): they hold that frame's light
         and get that frame's correction.
@@ -294,13 +300,18 @@ class FlickerRemover:
         group of pictures hold the key frame's in the next: no row's share of the pattern
         learned over the frames before can tell (5 % bands at rows that had followed it).
 
-        The sources, first match first: the last key frame and the :data:`COPY_REFERENCES`
-        frames before (nearest first). A B-frame is decoded after the reference frame shown
-        next and may copy from it too; giving such blocks that frame's correction removed
-        false bands in ``bench_false_events`` but read a rig of ``tests/test_random_rigs.py``
-        upside down (README, "Real light"): not done."""
+        A block's light is that of the frame that coded it, and a B-frame is decoded after
+        the reference frame (I or P) shown next, so it may copy from it. The sources, first
+        match first: the last key frame, the :data:`COPY_REFERENCES` frames before (nearest
+        first) and, for a B-frame, the next reference frame (the division waits
+        :data:`COPY_FRAMES` frames for it). A B-frame just before a key frame copies the key
+        frame's blocks, and one just after an auto-exposure step copies the rows that the
+        next P-frame codes again at its own phase."""
+        t_ms, profile, picture, applied = self._pending.popleft()
         if picture != "I":
             sources = ([self._key] if self._key is not None else []) + list(reversed(self._before))
+            if picture == "B":
+                sources += [(p, c) for _, p, kind, c in self._pending if kind != "B"][:1]
             free = np.ones(profile.shape, dtype=bool)
             for source, correction in sources:
                 if source.shape == profile.shape:

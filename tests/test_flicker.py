@@ -136,17 +136,13 @@ def test_key_frame_under_rolling_flicker(tmp_path):
     assert len(detection.events) == 0, events_to_frame(detection.events)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known miss: B-frames' blocks copied from the next reference frame keep the correction of the "
-    "frames before (taking that frame's removed these bands but read rig-20 of test_random_rigs upside down)",
-)
 def test_b_frames_take_the_correction_of_the_reference_frame_they_copy():
     """18 s of ``bench_false_events``' ``rink-0.5ms-3%`` (30 fps, 0.5 ms, 3 % 100 Hz
     flicker, ten players, no flash): frames 8500-9030 of its 10-minute clip. x264 decodes a
     B-frame after the reference frame shown next and copies blocks from it, which then hold
     that frame's light, at another phase of the flicker than the frames shown before. Given
-    the correction of a frame before instead, they make two 4 % bands (frames 511 and 529)."""
+    the correction of a frame before instead, they made two 4 % bands (frames 511 and 529);
+    they get the next reference frame's."""
     detection = detect_video(CLIPS / "rink_b_frames.mp4")
     assert len(detection.frame_times_ms) == 531
     assert detection.flicker.hz == 100.0
