@@ -538,8 +538,7 @@ def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
 def _informative(durations: Durations | None, n_cameras: int) -> Durations:
     """The durations of cameras with :data:`MIN_BANDS_PER_GAP` bands at least within one
     frame and as many split across frames (else the duration and ``T_row`` cannot be told
-    apart, or a single split band ties ``T_row`` with nothing to check it: rig-20's did,
-    1.6 % off)."""
+    apart)."""
     if durations is None or len(durations.camera) == 0:
         return Durations(np.empty(0, np.int64), np.empty(0), np.empty(0))
     camera = np.asarray(durations.camera, dtype=np.int64)
@@ -554,8 +553,10 @@ def _informative(durations: Durations | None, n_cameras: int) -> Durations:
 
 
 #: Fewest bands within one frame, and fewest split across frames, for a camera's band
-#: durations to tell its time per row.
-MIN_BANDS_PER_GAP = 2
+#: durations to tell its time per row. One of each is enough now that a duration is at
+#: least as noisy as two edges (rig-20's single split band no longer claims 0.02 %); two
+#: left a 16 ms camera's time per row to the events alone, 0.67 % off (tests/test_exposure.py).
+MIN_BANDS_PER_GAP = 1
 
 
 class _Triplets:
