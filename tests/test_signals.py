@@ -20,6 +20,13 @@ from flashsync.io import load_model
 ENV = dict(os.environ, PYTHONUNBUFFERED="1")
 
 
+def interruptible() -> None:
+    """In the child before exec: Ctrl-C as a terminal user has it. A shell starting a job in
+    the background (``nohup pytest &``) ignores SIGINT, the child inherits that, and
+    Python then keeps ignoring it, as it should: the commands would run to the end."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(*args, cwd: Path) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "flashsync", *map(str, args)],
@@ -28,6 +35,7 @@ def start(*args, cwd: Path) -> subprocess.Popen:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=interruptible,
     )
 
 

@@ -872,7 +872,12 @@ def test_serve_listens_on_this_machine_only_until_ctrl_c(tiny):
         str(grpc_port),
     ]
     server = subprocess.Popen(
-        command, cwd=Path(__file__).parents[1], stderr=subprocess.PIPE, text=True, start_new_session=True
+        command,
+        cwd=Path(__file__).parents[1],
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # Ctrl-C works even under `nohup pytest &`
     )
     try:
         line, deadline = "", time.monotonic() + 120
