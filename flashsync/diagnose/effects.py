@@ -45,7 +45,20 @@ pulse_shape     a band longer than the camera's others has  columns ``[trailing]
                 its trailing edge late and its leading      ``-[leading] * w`` (``w``: the band's
                 edge early, by shares of the excess ``w``   excess length, ms): the shares of it
                                                             on the trailing and the leading edge
+flicker         the camera's rolling mains flicker: its     the camera's time per row is the
+                period in rows off the one the model's      flicker's, ``(1000 / hz) /
+                time per row predicts                       period_rows``, instead of frame
+                                                            period / height
 ==============  ==========================================  ======================================
+
+Rolling mains flicker is a third stream of evidence besides the edges and the stamps: where
+a camera saw it (:attr:`~flashsync.diagnose.measure.Measurement.flicker`), its period in
+rows is ``(1000 / hz) / T_row``, so every model predicts it from the camera's time per row,
+and the model is scored on it (Gaussian, the flicker's standard deviation, 1 % at the
+least). ``flicker`` times the camera's rows by it, with no parameter; ``row_time`` fits a
+time per row to the edges and the flicker together. Where the flashes leave the time per
+row loose (cameras at one frame rate with a steady phase, few flashes: the design notes'
+trap) the flicker is what fixes it.
 
 ``dropped_frames``, ``frame_clock`` and ``stamp_rate`` switch on parts of the pipeline's frame clock
 (:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
@@ -84,6 +97,7 @@ EXPOSURE = "exposure"
 STAMP_RATE = "stamp_rate"
 SATURATION = "saturation"
 PULSE_SHAPE = "pulse_shape"
+FLICKER = "flicker"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -152,6 +166,11 @@ class CameraEstimate:
         early by.
     longest_excess_ms : float
         The largest excess length of the camera's bands, ms.
+    flicker_hz, flicker_depth, flicker_period_rows : float
+        The camera's rolling mains flicker: frequency (Hz), depth of its fundamental as the
+        rows saw it, period in readout rows; NaN where it saw none.
+    flicker_row_time_ms : float
+        The time per row that period tells, ms; NaN where none.
     effects : list of str
         The effects the model has on this camera.
     """
@@ -174,6 +193,10 @@ class CameraEstimate:
     pulse_trailing: float
     pulse_leading: float
     longest_excess_ms: float
+    flicker_hz: float
+    flicker_depth: float
+    flicker_period_rows: float
+    flicker_row_time_ms: float
     effects: list[str]
 
     @property
@@ -241,6 +264,14 @@ def _describe_pulse_shape(camera: CameraEstimate, reference: CameraEstimate) -> 
     return (
         f"bands up to {camera.longest_excess_ms:.3f} ms longer than the camera's others: trailing edges "
         f"{camera.pulse_trailing:.2f} of it late, leading edges {camera.pulse_leading:.2f} of it early"
+    )
+
+
+def _describe_flicker(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return (
+        f"{camera.flicker_hz:.0f} Hz, depth {100 * camera.flicker_depth:.1f} %, period "
+        f"{camera.flicker_period_rows:.2f} rows: time per row {camera.flicker_row_time_ms:.5f} ms "
+        f"(nominal {camera.nominal_row_time_ms:.5f})"
     )
 
 
@@ -369,6 +400,16 @@ CATALOGUE: dict[str, Effect] = {
             EVERY_CAMERA,
             _describe_stamp_rate,
             implies=(DROPPED_FRAMES, FRAME_CLOCK),
+        ),
+        Effect(
+            FLICKER,
+            "rolling mains flicker",
+            "the camera's rolling mains flicker: its period in rows off the one the model's time "
+            "per row predicts ((1000 / hz) / time per row)",
+            "times the camera's rows by the flicker: time per row (1000 / hz) / period in rows "
+            "instead of frame period / height",
+            EVERY_CAMERA,
+            _describe_flicker,
         ),
     )
 }
