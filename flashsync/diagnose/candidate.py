@@ -374,7 +374,9 @@ def _fit(
     )
 
 
-def _base_row_time_ms(measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], camera: int) -> float:
+def _base_row_time_ms(
+    measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], camera: int
+) -> float:
     """The camera's time per row before the ``row_time`` effect, ms: its rolling flicker's
     where the ``flicker`` effect is on, else frame period / height."""
     if Term(FLICKER, camera) in terms:

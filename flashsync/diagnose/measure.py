@@ -227,9 +227,7 @@ def _mains_flicker(cameras: tuple[CameraDetection, ...]) -> tuple[Flicker | None
     known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
     hall_hz = max(set(known), key=known.count) if known else None
     return tuple(
-        c.flicker
-        if c.flicker is not None and hall_hz is not None and c.flicker.hz == hall_hz and c.flicker.period_rows < c.height
-        else None
+        c.flicker if c.flicker and hall_hz and c.flicker.hz == hall_hz and c.flicker.period_rows < c.height else None
         for c in cameras
     )
 
