@@ -361,21 +361,21 @@ def test_second_world_stamp_faults_are_named_first_and_sync_and_diagnose_o_agree
     assert pooled_error_ms(d.sync_model, truth) < 0.1, format_diagnosis(d)
 
 
-def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path):
+@pytest.mark.parametrize("world", [FIRST, SECOND])
+def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path, world):
     """The issue's drifting HD rig, smaller: three cameras at 29.97/29.97/59.94 fps
     (320x180, 10 s) whose clocks run 80 and 100 ppm from the reference's (0.8-1.0 ms over
     the clip; at 180 rows an edge is 6x less precise in ms than at 1080). Without drift the
     residuals fail the chi-squared test, on the drifting cameras; the workflow takes a
-    drift step, passes it, and its model is within 0.05 ms RMS of the truth."""
+    drift step, passes it, and its model is within 0.05 ms RMS of the truth, in both worlds."""
     duration = 10_000.0
     rig = (
         CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
         CameraSpec("cam2", 320, 180, NTSC_30, exposure_ms=4.0, drift_ppm=80.0, start_ms=1000.0, offset_ms=-900.0),
         CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=100.0, start_ms=5000.0, offset_ms=-4950.0),
     )
-    truth = render_scenario(
-        Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration), n_players=0, seed=2), tmp_path
-    )
+    scenario = Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration), n_players=0, seed=2)
+    truth = render_scenario(dress(scenario, world), tmp_path)
     cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig], estimate_readout=False)
     d = diagnose(cameras)
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}
@@ -390,13 +390,15 @@ def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path):
     assert pooled_error_ms(d.sync_model, truth) < 0.05
 
 
-def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path):
+@pytest.mark.parametrize("world", [FIRST, SECOND])
+def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path, world):
     """The issue's HD rig, as the workflow saw it: twelve flashes, clocks 30 and 40 ppm from
     the reference's (0.3-0.4 ms over 10 s), and on the 59.94 fps camera one band whose
     trailing edge is 1 ms late (the pulse's tail on a short exposure; there it made the
     camera's band-length noise 0.25 ms against 0.02 for its other bands, and no drift step
     was taken). The band is an outlier of the band lengths and left out of the noise, so
-    both drifts are named and the model is within 0.02 ms RMS of the truth."""
+    both drifts are named and the model is within 0.02 ms RMS of the truth; in the second
+    world, whose bands on that camera scatter as 0.043 ms of edge noise, within 0.04 (0.021)."""
     duration = 10_000.0
     rig = (
         CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
@@ -404,19 +406,20 @@ def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path):
         CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=40.0, start_ms=5000.0, offset_ms=-4950.0),
     )
     scenario = Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration)[::3], n_players=0, seed=2)
-    truth = render_scenario(scenario, tmp_path)
+    truth = render_scenario(dress(scenario, world), tmp_path)
     cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig], estimate_readout=False)
+    unmoved = measure(cameras).camera_noise_ms[2]
     events = events_to_frame(cameras[2].events)
     late = events.index[(events["edge"] == "trailing") & (events["flags"] == "")][3]
     events.loc[late, "row"] += 1.0 / (1000.0 / NTSC_60 / 180)
     cameras[2] = replace(cameras[2], top_down=events_from_frame(events))
     measurement = measure(cameras)
-    assert measurement.camera_noise_ms[2] < 0.02
+    assert measurement.camera_noise_ms[2] < 1.5 * unmoved and (world == SECOND or unmoved < 0.02)
     d = diagnose(cameras)
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}
     assert drifting == {"cam2", "cam3"}, format_diagnosis(d)
     assert [m["drift_ppm"] for m in d.model] == pytest.approx([0.0, 30.0, 40.0], abs=5.0)
-    assert pooled_error_ms(d.sync_model, truth) < 0.02
+    assert pooled_error_ms(d.sync_model, truth) < (0.02 if world == FIRST else 0.04)
 
 
 @pytest.fixture(scope="module", params=[FIRST, SECOND])
