@@ -142,29 +142,27 @@ def test_a_hidden_effect_is_named_first_and_the_gap_closes(rendered, effect):
     assert_settled(d, pair(detections, CAMERA[effect]), truth, world)
 
 
-def test_hidden_saturation_is_named_first_and_the_gap_reaches_the_noise(rendered, request):
-    """Bands clipped at white (32 of the camera's 38 events) have their edges moved out,
-    by an amount that varies with the clip: the gap cannot shrink 5x, but the residuals go
-    from failing the chi-squared test to passing it."""
-    detections, _, world = rendered
-    if world == SECOND:
-        request.applymarker(
-            pytest.mark.xfail(
-                strict=True,
-                reason="second world: the clipped bands' edges move out 0.12-0.19 ms but scatter "
-                "0.10-0.13 ms about that (the clip varies with each pulse under the tone curve), so "
-                "the camera's band-length noise is 0.14 ms and the plain model already passes the "
-                "chi-squared test (p = 0.12): nothing to name",
-            )
-        )
+def test_hidden_saturation_is_named_first_and_the_gap_narrows(rendered):
+    """Bands clipped at white (32 of the camera's 38 events) have their edges moved out, the
+    farther the deeper the clip, which makes the band longer: the effect fits how far the
+    edges of a clipped band of median length move out and the share of a band's length over
+    that median they move by (about a half each). In both worlds it is named first and the
+    gap narrows 1.8x or more, not 5x (the edges of the shortest clipped bands and of the
+    clipped bands split across two frames stay 0.1-0.2 ms off); the residuals pass the test
+    and the model is closer to the truth than the plain one (the first world's plain model
+    fails the test)."""
+    detections, truth, world = rendered
     cameras = pair(detections, CAMERA["saturation"])
     d = diagnose(cameras)
     step = d.steps[0]
     assert (step.effect, step.camera) == ("saturation", CAMERA["saturation"]), format_diagnosis(d)
-    assert step.rms_after_ms < step.rms_before_ms / 1.5 and d.model[1]["saturation_ms"] > 0.05
+    assert step.rms_after_ms < step.rms_before_ms / 1.8, format_diagnosis(d)
+    assert d.model[1]["saturation_ms"] > 0.05 and 0.3 < d.model[1]["saturation_share"] < 0.7, d.model[1]
     measurement = measure(cameras)
-    assert not residual_test(measurement, fit_candidate(measurement, frozenset())).consistent
+    plain = fit_candidate(measurement, frozenset())
+    assert world == SECOND or not residual_test(measurement, plain).consistent
     assert d.consistent, format_diagnosis(d)
+    assert pooled_error_ms(d.sync_model, truth) < pooled_error_ms(plain.sync_model(), truth)
 
 
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
@@ -361,13 +359,14 @@ def test_second_world_stamp_faults_are_named_first_and_sync_and_diagnose_o_agree
     assert pooled_error_ms(d.sync_model, truth) < 0.1, format_diagnosis(d)
 
 
-@pytest.mark.parametrize("world", [FIRST, SECOND])
-def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path, world):
+def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path):
     """The issue's drifting HD rig, smaller: three cameras at 29.97/29.97/59.94 fps
     (320x180, 10 s) whose clocks run 80 and 100 ppm from the reference's (0.8-1.0 ms over
     the clip; at 180 rows an edge is 6x less precise in ms than at 1080). Without drift the
     residuals fail the chi-squared test, on the drifting cameras; the workflow takes a
-    drift step, passes it, and its model is within 0.05 ms RMS of the truth, in both worlds."""
+    drift step, passes it, and its model is within 0.05 ms RMS of the truth. (In the second
+    world it passes too, 42 s on a busy machine: the next test's second-world case, the
+    same rig with twelve flashes, stands for it.)"""
     duration = 10_000.0
     rig = (
         CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
@@ -375,7 +374,7 @@ def test_drifting_clocks_get_a_drift_step_and_are_not_called_noise(tmp_path, wor
         CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=100.0, start_ms=5000.0, offset_ms=-4950.0),
     )
     scenario = Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration), n_players=0, seed=2)
-    truth = render_scenario(dress(scenario, world), tmp_path)
+    truth = render_scenario(scenario, tmp_path)
     cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig], estimate_readout=False)
     d = diagnose(cameras)
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}

@@ -165,6 +165,7 @@ class Candidate:
                 nominal_row_time_ms=self.nominal_row_time_ms(c),
                 exposure_ms=self.exposure_ms(c),
                 saturation_ms=self.coefficient(SATURATION, c),
+                saturation_share=self.coefficient(f"{SATURATION}.1", c),
                 pulse_trailing=self.coefficient(PULSE_SHAPE, c),
                 pulse_leading=self.coefficient(f"{PULSE_SHAPE}.1", c),
                 longest_excess_ms=float(np.max(self.features.excess_ms[self.features.camera == c], initial=0.0)),
@@ -334,7 +335,13 @@ def _fit(
         observed[mine] = frame_ms[mine] + q[mine] * _base_row_time_ms(measurement, terms, timing, c)
         frame_ms[mine] -= 0.5 * (times.times_ms[0] + times.times_ms[-1])
     features = Features(
-        edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera], edges.saturated, edges.excess_ms
+        edges.camera,
+        frame_ms,
+        q,
+        edges.trailing != reflected[edges.camera],
+        edges.saturated,
+        edges.excess_ms,
+        edges.clip_ms,
     )
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms

@@ -34,9 +34,12 @@ drift_rate      a curvature against time                    column ``-t**2`` (ot
                                                             half the drift's change per ms
 exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
                 and leading edges' residuals                exposure minus the reference's, ms
-saturation      the edges of bands clipped at white: the    column ``[saturated] * (+1 trailing,
-                leading ones early, the trailing ones late  -1 leading)``: how far a clipped
-                                                            band's edges move out, ms
+saturation      the edges of bands clipped at white: the    columns ``[saturated] * (+1 trailing,
+                leading ones early, the trailing ones late, -1 leading)`` and that times ``c``
+                the farther the deeper the clip (the        (``c``: the band's length over its
+                longer the band)                            clipped kind's median, ms): how far
+                                                            a clipped band's edges move out, ms,
+                                                            and the share of ``c`` they move by
 stamp_rate      from one frame on, edges run away at a      frame times at one rate throughout
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
@@ -122,7 +125,9 @@ class Features:
     saturated : bool array
         The edge's band clipped at white.
     excess_ms : float array
-        The edge's band's length minus its camera's median of its kind, ms.
+        The edge's band's length minus its camera's median of its kind where it is widened, ms.
+    clip_ms : float array
+        The same for every band clipped at white, ms (0 for the others).
     """
 
     camera: np.ndarray
@@ -131,6 +136,7 @@ class Features:
     trailing: np.ndarray
     saturated: np.ndarray
     excess_ms: np.ndarray
+    clip_ms: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -160,7 +166,10 @@ class CameraEstimate:
         Time per row under the model and frame period / height, ms.
     exposure_ms : float
     saturation_ms : float
-        How far the edges of a clipped band move out (leading earlier, trailing later), ms.
+        How far the edges of a clipped band of its kind's median length move out (leading
+        earlier, trailing later), ms.
+    saturation_share : float
+        And the share of a clipped band's length over that median that each edge moves out by.
     pulse_trailing, pulse_leading : float
         Shares of a band's excess length that its trailing edge is late and its leading edge
         early by.
@@ -190,6 +199,7 @@ class CameraEstimate:
     nominal_row_time_ms: float
     exposure_ms: float
     saturation_ms: float
+    saturation_share: float
     pulse_trailing: float
     pulse_leading: float
     longest_excess_ms: float
@@ -257,7 +267,10 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
 
 
 def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
-    return f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later)"
+    return (
+        f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later) "
+        f"and {camera.saturation_share:.2f} of a band's length over its clipped kind's median"
+    )
 
 
 def _describe_pulse_shape(camera: CameraEstimate, reference: CameraEstimate) -> str:
@@ -372,10 +385,15 @@ CATALOGUE: dict[str, Effect] = {
             "saturation",
             "the edges of bands clipped at white off the others': the clipped plateau pulls the "
             "half-level crossing of the leading edge early and of the trailing edge late",
-            "adds how far a clipped band's edges move out (ms) on its edges, leading ones earlier",
+            "adds how far a clipped band's edges move out (ms, leading ones earlier) and the share "
+            "of its length over its clipped kind's median that they move out by (a deeper clip "
+            "makes a longer band)",
             EVERY_CAMERA,
             _describe_saturation,
-            column=lambda f: np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0),
+            column=lambda f: (
+                np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0)[:, None]
+                * np.column_stack([np.ones_like(f.clip_ms), f.clip_ms])
+            ),
         ),
         Effect(
             PULSE_SHAPE,

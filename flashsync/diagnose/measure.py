@@ -72,6 +72,10 @@ class Edges:
         How much longer the edge's band is than the median of its camera's bands of its kind
         (:func:`_length_excess_ms`), ms, where that is more than :data:`WIDE_BAND_SIGMAS`
         robust standard deviations of the camera's band lengths (a widened band); else 0.
+    clip_ms : float array
+        For an edge of a band clipped at white, how much longer its band is than the median
+        of its camera's clipped bands of its kind (:func:`_length_excess_ms`), ms: the deeper
+        the clip, the longer the band and the farther out its edges; else 0.
     """
 
     camera: np.ndarray
@@ -82,6 +86,7 @@ class Edges:
     trailing: np.ndarray
     saturated: np.ndarray
     excess_ms: np.ndarray
+    clip_ms: np.ndarray
 
     def __len__(self) -> int:
         return len(self.camera)
@@ -200,7 +205,13 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     pulses = [pulses[d.camera] for d in kept]
     excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
     deviations = [e[np.isfinite(e)] for e in excess]
-    edges = _edges(pulses, matching.flashes, cameras, [_widening_ms(e, d) for e, d in zip(excess, deviations)])
+    edges = _edges(
+        pulses,
+        matching.flashes,
+        cameras,
+        [_widening_ms(e, d) for e, d in zip(excess, deviations)],
+        [np.where(np.isfinite(e), e, 0.0) for e in excess],
+    )
     if len(edges) == 0:
         raise NotEnoughDataError(
             "no flash band with both edges inside the image is seen by two cameras; "
@@ -286,10 +297,13 @@ def _edges(
     flash_of: dict[tuple[str, int], int],
     cameras: tuple[CameraDetection, ...],
     excess_ms: list[np.ndarray],
+    kind_excess_ms: list[np.ndarray],
 ) -> Edges:
-    """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    camera, flash, event, frame, row, trailing, saturated, excess = [], [], [], [], [], [], [], []
-    for index, (named, mine, longer) in enumerate(zip(cameras, pulses, excess_ms)):
+    """Both edges of every clean band that belongs to a flash of two or more kept cameras;
+    ``excess_ms`` per camera and band its widening, ``kind_excess_ms`` its length over its
+    kind's median (0 where unknown)."""
+    camera, flash, event, frame, row, trailing, saturated, excess, clip = [], [], [], [], [], [], [], [], []
+    for index, (named, mine, longer, over) in enumerate(zip(cameras, pulses, excess_ms, kind_excess_ms)):
         clipped = mine.events.has_flag(Flag.SATURATED)
         for band in np.flatnonzero(mine.clean):
             if (named.camera, band) not in flash_of:
@@ -303,6 +317,7 @@ def _edges(
                 trailing.append(is_trailing)
                 saturated.append(bool(clipped[edge]))
                 excess.append(float(longer[band]))
+                clip.append(float(over[band]) if clipped[edge] else 0.0)
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -313,6 +328,7 @@ def _edges(
         np.asarray(trailing, dtype=bool)[keep],
         np.asarray(saturated, dtype=bool)[keep],
         np.asarray(excess, dtype=np.float64)[keep],
+        np.asarray(clip, dtype=np.float64)[keep],
     )
 
 

@@ -81,7 +81,12 @@ class Step:
     def evidence(self) -> str:
         if self.removed:
             return f"ΔBIC {self.delta_bic:.1f} <= {THRESHOLD:g}, no longer needed: {self.estimate}"
-        return f"ΔBIC {self.delta_bic:.1f} > {THRESHOLD:g}: {self.estimate}"
+        gap = ""
+        if np.isfinite(self.flicker_gap_before_ms) and self.flicker_gap_after_ms != self.flicker_gap_before_ms:
+            gap = (
+                f"; flicker's gap {self.flicker_gap_before_ms:.3f} -> {self.flicker_gap_after_ms:.3f} ms over the image"
+            )
+        return f"ΔBIC {self.delta_bic:.1f} > {THRESHOLD:g}: {self.estimate}{gap}"
 
 
 @dataclass(frozen=True)
@@ -376,6 +381,7 @@ def _camera_models(fit: Candidate) -> list[dict]:
             "row_time_ms": e.row_time_ms,
             "exposure_ms": e.exposure_ms,
             "saturation_ms": e.saturation_ms,
+            "saturation_share": e.saturation_share,
             "effects": e.effects,
         }
         for e in fit.estimates()
