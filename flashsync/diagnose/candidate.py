@@ -14,7 +14,7 @@ rolling mains flicker, the time per row its period tells is a third: Gaussian ab
 model's time per row, with the flicker's standard deviation; where the model fits that
 camera's time per row, the flicker enters the fit as one more equation.
 
-A model's score is its Bayesian information criterion over both streams::
+A model's score is its Bayesian information criterion over all its streams::
 
     BIC = 2 * (negative log-likelihood) + (number of parameters) * ln(number of observations)
 """
@@ -86,7 +86,7 @@ class Candidate:
     scale_ms : float
         Cauchy scale of the weighted edge residuals (:func:`_edge_weights`), ms.
     bic : float
-        Bayesian information criterion over edges and stamps.
+        Bayesian information criterion over edges, stamps and flicker.
     """
 
     measurement: Measurement

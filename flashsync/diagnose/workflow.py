@@ -49,7 +49,7 @@ class Step:
     camera : str
         The camera (a pair on two cameras: both, joined by ``+``).
     delta_bic : float
-        How much the BIC fell, over edges and stamps (for a removal: how much the effect
+        How much the BIC fell, over edges, stamps and flicker (for a removal: how much the effect
         still lowered it).
     estimate : str
         What the effect's parameter came out as (the structure it explains).
