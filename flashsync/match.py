@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flashsync.coincidence import chance_alignments
+from flashsync.compiled import njit
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Events
@@ -145,54 +146,102 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     """The shifts (ms) that line up most event pairs, strongest first; only those that line
     up at least :data:`MIN_SHARED_FLASHES` (fewer never count).
 
-    A shift's votes are the event-time differences within ``window`` of it. They are
-    counted only in bins (one window wide) whose differences can have at least ``floor``
-    votes (the bin and its two neighbours hold that many): first the floor of the
-    (:data:`FLOOR_RANK` x ``n_candidates``)-th fullest bin, lowered until the last shift
-    chosen has at least ``floor`` votes, so that no shift under the floor could rank among
-    them: the candidates are those of counting every difference."""
-    differences = (times_a[:, None] - times_b[None, :]).ravel()
+    A shift's votes are the event-time differences ``d'`` with ``d - window <= d' < d + window``;
+    the candidates are the differences with most votes (the smaller first among equals), each
+    more than two windows from a stronger one. The votes are counted only in bins (one window
+    wide) whose differences can have at least ``floor`` votes (the bin and its two
+    neighbours hold that many): first the floor of the (:data:`FLOOR_RANK` x
+    ``n_candidates``)-th fullest bin, lowered until the last shift chosen has at least
+    ``floor`` votes, so that no shift under the floor could rank among them: the candidates
+    are those of counting every difference (:func:`_strongest_shifts`, compiled)."""
     span = max(np.ptp(times_a), np.ptp(times_b))
     window = tolerance_ms + MAX_DRIFT * span
-    width = window * (1.0 + 1e-9)  # differences within a window of each other are in neighbouring bins
-    bins = ((differences - differences.min()) // width).astype(np.int64)
-    counts = np.pad(np.bincount(bins), 1)
-    bound = counts[:-2] + counts[1:-1] + counts[2:]  # most votes of a difference in each bin
-    floor = max(int(np.sort(bound)[-min(len(bound), FLOOR_RANK * n_candidates)]), MIN_SHARED_FLASHES)
+    return _strongest_shifts(times_a, times_b, window, FLOOR_RANK * n_candidates, n_candidates, MIN_SHARED_FLASHES)
+
+
+@njit
+def _strongest_shifts(times_a, times_b, window, rank, n_candidates, min_votes):  # pragma: no cover - compiled
+    """Up to ``n_candidates`` differences ``a_i - b_j`` (ms) with most votes, at least
+    ``min_votes`` (see :func:`_candidate_shifts`); shape (n_chosen,)."""
+    scale = 1.0 / (window * (1.0 + 1e-9))  # differences within a window of each other are in neighbouring bins
+    low = np.min(times_a) - np.max(times_b)  # the smallest difference
+    n_bins = int((np.max(times_a) - np.min(times_b) - low) * scale) + 1
+    counts = np.zeros(n_bins, dtype=np.int64)
+    for a in times_a:
+        for b in times_b:
+            counts[int((a - b - low) * scale)] += 1
+    bound = counts.copy()  # most votes of a difference in each bin
+    bound[1:] += counts[:-1]
+    bound[:-1] += counts[1:]
+    floor = max(_largest(bound, min(n_bins, rank)), min_votes)
     while True:
-        chosen, last = _strongest_shifts(differences, bins, bound, floor, window, width, n_candidates)
-        if floor == MIN_SHARED_FLASHES or (len(chosen) == n_candidates and last >= floor):
-            break  # every difference with more votes than the last one chosen was counted
-        floor = max(min(last, floor - 1), MIN_SHARED_FLASHES)
-    return np.asarray(chosen)
+        counted = bound >= floor
+        near = counted.copy()  # the bins whose differences are needed: the counted ones and their neighbours
+        near[1:] |= counted[:-1]
+        near[:-1] |= counted[1:]
+        first = np.zeros(n_bins + 1, dtype=np.int64)  # bin m's differences are ordered[first[m]:first[m + 1]]
+        first[1:] = np.cumsum(np.where(near, counts, 0))
+        ordered, filled = np.empty(first[-1]), first[:-1].copy()
+        for a in times_a:
+            for b in times_b:
+                m = int((a - b - low) * scale)
+                if near[m]:
+                    ordered[filled[m]] = a - b
+                    filled[m] += 1
+        for m in np.flatnonzero(near):
+            _insertion_sort(ordered, first[m], first[m + 1])
+        votes = np.zeros(len(ordered), dtype=np.int64)
+        for m in np.flatnonzero(counted):
+            below, under, stop = first[max(m - 1, 0)], first[max(m - 1, 0)], first[min(m + 2, n_bins)]
+            for k in range(first[m], first[m + 1]):  # votes: differences in [d - window, d + window)
+                while below < stop and ordered[below] < ordered[k] - window:
+                    below += 1
+                while under < stop and ordered[under] < ordered[k] + window:
+                    under += 1
+                votes[k] = under - below
+        chosen = np.empty(n_candidates)
+        n_chosen, last = 0, 0
+        while n_chosen < n_candidates:
+            best = -1
+            for k in range(len(ordered)):  # the most votes, the smallest first, away from those chosen
+                if votes[k] >= min_votes and (best < 0 or votes[k] > votes[best]):
+                    free = True
+                    for c in range(n_chosen):
+                        if abs(ordered[k] - chosen[c]) <= 2 * window:
+                            free = False
+                    if free:
+                        best = k
+            if best < 0:
+                break
+            chosen[n_chosen] = ordered[best]
+            last = votes[best]
+            n_chosen += 1
+        if floor == min_votes or (n_chosen == n_candidates and last >= floor):
+            return chosen[:n_chosen]  # every difference with more votes than the last one chosen was counted
+        floor = max(min(last, floor - 1), min_votes)
 
 
-def _strongest_shifts(
-    differences: np.ndarray,
-    bins: np.ndarray,
-    bound: np.ndarray,
-    floor: int,
-    window: float,
-    width: float,
-    n_candidates: int,
-) -> tuple[list[float], int]:
-    """Up to ``n_candidates`` differences (ms) with most votes, at least
-    :data:`MIN_SHARED_FLASHES`, each more than two windows from a stronger one, among those
-    in bins whose ``bound`` reaches ``floor`` (their votes counted exactly: the bins either
-    side are counted too); and the votes of the last one chosen."""
-    counted = bound >= floor
-    subset = np.sort(differences[np.convolve(counted, np.ones(3), mode="same")[bins] > 0])
-    votes = np.searchsorted(subset, subset + window) - np.searchsorted(subset, subset - window)
-    votes[~counted[((subset - differences.min()) // width).astype(np.int64)]] = 0  # not all their votes counted
-    chosen: list[float] = []
-    last = 0
-    for index in np.argsort(-votes, kind="stable"):
-        if votes[index] < MIN_SHARED_FLASHES or len(chosen) == n_candidates:
-            break
-        if all(abs(subset[index] - shift) > 2 * window for shift in chosen):
-            chosen.append(subset[index])
-            last = int(votes[index])
-    return chosen, last
+@njit
+def _largest(values, rank):  # pragma: no cover - compiled
+    """The ``rank``-th largest of non-negative integers (``np.sort(values)[-rank]``)."""
+    histogram = np.bincount(values)
+    total = 0
+    for value in range(len(histogram) - 1, -1, -1):
+        total += histogram[value]
+        if total >= rank:
+            return value
+    return 0
+
+
+@njit
+def _insertion_sort(values, start, stop):  # pragma: no cover - compiled
+    """Sort ``values[start:stop]`` in place (a few values)."""
+    for k in range(start + 1, stop):
+        value, m = values[k], k - 1
+        while m >= start and values[m] > value:
+            values[m + 1] = values[m]
+            m -= 1
+        values[m + 1] = value
 
 
 def _refine(
