@@ -26,7 +26,7 @@ from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Events
 from flashsync.model import readout_rows
-from flashsync.partners import occupancy_spectrum, planned_pairs, shared_flash_estimate, spectrum_length
+from flashsync.partners import occupied_bins, planned_pairs, shared_flash_estimate
 from flashsync.timestamps import median_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
@@ -401,18 +401,17 @@ def match_events(
     keys = {name: times.tobytes() for name, times in times_ms.items()}
     span = max((np.ptp(times) for times in times_ms.values() if len(times)), default=0.0)
     window = tolerance_ms + MAX_DRIFT * span
-    length = spectrum_length([np.ptp(times) for times in times_ms.values() if len(times)], window)
 
-    def spectrum(name: str) -> np.ndarray:
-        key = ("spectrum", keys[name], window, length)
+    def bins(name: str) -> np.ndarray:
+        key = ("bins", keys[name], window)
         if key not in memo:
-            memo[key] = occupancy_spectrum(times_ms[name], window, length)
+            memo[key] = occupied_bins(times_ms[name], window)
         return memo[key]
 
     def estimate(a: str, b: str) -> int:
-        key = ("estimate", keys[a], keys[b], window, length)
+        key = ("estimate", keys[a], keys[b], window)
         if key not in memo:
-            memo[key] = shared_flash_estimate(spectrum(a), spectrum(b))
+            memo[key] = shared_flash_estimate(bins(a), bins(b))
         return memo[key]
 
     def aligned(a: str, b: str) -> PairAlignment | None:
