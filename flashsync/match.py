@@ -303,31 +303,56 @@ def group_flashes(
     Returns
     -------
     dict mapping (camera, event index) to a flash number, for events in a flash of at least
-    two cameras.
+    two cameras; flashes numbered in the order of their first member (camera name, event).
     """
-    parent = {(camera, i): (camera, i) for camera, n in n_events.items() for i in range(n)}
-    members = {node: {node[0]: node[1]} for node in parent}
-
-    def root(node):
-        while parent[node] != node:
-            parent[node] = parent[parent[node]]
-            node = parent[node]
-        return node
-
+    names = list(n_events)
+    offset = dict(zip(names, np.cumsum([0, *n_events.values()])[:-1].tolist()))
+    camera = np.repeat(np.arange(len(names)), list(n_events.values()))
     ranked = sorted(alignments.items(), key=lambda item: -len(item[1].matches))
-    for (camera_a, camera_b), alignment in ranked:
-        for i, j in alignment.matches:
-            ra, rb = root((camera_a, int(i))), root((camera_b, int(j)))
-            if ra == rb or not members[ra].keys().isdisjoint(members[rb]):
-                continue
-            parent[rb] = ra
-            members[ra].update(members.pop(rb))
-    flashes: dict[tuple[str, int], int] = {}
-    roots = sorted({root(node) for node in parent if len(members[root(node)]) > 1})
-    for number, group_root in enumerate(roots):
-        for camera, event in members[group_root].items():
-            flashes[(camera, event)] = number
-    return flashes
+    merges = np.zeros((0, 2), dtype=np.int64)
+    if ranked:
+        merges = np.concatenate([alignment.matches + [offset[a], offset[b]] for (a, b), alignment in ranked]).astype(
+            np.int64
+        )
+    root, size = _merged_groups(merges, camera, len(names))
+    event = np.arange(len(camera)) - np.repeat(list(offset.values()), list(n_events.values()))
+    grouped = np.flatnonzero(size[root] > 1)
+    roots = sorted(set(root[grouped].tolist()), key=lambda node: (names[camera[node]], int(event[node])))
+    number = dict(zip(roots, range(len(roots))))
+    return {(names[camera[node]], int(event[node])): number[root[node]] for node in grouped.tolist()}
+
+
+@njit
+def _merged_groups(merges, camera, n_cameras):  # pragma: no cover - compiled
+    """Union of events (nodes of camera ``camera[node]``) along ``merges`` (pairs of nodes,
+    in order), refusing a merge that would hold two events of one camera: each node's group
+    (its root node) and each root's size."""
+    n = len(camera)
+    parent = np.arange(n)
+    words = (n_cameras + 63) // 64
+    cameras = np.zeros((n, words), dtype=np.uint64)  # per root, the cameras in its group (bits)
+    for node in range(n):
+        cameras[node, camera[node] // 64] = np.uint64(1) << np.uint64(camera[node] % 64)
+    size = np.ones(n, dtype=np.int64)
+    for k in range(len(merges)):
+        a, b = _root(parent, merges[k, 0]), _root(parent, merges[k, 1])
+        if a == b or np.any(cameras[a] & cameras[b]):
+            continue
+        parent[b] = a
+        cameras[a] |= cameras[b]
+        size[a] += size[b]
+    for node in range(n):
+        parent[node] = _root(parent, node)
+    return parent, size
+
+
+@njit
+def _root(parent, node):  # pragma: no cover - compiled
+    """The root of ``node``'s group, halving the path on the way."""
+    while parent[node] != node:
+        parent[node] = parent[parent[node]]
+        node = parent[node]
+    return node
 
 
 def match_tolerance_ms(frame_periods_ms: Iterable[float], readout_known: bool) -> float:
