@@ -270,25 +270,36 @@ def _refine(
     return PairAlignment(alpha, beta, matches, float(np.sqrt(np.mean(residuals**2))), False)
 
 
-def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) -> np.ndarray:
+@njit
+def _mutual_nearest(times_a, mapped_b, window):  # pragma: no cover - compiled
     """Pairs (i, j) where a_i and mapped b_j are each other's nearest and within ``window``,
-    closest first."""
+    closest first; shape (n_pairs, 2)."""
     nearest_a = _nearest(times_a, mapped_b)
     nearest_b = _nearest(mapped_b, times_a)
-    j = np.flatnonzero(
-        (nearest_b[nearest_a] == np.arange(len(mapped_b))) & (np.abs(times_a[nearest_a] - mapped_b) <= window)
-    )
-    j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="stable")]
-    return np.stack([nearest_a[j], j], axis=1).astype(np.int64).reshape(-1, 2)
+    mutual = np.zeros(len(mapped_b), dtype=np.bool_)
+    for j in range(len(mapped_b)):
+        mutual[j] = nearest_b[nearest_a[j]] == j and abs(times_a[nearest_a[j]] - mapped_b[j]) <= window
+    j = np.flatnonzero(mutual)
+    j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="mergesort")]
+    pairs = np.empty((len(j), 2), dtype=np.int64)
+    pairs[:, 0] = nearest_a[j]
+    pairs[:, 1] = j
+    return pairs
 
 
-def _nearest(values: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Index into ``values`` (at least one) of the nearest to each query."""
-    order = np.argsort(values, kind="stable")
-    position = np.clip(np.searchsorted(values[order], queries), 1, max(len(values) - 1, 1))
-    left = values[order[position - 1]]
-    right = values[order[np.minimum(position, len(values) - 1)]]
-    return order[np.where(queries - left <= right - queries, position - 1, np.minimum(position, len(values) - 1))]
+@njit
+def _nearest(values, queries):  # pragma: no cover - compiled
+    """Index into ``values`` (at least one) of the nearest to each query (the lower on a tie)."""
+    order = np.argsort(values, kind="mergesort")
+    ordered = values[order]
+    last = len(values) - 1
+    nearest = np.empty(len(queries), dtype=np.int64)
+    for q in range(len(queries)):
+        position = min(max(np.searchsorted(ordered, queries[q]), 1), max(last, 1))
+        right = min(position, last)
+        below = queries[q] - ordered[position - 1] <= ordered[right] - queries[q]
+        nearest[q] = order[position - 1] if below else order[right]
+    return nearest
 
 
 def group_flashes(
