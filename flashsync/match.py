@@ -189,7 +189,7 @@ def _strongest_shifts(times_a, times_b, window, rank, n_candidates, min_votes): 
                     ordered[filled[m]] = a - b
                     filled[m] += 1
         for m in np.flatnonzero(near):
-            _insertion_sort(ordered, first[m], first[m + 1])
+            ordered[first[m] : first[m + 1]].sort()
         votes = np.zeros(len(ordered), dtype=np.int64)
         for m in np.flatnonzero(counted):
             below, under, stop = first[max(m - 1, 0)], first[max(m - 1, 0)], first[min(m + 2, n_bins)]
@@ -231,17 +231,6 @@ def _largest(values, rank):  # pragma: no cover - compiled
         if total >= rank:
             return value
     return 0
-
-
-@njit
-def _insertion_sort(values, start, stop):  # pragma: no cover - compiled
-    """Sort ``values[start:stop]`` in place (a few values)."""
-    for k in range(start + 1, stop):
-        value, m = values[k], k - 1
-        while m >= start and values[m] > value:
-            values[m + 1] = values[m]
-            m -= 1
-        values[m + 1] = value
 
 
 def _refine(
