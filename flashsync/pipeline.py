@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import cached_property
-from itertools import combinations
+from itertools import combinations, compress, product
 from pathlib import Path
 
 import numpy as np
@@ -204,16 +204,23 @@ def synchronize(
     rate_std = {name: clock.rate_std for name, clock in report.frame_clocks.items()}
     memo: dict = {}  # pair alignments shared by the attempts (a flip changes only that camera's pairs)
 
-    def attempt(trial: dict[str, CameraDetection]) -> _Attempt:
-        return _attempt(trial, reference, row_times, anchors, rate_std, memo)
+    def attempt_on(on: str) -> Callable[[dict[str, CameraDetection]], _Attempt]:
+        return lambda trial: _attempt(trial, on, row_times, anchors, rate_std, memo)
 
-    best, rivals = _best_readout(cameras, undecided, attempt)
+    # The choices (readouts, frame times) are made in name order on a reference that neither
+    # the camera order nor the reference given decides (:func:`_search_reference`); the
+    # model is then solved on the reference given, in the order given.
+    by_name = {name: cameras[name] for name in sorted(cameras)}
+    search_reference = _search_reference(by_name, reference, attempt_on(reference))
+    attempt = attempt_on(search_reference)
+    best, rivals = _best_readout(by_name, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
-    spreads, readout_warnings = _readout_doubts(best, rivals, reference)
+    spreads, readout_warnings = _readout_doubts(best, rivals, search_reference)
     for name, spread in spreads.items():
         frame_std[name] = np.hypot(frame_std[name], spread)
+    best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
     report.alignments = best.alignments
     report.warnings = (
         best.warnings + clock_warnings + readout_warnings + _few_flashes(best, reference) + _row_time_doubts(best)
@@ -322,46 +329,116 @@ def _best_readout(
     cameras: dict[str, CameraDetection], undecided: list[str], attempt: Callable[[dict[str, CameraDetection]], _Attempt]
 ) -> tuple[_Attempt, dict[str, _Attempt]]:
     """The readout directions of the ``undecided`` cameras that the events support
-    (:attr:`_Attempt.score`): ascent from the detected ones (top-down, the usual mounting),
-    each step taking the best of all single flips that explains the events better by
-    :data:`DECIDED_LOG_LIKELIHOOD` at least, until none does. A near tie is not decided by
-    the noise of the edges (H.264 output changes slightly with what the encoder did
-    before): the reading stays, :func:`_readout_doubts` warns and widens sigma. Returns the
-    chosen attempt and, per undecided camera, the best attempt tried with that camera read
-    the other way (where one solved: with two cameras read the wrong way up, the rival may
-    differ in both). Raises the first failure if nothing solves."""
-    best, failure, tried = None, None, []
+    (:attr:`_Attempt.score`): from the detected ones (top-down, the usual mounting), the
+    best reading where it explains the events better by :data:`DECIDED_LOG_LIKELIHOOD` at
+    least. Up to :data:`EVERY_READING` readings, every reading is solved. Beyond, an ascent:
+    each step takes the best move that gains the margin, until none does. The moves are the
+    single flips and, where none of those pays, joint ones: a camera flipped together with
+    the undecided cameras that lose inlier flashes when it alone is flipped (cameras read
+    the wrong way up that share flashes fit each other, so neither flip pays alone: rig-14
+    of the random rigs). Candidates are tried in name order and a reading is solved once,
+    so the camera order decides nothing; at most two attempts per undecided camera per step.
 
-    def tries(trial: dict[str, CameraDetection]) -> _Attempt | None:
+    A near tie is not decided by the noise of the edges (H.264 output changes slightly with
+    what the encoder did before): the reading stays, :func:`_readout_doubts` warns and
+    widens sigma. Returns the chosen attempt and, per undecided camera, the best attempt
+    tried with that camera read the other way (where one solved: with two cameras read the
+    wrong way up, the rival may differ in both). Raises the first failure if nothing solves."""
+    undecided = sorted(undecided)
+    failure: FlashsyncError | None = None
+    tried: dict[tuple[bool, ...], _Attempt | None] = {}
+
+    def tries(start: dict[str, CameraDetection], flips: set[str]) -> _Attempt | None:
         nonlocal failure
-        try:
-            result = attempt(trial)
-        except FlashsyncError as error:
-            failure = failure or error
-            return None
-        tried.append(result)
-        return result
+        trial = {name: d.read_flipped(not d.flipped) if name in flips else d for name, d in start.items()}
+        key = tuple(trial[name].flipped for name in undecided)
+        if key not in tried:
+            try:
+                tried[key] = attempt(trial)
+            except FlashsyncError as error:
+                failure = failure or error
+                tried[key] = None
+        return tried[key]
 
-    best = tries(cameras)
-    while True:
+    best = tries(cameras, set())
+    every = 2 ** len(undecided) <= EVERY_READING
+    if every:
+        readings = product((False, True), repeat=len(undecided))
+        results = [r for flips in readings if (r := tries(cameras, set(compress(undecided, flips)))) is not None]
+        top = max(results, key=lambda r: r.score, default=None)
+        if best is None or (top is not None and top.score >= best.score + DECIDED_LOG_LIKELIHOOD):
+            best = top
+    while not every:
         start = best.cameras if best is not None else cameras
-        steps = [tries({**start, name: start[name].read_flipped(not start[name].flipped)}) for name in undecided]
-        steps = [r for r in steps if r is not None]
+        singles = {name: tries(start, {name}) for name in undecided}
+        steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
             best = max(steps, key=lambda r: r.score)
             continue
         better = [r for r in steps if best is not None and r.score >= best.score + DECIDED_LOG_LIKELIHOOD]
+        if not better and best is not None:
+            groups = [{name, *_losing(best, r, undecided)} for name, r in singles.items() if r is not None]
+            steps = [tries(start, group) for group in groups if len(group) > 1]
+            better = [r for r in steps if r is not None and r.score >= best.score + DECIDED_LOG_LIKELIHOOD]
         if not better:
             break
         best = max(better, key=lambda r: r.score)
     if best is None:
         raise failure
     rivals = {}
+    solved = [r for r in tried.values() if r is not None]
     for name in undecided:
-        other = [r for r in tried if r.cameras[name].flipped != best.cameras[name].flipped]
+        other = [r for r in solved if r.cameras[name].flipped != best.cameras[name].flipped]
         if other:
             rivals[name] = max(other, key=lambda r: r.score)
     return best, rivals
+
+
+def _losing(before: _Attempt, after: _Attempt, undecided: list[str]) -> list[str]:
+    """The ``undecided`` cameras read the same way in both attempts that have fewer inlier
+    flashes in ``after`` than in ``before`` (none where it left them out, or its time per row
+    is :attr:`~_Attempt.implausible`)."""
+    count_before, count_after = _inlier_counts(before), _inlier_counts(after)
+    return [
+        name
+        for name in undecided
+        if before.cameras[name].flipped == after.cameras[name].flipped
+        and count_after.get(name, 0) < count_before.get(name, 0)
+    ]
+
+
+def _inlier_counts(result: _Attempt) -> dict[str, int]:
+    """Per camera tied with a plausible time per row: its inlier sync events."""
+    inlier = result.solution.inlier[: len(result.matches)]
+    return {
+        name: int(np.sum(inlier & (result.matches.camera == name)))
+        for name in result.connected
+        if name not in result.implausible
+    }
+
+
+def _search_reference(
+    cameras: dict[str, CameraDetection], reference: str, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> str:
+    """The reference the readouts are chosen on: of the cameras tied to ``reference`` in
+    their detected readings (``attempt`` solves on it), the one with the most matched sync
+    events, the first name among equals; ``reference`` itself where those readings do not
+    solve. A camera's score depends a little on the reference (its drift prior is relative
+    to the reference's clock), and with it an ascent of one flip at a time can end
+    elsewhere: rig-14 of the random rigs did with ``cam1`` as reference, not with ``cam10``."""
+    try:
+        start = attempt(cameras)
+    except FlashsyncError:
+        return reference
+    counts = {name: int(np.sum(start.matches.camera == name)) for name in start.connected}
+    return max(sorted(counts), key=lambda name: counts[name])
+
+
+#: Rigs with at most this many readings of their undecided cameras (two ways up each) have
+#: every reading solved, not an ascent: three cameras of rig-14 (cam6 upright, cam8 and cam10
+#: upside down) took the wrong single flip first (cam6: a gain of 33, the right ones 26 and 14)
+#: and ended there, all three read wrong with no warning.
+EVERY_READING = 16
 
 
 #: A camera tied by fewer inlier flashes than this has almost no equation to spare.
