@@ -170,6 +170,9 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
         scale = system.group_scales(x, weights, inlier)
         floor = _edge_floor_ms(system, x, n_cameras)
         scale[leading] = np.maximum(scale[leading], floor[system.camera[leading]])
+        # trailing edges no less noisy than their camera's leading ones: a camera of a few bands fits
+        # them almost exactly (rig-20: two bands, a scale of 3 microseconds) and its time per row,
+        # which its split bands tie to the frame period, would claim 0.02 % while 1.6 % off
         floor = np.fmax(floor, _camera_values(system.camera[leading], scale[leading], n_cameras))
         scale[~leading] = np.maximum(scale[~leading], floor[system.camera[~leading]])
         weights = inlier * (system.event_sigma_ms / scale) ** 2 + idle
@@ -220,10 +223,7 @@ def _all_rejected(group: np.ndarray, inlier: np.ndarray) -> np.ndarray:
 def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray:
     """Each camera's least edge noise, ms (shape (n_cameras,)): :data:`EDGE_FLOOR_ROWS` of its
     time per row. A camera of a few events fits them almost exactly and would claim a noise
-    no band edge has. Its trailing edges are no less noisy than its leading ones (the same
-    ramp with the pulse's tail on it): a camera of a few bands fits its trailing edges almost
-    exactly (rig-20: two bands, a scale of 3 microseconds) and its time per row, which the
-    split bands tie to the frame period, would claim a precision of 0.02 % while 1.6 % off."""
+    no band edge has."""
     columns = np.array([system.param_columns[c][2] for c in range(n_cameras)])
     return EDGE_FLOOR_ROWS * np.where(columns >= 0, np.abs(x[np.maximum(columns, 0)]), 0.0)
 

@@ -66,7 +66,12 @@ def test_trailing_edges_give_each_cameras_exposure_and_their_own_noise():
     trailing = np.arange(2 * len(q)) >= len(q)
     both = solve_clocks(
         Observations(
-            np.tile(camera, 2), np.tile(flash, 2), np.tile(t_frame, 2), np.concatenate([lead_q, trail_q]), None, trailing
+            np.tile(camera, 2),
+            np.tile(flash, 2),
+            np.tile(t_frame, 2),
+            np.concatenate([lead_q, trail_q]),
+            None,
+            trailing,
         ),
         n_cameras=3,
     )
