@@ -274,7 +274,7 @@ def fit_frame_clock(
         return FrameClock(stamps, np.arange(n), (segment,), np.zeros(n), step, quantum, np.zeros(n))
     fitter = _Fitter(stamps, step, quantum, smoothing)
     if count_gaps:
-        fits = _refine(fitter, _merge(fitter, [fitter.fit(lo, hi) for lo, hi in _split(fitter)]))
+        fits = _refine(fitter, _merge(fitter, _split(fitter)))
     else:
         fits = [fitter.fit(0, n, np.arange(n))]
     slots = _joined_slots(stamps, fits)
@@ -353,19 +353,19 @@ class _Fitter:
         )
 
 
-def _split(fitter: _Fitter) -> list[tuple[int, int]]:
-    """Frame ranges of the segments: binary segmentation of the stamps where they do not
-    scatter about one clock as white noise, at the split that two lines fit best."""
+def _split(fitter: _Fitter) -> list[_SegmentFit]:
+    """The segments' fits, in frame order: binary segmentation of the stamps where they do
+    not scatter about one clock as white noise, at the split that two lines fit best."""
     pending, done = [(0, len(fitter.stamps))], []
     while pending:
         lo, hi = pending.pop(0)
         fit = fitter.fit(lo, hi)
         if fit.white or hi - lo < 2 * MIN_SEGMENT_FRAMES or len(done) + len(pending) + 2 > MAX_SEGMENTS:
-            done.append((lo, hi))
+            done.append(fit)
             continue
         middle = lo + _best_split(fit.slots.astype(np.float64), fit.residual)
         pending[:0] = [(lo, middle), (middle, hi)]
-    return sorted(done)
+    return sorted(done, key=lambda fit: fit.start)
 
 
 def _best_split(x: np.ndarray, y: np.ndarray) -> int:

@@ -21,11 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from flashsync.coincidence import chance_alignments
+from flashsync.compiled import njit
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Events
 from flashsync.model import readout_rows
-from flashsync.partners import occupancy_spectrum, planned_pairs, shared_flash_estimate, spectrum_length
+from flashsync.partners import occupied_bins, planned_pairs, shared_flash_estimate
 from flashsync.timestamps import median_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
@@ -145,54 +146,91 @@ def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: fl
     """The shifts (ms) that line up most event pairs, strongest first; only those that line
     up at least :data:`MIN_SHARED_FLASHES` (fewer never count).
 
-    A shift's votes are the event-time differences within ``window`` of it. They are
-    counted only in bins (one window wide) whose differences can have at least ``floor``
-    votes (the bin and its two neighbours hold that many): first the floor of the
-    (:data:`FLOOR_RANK` x ``n_candidates``)-th fullest bin, lowered until the last shift
-    chosen has at least ``floor`` votes, so that no shift under the floor could rank among
-    them: the candidates are those of counting every difference."""
-    differences = (times_a[:, None] - times_b[None, :]).ravel()
+    A shift's votes are the event-time differences ``d'`` with ``d - window <= d' < d + window``;
+    the candidates are the differences with most votes (the smaller first among equals), each
+    more than two windows from a stronger one. The votes are counted only in bins (one window
+    wide) whose differences can have at least ``floor`` votes (the bin and its two
+    neighbours hold that many): first the floor of the (:data:`FLOOR_RANK` x
+    ``n_candidates``)-th fullest bin, lowered until the last shift chosen has at least
+    ``floor`` votes, so that no shift under the floor could rank among them: the candidates
+    are those of counting every difference (:func:`_strongest_shifts`, compiled)."""
     span = max(np.ptp(times_a), np.ptp(times_b))
     window = tolerance_ms + MAX_DRIFT * span
-    width = window * (1.0 + 1e-9)  # differences within a window of each other are in neighbouring bins
-    bins = ((differences - differences.min()) // width).astype(np.int64)
-    counts = np.pad(np.bincount(bins), 1)
-    bound = counts[:-2] + counts[1:-1] + counts[2:]  # most votes of a difference in each bin
-    floor = max(int(np.sort(bound)[-min(len(bound), FLOOR_RANK * n_candidates)]), MIN_SHARED_FLASHES)
+    return _strongest_shifts(times_a, times_b, window, FLOOR_RANK * n_candidates, n_candidates, MIN_SHARED_FLASHES)
+
+
+@njit
+def _strongest_shifts(times_a, times_b, window, rank, n_candidates, min_votes):  # pragma: no cover - compiled
+    """Up to ``n_candidates`` differences ``a_i - b_j`` (ms) with most votes, at least
+    ``min_votes`` (see :func:`_candidate_shifts`); shape (n_chosen,)."""
+    scale = 1.0 / (window * (1.0 + 1e-9))  # differences within a window of each other are in neighbouring bins
+    low = np.min(times_a) - np.max(times_b)  # the smallest difference
+    n_bins = int((np.max(times_a) - np.min(times_b) - low) * scale) + 1
+    counts = np.zeros(n_bins, dtype=np.int64)
+    for a in times_a:
+        for b in times_b:
+            counts[int((a - b - low) * scale)] += 1
+    bound = counts.copy()  # most votes of a difference in each bin
+    bound[1:] += counts[:-1]
+    bound[:-1] += counts[1:]
+    floor = max(_largest(bound, min(n_bins, rank)), min_votes)
     while True:
-        chosen, last = _strongest_shifts(differences, bins, bound, floor, window, width, n_candidates)
-        if floor == MIN_SHARED_FLASHES or (len(chosen) == n_candidates and last >= floor):
-            break  # every difference with more votes than the last one chosen was counted
-        floor = max(min(last, floor - 1), MIN_SHARED_FLASHES)
-    return np.asarray(chosen)
+        counted = bound >= floor
+        near = counted.copy()  # the bins whose differences are needed: the counted ones and their neighbours
+        near[1:] |= counted[:-1]
+        near[:-1] |= counted[1:]
+        first = np.zeros(n_bins + 1, dtype=np.int64)  # bin m's differences are ordered[first[m]:first[m + 1]]
+        first[1:] = np.cumsum(np.where(near, counts, 0))
+        ordered, filled = np.empty(first[-1]), first[:-1].copy()
+        for a in times_a:
+            for b in times_b:
+                m = int((a - b - low) * scale)
+                if near[m]:
+                    ordered[filled[m]] = a - b
+                    filled[m] += 1
+        for m in np.flatnonzero(near):
+            ordered[first[m] : first[m + 1]].sort()
+        votes = np.zeros(len(ordered), dtype=np.int64)
+        for m in np.flatnonzero(counted):
+            below, under, stop = first[max(m - 1, 0)], first[max(m - 1, 0)], first[min(m + 2, n_bins)]
+            for k in range(first[m], first[m + 1]):  # votes: differences in [d - window, d + window)
+                while below < stop and ordered[below] < ordered[k] - window:
+                    below += 1
+                while under < stop and ordered[under] < ordered[k] + window:
+                    under += 1
+                votes[k] = under - below
+        chosen = np.empty(n_candidates)
+        n_chosen, last = 0, 0
+        while n_chosen < n_candidates:
+            best = -1
+            for k in range(len(ordered)):  # the most votes, the smallest first, away from those chosen
+                if votes[k] >= min_votes and (best < 0 or votes[k] > votes[best]):
+                    free = True
+                    for c in range(n_chosen):
+                        if abs(ordered[k] - chosen[c]) <= 2 * window:
+                            free = False
+                    if free:
+                        best = k
+            if best < 0:
+                break
+            chosen[n_chosen] = ordered[best]
+            last = votes[best]
+            n_chosen += 1
+        if floor == min_votes or (n_chosen == n_candidates and last >= floor):
+            return chosen[:n_chosen]  # every difference with more votes than the last one chosen was counted
+        floor = max(min(last, floor - 1), min_votes)
 
 
-def _strongest_shifts(
-    differences: np.ndarray,
-    bins: np.ndarray,
-    bound: np.ndarray,
-    floor: int,
-    window: float,
-    width: float,
-    n_candidates: int,
-) -> tuple[list[float], int]:
-    """Up to ``n_candidates`` differences (ms) with most votes, at least
-    :data:`MIN_SHARED_FLASHES`, each more than two windows from a stronger one, among those
-    in bins whose ``bound`` reaches ``floor`` (their votes counted exactly: the bins either
-    side are counted too); and the votes of the last one chosen."""
-    counted = bound >= floor
-    subset = np.sort(differences[np.convolve(counted, np.ones(3), mode="same")[bins] > 0])
-    votes = np.searchsorted(subset, subset + window) - np.searchsorted(subset, subset - window)
-    votes[~counted[((subset - differences.min()) // width).astype(np.int64)]] = 0  # not all their votes counted
-    chosen: list[float] = []
-    last = 0
-    for index in np.argsort(-votes, kind="stable"):
-        if votes[index] < MIN_SHARED_FLASHES or len(chosen) == n_candidates:
-            break
-        if all(abs(subset[index] - shift) > 2 * window for shift in chosen):
-            chosen.append(subset[index])
-            last = int(votes[index])
-    return chosen, last
+@njit
+def _largest(values, rank):  # pragma: no cover - compiled
+    """The ``rank``-th largest of non-negative integers (``np.sort(values)[-rank]``)."""
+    histogram = np.bincount(values)
+    total = 0
+    for value in range(len(histogram) - 1, -1, -1):
+        total += histogram[value]
+        if total >= rank:
+            return value
+    return 0
 
 
 def _refine(
@@ -221,25 +259,36 @@ def _refine(
     return PairAlignment(alpha, beta, matches, float(np.sqrt(np.mean(residuals**2))), False)
 
 
-def _mutual_nearest(times_a: np.ndarray, mapped_b: np.ndarray, window: float) -> np.ndarray:
+@njit
+def _mutual_nearest(times_a, mapped_b, window):  # pragma: no cover - compiled
     """Pairs (i, j) where a_i and mapped b_j are each other's nearest and within ``window``,
-    closest first."""
+    closest first; shape (n_pairs, 2)."""
     nearest_a = _nearest(times_a, mapped_b)
     nearest_b = _nearest(mapped_b, times_a)
-    j = np.flatnonzero(
-        (nearest_b[nearest_a] == np.arange(len(mapped_b))) & (np.abs(times_a[nearest_a] - mapped_b) <= window)
-    )
-    j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="stable")]
-    return np.stack([nearest_a[j], j], axis=1).astype(np.int64).reshape(-1, 2)
+    mutual = np.zeros(len(mapped_b), dtype=np.bool_)
+    for j in range(len(mapped_b)):
+        mutual[j] = nearest_b[nearest_a[j]] == j and abs(times_a[nearest_a[j]] - mapped_b[j]) <= window
+    j = np.flatnonzero(mutual)
+    j = j[np.argsort(np.abs(times_a[nearest_a[j]] - mapped_b[j]), kind="mergesort")]
+    pairs = np.empty((len(j), 2), dtype=np.int64)
+    pairs[:, 0] = nearest_a[j]
+    pairs[:, 1] = j
+    return pairs
 
 
-def _nearest(values: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Index into ``values`` (at least one) of the nearest to each query."""
-    order = np.argsort(values, kind="stable")
-    position = np.clip(np.searchsorted(values[order], queries), 1, max(len(values) - 1, 1))
-    left = values[order[position - 1]]
-    right = values[order[np.minimum(position, len(values) - 1)]]
-    return order[np.where(queries - left <= right - queries, position - 1, np.minimum(position, len(values) - 1))]
+@njit
+def _nearest(values, queries):  # pragma: no cover - compiled
+    """Index into ``values`` (at least one) of the nearest to each query (the lower on a tie)."""
+    order = np.argsort(values, kind="mergesort")
+    ordered = values[order]
+    last = len(values) - 1
+    nearest = np.empty(len(queries), dtype=np.int64)
+    for q in range(len(queries)):
+        position = min(max(np.searchsorted(ordered, queries[q]), 1), max(last, 1))
+        right = min(position, last)
+        below = queries[q] - ordered[position - 1] <= ordered[right] - queries[q]
+        nearest[q] = order[position - 1] if below else order[right]
+    return nearest
 
 
 def group_flashes(
@@ -254,31 +303,56 @@ def group_flashes(
     Returns
     -------
     dict mapping (camera, event index) to a flash number, for events in a flash of at least
-    two cameras.
+    two cameras; flashes numbered in the order of their first member (camera name, event).
     """
-    parent = {(camera, i): (camera, i) for camera, n in n_events.items() for i in range(n)}
-    members = {node: {node[0]: node[1]} for node in parent}
-
-    def root(node):
-        while parent[node] != node:
-            parent[node] = parent[parent[node]]
-            node = parent[node]
-        return node
-
+    names = list(n_events)
+    offset = dict(zip(names, np.cumsum([0, *n_events.values()])[:-1].tolist()))
+    camera = np.repeat(np.arange(len(names)), list(n_events.values()))
     ranked = sorted(alignments.items(), key=lambda item: -len(item[1].matches))
-    for (camera_a, camera_b), alignment in ranked:
-        for i, j in alignment.matches:
-            ra, rb = root((camera_a, int(i))), root((camera_b, int(j)))
-            if ra == rb or not members[ra].keys().isdisjoint(members[rb]):
-                continue
-            parent[rb] = ra
-            members[ra].update(members.pop(rb))
-    flashes: dict[tuple[str, int], int] = {}
-    roots = sorted({root(node) for node in parent if len(members[root(node)]) > 1})
-    for number, group_root in enumerate(roots):
-        for camera, event in members[group_root].items():
-            flashes[(camera, event)] = number
-    return flashes
+    merges = np.zeros((0, 2), dtype=np.int64)
+    if ranked:
+        merges = np.concatenate([alignment.matches + [offset[a], offset[b]] for (a, b), alignment in ranked]).astype(
+            np.int64
+        )
+    root, size = _merged_groups(merges, camera, len(names))
+    event = np.arange(len(camera)) - np.repeat(list(offset.values()), list(n_events.values()))
+    grouped = np.flatnonzero(size[root] > 1)
+    roots = sorted(set(root[grouped].tolist()), key=lambda node: (names[camera[node]], int(event[node])))
+    number = dict(zip(roots, range(len(roots))))
+    return {(names[camera[node]], int(event[node])): number[root[node]] for node in grouped.tolist()}
+
+
+@njit
+def _merged_groups(merges, camera, n_cameras):  # pragma: no cover - compiled
+    """Union of events (nodes of camera ``camera[node]``) along ``merges`` (pairs of nodes,
+    in order), refusing a merge that would hold two events of one camera: each node's group
+    (its root node) and each root's size."""
+    n = len(camera)
+    parent = np.arange(n)
+    words = (n_cameras + 63) // 64
+    cameras = np.zeros((n, words), dtype=np.uint64)  # per root, the cameras in its group (bits)
+    for node in range(n):
+        cameras[node, camera[node] // 64] = np.uint64(1) << np.uint64(camera[node] % 64)
+    size = np.ones(n, dtype=np.int64)
+    for k in range(len(merges)):
+        a, b = _root(parent, merges[k, 0]), _root(parent, merges[k, 1])
+        if a == b or np.any(cameras[a] & cameras[b]):
+            continue
+        parent[b] = a
+        cameras[a] |= cameras[b]
+        size[a] += size[b]
+    for node in range(n):
+        parent[node] = _root(parent, node)
+    return parent, size
+
+
+@njit
+def _root(parent, node):  # pragma: no cover - compiled
+    """The root of ``node``'s group, halving the path on the way."""
+    while parent[node] != node:
+        parent[node] = parent[parent[node]]
+        node = parent[node]
+    return node
 
 
 def match_tolerance_ms(frame_periods_ms: Iterable[float], readout_known: bool) -> float:
@@ -352,18 +426,17 @@ def match_events(
     keys = {name: times.tobytes() for name, times in times_ms.items()}
     span = max((np.ptp(times) for times in times_ms.values() if len(times)), default=0.0)
     window = tolerance_ms + MAX_DRIFT * span
-    length = spectrum_length([np.ptp(times) for times in times_ms.values() if len(times)], window)
 
-    def spectrum(name: str) -> np.ndarray:
-        key = ("spectrum", keys[name], window, length)
+    def bins(name: str) -> np.ndarray:
+        key = ("bins", keys[name], window)
         if key not in memo:
-            memo[key] = occupancy_spectrum(times_ms[name], window, length)
+            memo[key] = occupied_bins(times_ms[name], window)
         return memo[key]
 
     def estimate(a: str, b: str) -> int:
-        key = ("estimate", keys[a], keys[b], window, length)
+        key = ("estimate", keys[a], keys[b], window)
         if key not in memo:
-            memo[key] = shared_flash_estimate(spectrum(a), spectrum(b))
+            memo[key] = shared_flash_estimate(bins(a), bins(b))
         return memo[key]
 
     def aligned(a: str, b: str) -> PairAlignment | None:

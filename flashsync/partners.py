@@ -22,33 +22,35 @@ from collections.abc import Callable
 
 import numpy as np
 
+from flashsync.compiled import njit
+
 #: Convincing alignments sought per camera (its best-ranked partners first).
 PARTNERS = 4
 
 
-def occupancy_spectrum(times: np.ndarray, window_ms: float, length: int) -> np.ndarray:
-    """Real FFT of a camera's events counted in bins ``window_ms`` wide from its first
-    event, ``length`` bins (at least two spans' worth: the correlation of two cameras then
-    does not wrap around); shape (length // 2 + 1,)."""
+def occupied_bins(times: np.ndarray, window_ms: float) -> np.ndarray:
+    """The bins (``window_ms`` wide, from the camera's first event) of a camera's events,
+    int array of shape (n_events,)."""
     times = np.asarray(times, dtype=np.float64)
-    counts = np.zeros(length)
-    if len(times):
-        np.add.at(counts, ((times - times.min()) // window_ms).astype(np.int64), 1.0)
-    return np.fft.rfft(counts)
+    return ((times - times.min()) // window_ms).astype(np.int64) if len(times) else np.zeros(0, dtype=np.int64)
 
 
-def spectrum_length(spans_ms: list[float], window_ms: float) -> int:
-    """Bins of :func:`occupancy_spectrum` for cameras whose events span ``spans_ms``: a power
-    of two over twice the longest span in bins."""
-    return 1 << int(np.ceil(np.log2(2 * (max(spans_ms, default=0.0) // window_ms + 2))))
-
-
-def shared_flash_estimate(spectrum_a: np.ndarray, spectrum_b: np.ndarray) -> int:
-    """Upper estimate of the flashes two cameras share from their :func:`occupancy_spectrum`:
-    the most event pairs whose time differences fall into two adjacent bins (one shift,
-    give or take a bin; chance coincidences add a few)."""
-    correlation = np.fft.irfft(spectrum_a * np.conj(spectrum_b), n=2 * (len(spectrum_a) - 1))
-    return int(np.rint(np.max(correlation + np.roll(correlation, -1))))
+@njit
+def shared_flash_estimate(bins_a: np.ndarray, bins_b: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Upper estimate of the flashes two cameras share from their :func:`occupied_bins`: the
+    most event pairs whose bin differences are one of two adjacent values (one shift, give
+    or take a bin; chance coincidences add a few)."""
+    if not len(bins_a) or not len(bins_b):
+        return 0
+    low = -np.max(bins_b)
+    pairs = np.zeros(np.max(bins_a) - low + 2, dtype=np.int64)  # by bin difference, from low
+    for i in bins_a:
+        for j in bins_b:
+            pairs[i - j - low] += 1
+    best = 0
+    for k in range(len(pairs) - 1):
+        best = max(best, pairs[k] + pairs[k + 1])
+    return best
 
 
 def planned_pairs(

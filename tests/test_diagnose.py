@@ -1,5 +1,8 @@
 """The discrepancy workflow on rendered clips in which one effect (or two, or none) is hidden:
-the model under test starts without it and nothing in the videos names it."""
+the model under test starts without it and nothing in the videos names it. Each hidden-effect
+case runs in two worlds: the first (exponential flashes on linear sensors, the detector's
+own model) and the simulator's second (:func:`~flashsync.simulation.rigs.second_world`:
+xenon and LED pulses in turn, tone curves, black levels, x264 at crf 23)."""
 
 import json
 from dataclasses import replace
@@ -19,7 +22,7 @@ from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, 
 from flashsync.model import SyncModel
 from flashsync.pipeline import detect_videos, synchronize
 from flashsync.simulation import CameraSpec, FlashSpec, GroundTruth, Scenario, render_scenario
-from flashsync.simulation.rigs import NTSC_30, NTSC_60, recipe
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, recipe, second_world
 
 DURATION_MS = 6000.0
 #: Noise floor of a gap in the hidden-effect tests: this many times the RMS the edge noise
@@ -50,6 +53,14 @@ EFFECT = {"stamp_jitter": "frame_clock", "stamp_jitter_1ms": "frame_clock"}
 #: for the edges while the stamps run away from it.
 STAMP_GAP = {"stamp_rate"}
 
+FIRST, SECOND = "first world", "second world"
+
+
+def dress(scenario: Scenario, world: str) -> Scenario:
+    """The scenario in that world: as it is, or in the second world with xenon and LED
+    pulses in turn (seed 1; its first flash is a xenon with a 0.78 ms decay)."""
+    return scenario if world == FIRST else second_world(scenario, seed=1, pulses=("xenon", "led"))
+
 
 def flashes(seed: int, duration_ms: float = DURATION_MS) -> tuple[FlashSpec, ...]:
     """Flashes at irregular instants (as fired by hand), 120 ms or more apart."""
@@ -61,11 +72,11 @@ def flashes(seed: int, duration_ms: float = DURATION_MS) -> tuple[FlashSpec, ...
     )
 
 
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory) -> tuple[dict, GroundTruth]:
-    """Every camera's detection (320x180), rendered and detected once, and the truth; the
-    upside-down camera also as ``"<name>+declared"``, detected with its readout direction
-    given."""
+@pytest.fixture(scope="module", params=[FIRST, SECOND])
+def rendered(request, tmp_path_factory) -> tuple[dict, GroundTruth, str]:
+    """Every camera's detection (320x180), rendered and detected once per world, the truth
+    and the world; the upside-down camera also as ``"<name>+declared"``, detected with its
+    readout direction given."""
     cameras = [CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0)]
     cameras += [
         CameraSpec(
@@ -74,14 +85,13 @@ def rendered(tmp_path_factory) -> tuple[dict, GroundTruth]:
         for case, settings in HIDDEN.items()
     ]
     folder = tmp_path_factory.mktemp("hidden")
-    truth = render_scenario(
-        Scenario("hidden", tuple(cameras), duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1), folder
-    )
+    scenario = Scenario("hidden", tuple(cameras), duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1)
+    truth = render_scenario(dress(scenario, request.param), folder)
     videos = [folder / f"{spec.name}.{spec.container}" for spec in cameras]
     found = {d.camera: d for d in detect_videos(videos)}
     flipped = CAMERA["flipped"]
     found[f"{flipped}+declared"] = detect_videos([folder / f"{flipped}.mp4"], flipped=[flipped])[0]
-    return found, truth
+    return found, truth, request.param
 
 
 @pytest.fixture(scope="module")
@@ -93,8 +103,33 @@ def pair(detections: dict, name: str) -> list:
     return [detections["cam0"], detections[name]]
 
 
+def true_chi2_per_dof(measurement: Measurement, truth: GroundTruth) -> float:
+    """χ² per degree of freedom of the true clocks against the edge noise the band lengths
+    show: each edge's true error (:func:`true_edge_errors_ms`), each camera's mean taken out
+    (as its shift would), over its camera's edge noise."""
+    errors = true_edge_errors_ms(measurement, truth)
+    camera = measurement.edges.camera
+    for c in range(len(measurement.cameras)):
+        errors[camera == c] -= errors[camera == c].mean()
+    return float(np.sum((errors / measurement.camera_noise_ms[camera]) ** 2) / (len(errors) - len(measurement.cameras)))
+
+
+def assert_settled(d, cameras: list, truth: GroundTruth, world: str) -> None:
+    """The final residuals pass the χ² test; in the second world, where the band lengths
+    understate the edge noise (xenon tails and LED plateaus move both edges of a band alike,
+    by up to 0.1-0.2 ms, which its length does not show) and the true clocks themselves fail
+    the test (χ² per degree of freedom 2.0-3.1 on these cases), they fit no worse than the
+    truth does."""
+    if world == FIRST or d.consistent:
+        assert d.consistent, format_diagnosis(d)
+        return
+    truth_chi2 = true_chi2_per_dof(measure(cameras), truth)
+    assert truth_chi2 > 1.5 and d.noise.chi2 / d.noise.dof <= truth_chi2, (truth_chi2, format_diagnosis(d))
+
+
 @pytest.mark.parametrize("effect", [case for case in HIDDEN if case not in ("two", "saturation")])
-def test_a_hidden_effect_is_named_first_and_the_gap_closes(detections, effect):
+def test_a_hidden_effect_is_named_first_and_the_gap_closes(rendered, effect):
+    detections, truth, world = rendered
     d = diagnose(pair(detections, CAMERA[effect]))
     step = d.steps[0]
     assert (step.effect, step.camera) == (EFFECT.get(effect, effect), CAMERA[effect]), format_diagnosis(d)
@@ -104,21 +139,30 @@ def test_a_hidden_effect_is_named_first_and_the_gap_closes(detections, effect):
         before, after, floor = step.rms_before_ms, step.rms_after_ms, FLOOR * d.expected_ms
     assert before > floor, "the hidden effect must show above the noise"
     assert after <= max(before / 5.0, floor), format_diagnosis(d)
-    assert d.consistent, format_diagnosis(d)
+    assert_settled(d, pair(detections, CAMERA[effect]), truth, world)
 
 
-def test_hidden_saturation_is_named_first_and_the_gap_reaches_the_noise(detections):
-    """Bands clipped at white (32 of the camera's 38 events) have their edges moved out,
-    by an amount that varies with the clip: the gap cannot shrink 5x, but the residuals go
-    from failing the chi-squared test to passing it."""
+def test_hidden_saturation_is_named_first_and_the_gap_narrows(rendered):
+    """Bands clipped at white (32 of the camera's 38 events) have their edges moved out, the
+    farther the deeper the clip, which makes the band longer: the effect fits how far the
+    edges of a clipped band of median length move out and the share of a band's length over
+    that median they move by (about a half each). In both worlds it is named first and the
+    gap narrows 1.8x or more, not 5x (the edges of the shortest clipped bands and of the
+    clipped bands split across two frames stay 0.1-0.2 ms off); the residuals pass the test
+    and the model is closer to the truth than the plain one (the first world's plain model
+    fails the test)."""
+    detections, truth, world = rendered
     cameras = pair(detections, CAMERA["saturation"])
     d = diagnose(cameras)
     step = d.steps[0]
     assert (step.effect, step.camera) == ("saturation", CAMERA["saturation"]), format_diagnosis(d)
-    assert step.rms_after_ms < step.rms_before_ms / 1.5 and d.model[1]["saturation_ms"] > 0.05
+    assert step.rms_after_ms < step.rms_before_ms / 1.8, format_diagnosis(d)
+    assert d.model[1]["saturation_ms"] > 0.05 and 0.3 < d.model[1]["saturation_share"] < 0.7, d.model[1]
     measurement = measure(cameras)
-    assert not residual_test(measurement, fit_candidate(measurement, frozenset())).consistent
+    plain = fit_candidate(measurement, frozenset())
+    assert world == SECOND or not residual_test(measurement, plain).consistent
     assert d.consistent, format_diagnosis(d)
+    assert pooled_error_ms(d.sync_model, truth) < pooled_error_ms(plain.sync_model(), truth)
 
 
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
@@ -138,11 +182,14 @@ def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
     assert data["steps"][1]["evidence"].startswith("ΔBIC") and data["verdict"] == d.verdict
 
 
-def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(detections):
-    d = diagnose(pair(detections, f"{CAMERA['flipped']}+declared"))
+def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(rendered):
+    detections, truth, world = rendered
+    cameras = pair(detections, f"{CAMERA['flipped']}+declared")
+    d = diagnose(cameras)
     assert d.steps == [], format_diagnosis(d)
     assert all(model["effects"] == [] for model in d.model)
-    assert d.final_rms_ms == d.initial_rms_ms and d.consistent
+    assert d.final_rms_ms == d.initial_rms_ms
+    assert_settled(d, cameras, truth, world)
     assert "no effect of the catalogue" in format_diagnosis(d)
 
 
@@ -157,13 +204,14 @@ def test_one_bad_edge_names_nothing(detections):
 
 def true_edge_errors_ms(measurement: Measurement, truth: GroundTruth) -> np.ndarray:
     """Each measured edge's time minus its flash's half-light instant, both on the true
-    clocks (a trailing edge one true exposure earlier), ms, shape (n_edges,): what the
-    detector alone got wrong."""
+    clocks (a trailing edge, in the true readout direction, one true exposure earlier), ms,
+    shape (n_edges,): what the detector alone got wrong."""
     edges, names = measurement.edges, [c.camera for c in measurement.cameras]
     instants = np.array([flash["half_rise_global_ms"] for flash in truth.flashes])
     errors = np.empty(len(edges))
-    for i, (c, frame, row, trailing) in enumerate(zip(edges.camera, edges.frame, edges.row, edges.trailing)):
+    for i, (c, frame, row, told) in enumerate(zip(edges.camera, edges.frame, edges.row, edges.trailing)):
         camera = names[c]
+        trailing = told != (measurement.cameras[c].flipped != truth.cameras[camera].flipped)
         t = float(truth.global_time_ms(camera, frame, row)) - trailing * truth.cameras[camera].exposure_ms
         errors[i] = t - instants[np.argmin(np.abs(instants - t))]
     return errors
@@ -184,12 +232,7 @@ def test_shipped_sample_needs_a_pair_on_one_camera_and_ends_at_the_truth():
     assert ("row_time+exposure", "cam4") in [(s.effect, s.camera) for s in d.steps], format_diagnosis(d)
     assert "χ²" in d.verdict and "degrees of freedom" in d.verdict and "p = " in d.verdict, d.verdict
     truth = load_ground_truth(samples / "truth.json")
-    measurement = measure(cameras)
-    errors = true_edge_errors_ms(measurement, truth)
-    camera = measurement.edges.camera
-    for c in range(len(measurement.cameras)):
-        errors[camera == c] -= errors[camera == c].mean()
-    truth_chi2 = np.sum((errors / measurement.camera_noise_ms[camera]) ** 2) / (len(errors) - len(measurement.cameras))
+    truth_chi2 = true_chi2_per_dof(measure(cameras), truth)
     assert 1.0 < truth_chi2 and d.noise.chi2 / d.noise.dof < 1.25 * truth_chi2, (truth_chi2, d.verdict)
     for model in d.model:
         camera = truth.cameras[model["camera"]]
@@ -257,9 +300,9 @@ def pooled_error_ms(model: SyncModel, truth: GroundTruth) -> float:
 
 
 def test_sync_and_diagnose_o_agree_on_stamps_jittered_by_1_2_ms(rendered, tmp_path):
-    """The issue's jittered rig, first world: ``sync`` and the model ``diagnose -o`` writes
+    """The issue's jittered rig, in each world: ``sync`` and the model ``diagnose -o`` writes
     are both within 0.1 ms RMS of the truth, read back from the file."""
-    found, truth = rendered
+    found, truth, _ = rendered
     cameras = pair(found, CAMERA["stamp_jitter_1ms"])
     model, _ = synchronize(cameras)
     d = diagnose(cameras)
@@ -323,16 +366,17 @@ def test_drifting_clocks_get_a_drift_step_and_sync_agrees_with_diagnose_o(tmp_pa
     residuals fail the chi-squared test, on the drifting cameras; the workflow takes a
     drift step, passes it, and its model is within 0.05 ms RMS of the truth. Drift is in
     ``sync``'s model too, which fits both edges of every band as the workflow does: its model
-    is as close to the truth, and on every camera within its own sigma of the workflow's."""
+    is as close to the truth, and on every camera within its own sigma of the workflow's. (In
+    the second world it passes too, 42 s on a busy machine: the next test's second-world case,
+    the same rig with twelve flashes, stands for it.)"""
     duration = 10_000.0
     rig = (
         CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
         CameraSpec("cam2", 320, 180, NTSC_30, exposure_ms=4.0, drift_ppm=80.0, start_ms=1000.0, offset_ms=-900.0),
         CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=100.0, start_ms=5000.0, offset_ms=-4950.0),
     )
-    truth = render_scenario(
-        Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration), n_players=0, seed=2), tmp_path
-    )
+    scenario = Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration), n_players=0, seed=2)
+    truth = render_scenario(scenario, tmp_path)
     cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig], estimate_readout=False)
     d = diagnose(cameras)
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}
@@ -354,13 +398,15 @@ def test_drifting_clocks_get_a_drift_step_and_sync_agrees_with_diagnose_o(tmp_pa
         assert np.sqrt(np.mean(gap**2)) < np.sqrt(np.mean(sigma**2)), name
 
 
-def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path):
+@pytest.mark.parametrize("world", [FIRST, SECOND])
+def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path, world):
     """The issue's HD rig, as the workflow saw it: twelve flashes, clocks 30 and 40 ppm from
     the reference's (0.3-0.4 ms over 10 s), and on the 59.94 fps camera one band whose
     trailing edge is 1 ms late (the pulse's tail on a short exposure; there it made the
     camera's band-length noise 0.25 ms against 0.02 for its other bands, and no drift step
     was taken). The band is an outlier of the band lengths and left out of the noise, so
-    both drifts are named and the model is within 0.02 ms RMS of the truth."""
+    both drifts are named and the model is within 0.02 ms RMS of the truth; in the second
+    world, whose bands on that camera scatter as 0.043 ms of edge noise, within 0.04 (0.021)."""
     duration = 10_000.0
     rig = (
         CameraSpec("cam1", 320, 180, NTSC_30, exposure_ms=2.0),
@@ -368,19 +414,67 @@ def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path):
         CameraSpec("cam3", 320, 180, NTSC_60, exposure_ms=3.0, drift_ppm=40.0, start_ms=5000.0, offset_ms=-4950.0),
     )
     scenario = Scenario("drifting", rig, duration_ms=duration, flashes=flashes(2, duration)[::3], n_players=0, seed=2)
-    truth = render_scenario(scenario, tmp_path)
+    truth = render_scenario(dress(scenario, world), tmp_path)
     cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig], estimate_readout=False)
+    unmoved = measure(cameras).camera_noise_ms[2]
     events = events_to_frame(cameras[2].events)
     late = events.index[(events["edge"] == "trailing") & (events["flags"] == "")][3]
     events.loc[late, "row"] += 1.0 / (1000.0 / NTSC_60 / 180)
     cameras[2] = replace(cameras[2], top_down=events_from_frame(events))
     measurement = measure(cameras)
-    assert measurement.camera_noise_ms[2] < 0.02
+    assert measurement.camera_noise_ms[2] < 1.5 * unmoved and (world == SECOND or unmoved < 0.02)
     d = diagnose(cameras)
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}
     assert drifting == {"cam2", "cam3"}, format_diagnosis(d)
     assert [m["drift_ppm"] for m in d.model] == pytest.approx([0.0, 30.0, 40.0], abs=5.0)
-    assert pooled_error_ms(d.sync_model, truth) < 0.02
+    assert pooled_error_ms(d.sync_model, truth) < (0.02 if world == FIRST else 0.04)
+
+
+@pytest.fixture(scope="module", params=[FIRST, SECOND])
+def flickering(request, tmp_path_factory) -> tuple[list, GroundTruth, str]:
+    """Two cameras at one frame rate (30 fps) with the same hidden rows (8 + 20 of 208: their
+    time per row is 13 % under frame period / height) under 5 % 100 Hz mains flicker: the
+    reference's 10 ms exposure (one flicker period) averages it out, the other camera's 2 ms
+    sees it roll (a third of a period per frame). Eleven flashes, three of them seen clean by
+    both (10 ms bands are long): at one frame rate and a steady phase the flashes tell the
+    difference of the two times per row, not their common part. Detected once per world."""
+    rig = (
+        CameraSpec("cam0", 320, 180, 30.0, r0=8, r1=20, exposure_ms=10.0),
+        CameraSpec("cam1", 320, 180, 30.0, r0=8, r1=20, exposure_ms=2.0, start_ms=3000.0, offset_ms=-2817.0),
+    )
+    scenario = Scenario(
+        "flicker", rig, duration_ms=DURATION_MS, flashes=flashes(3)[::2], n_players=0, seed=3, flicker_depth=0.05
+    )
+    folder = tmp_path_factory.mktemp("flicker")
+    truth = render_scenario(dress(scenario, request.param), folder)
+    return detect_videos([folder / "cam0.mp4", folder / "cam1.mp4"], estimate_readout=False), truth, request.param
+
+
+def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loose(flickering, tmp_path):
+    """The flicker (its frequency and depth) is named first on the camera that sees it roll,
+    its period in rows then times that camera's rows (the model's time per row is the
+    flicker's: the gap between them, 4.5 ms over the image under frame period / height,
+    closes), the flashes carry it to the reference, and the model ``diagnose -o`` writes is
+    within 0.1 ms RMS of the truth (0.026 in the first world, 0.074 in the second, where the
+    tone curve leaves 1.8 % of the flicker's 5 % and the period comes out 0.26 % long), where
+    the same workflow blind to the flicker is 2.1 ms off: the flashes cannot see the hidden
+    rows."""
+    cameras, truth, world = flickering
+    d = diagnose(cameras)
+    step = d.steps[0]
+    assert (step.effect, step.camera) == ("flicker", "cam1"), format_diagnosis(d)
+    assert step.estimate.startswith("100 Hz, depth"), step.estimate
+    assert step.flicker_gap_before_ms > 1.0 and step.flicker_gap_after_ms <= step.flicker_gap_before_ms / 5.0
+    assert_settled(d, cameras, truth, world)
+    blind = diagnose([replace(camera, flicker=None) for camera in cameras])
+    assert "flicker" not in {s.effect for s in blind.steps}, format_diagnosis(blind)
+    error = pooled_error_ms(d.sync_model, truth)
+    assert error < 0.1 and pooled_error_ms(blind.sync_model, truth) > 5.0 * error, format_diagnosis(d)
+    save_model(d.sync_model, tmp_path / "sync.json")
+    written = load_model(tmp_path / "sync.json").camera("cam1")
+    flicker = cameras[1].flicker
+    assert written.row_time_ms == pytest.approx(1000.0 / flicker.hz / flicker.period_rows, rel=1e-9)
+    assert written.row_time_ms == pytest.approx(truth.cameras["cam1"].row_time_ms, rel=0.01)
 
 
 def test_second_world_pulse_tail_is_named_on_the_hd_rig_and_diagnose_o_closes_in(tmp_path):

@@ -231,3 +231,69 @@ def test_alignments_are_remembered_between_calls(monkeypatch):
     times["c3"] = times["c3"] + 1.0
     match.match_events(times, TOLERANCE_MS, memo=memo)
     assert 0 < len(aligned) - n_first <= len(times) - 1
+
+
+def counting_every_difference(times_a, times_b, tolerance_ms, n_candidates=8):
+    """The candidate shifts by definition: every difference's votes (differences in
+    [d - window, d + window)), the most first (the smaller among equals), each more than two
+    windows from a stronger one, at least MIN_SHARED_FLASHES votes."""
+    from flashsync.match import MAX_DRIFT, MIN_SHARED_FLASHES
+
+    window = tolerance_ms + MAX_DRIFT * max(np.ptp(times_a), np.ptp(times_b))
+    differences = np.sort(np.subtract.outer(times_a, times_b).ravel())
+    votes = np.searchsorted(differences, differences + window) - np.searchsorted(differences, differences - window)
+    chosen = []
+    for index in np.argsort(-votes, kind="stable"):
+        if votes[index] < MIN_SHARED_FLASHES or len(chosen) == n_candidates:
+            break
+        if all(abs(differences[index] - shift) > 2 * window for shift in chosen):
+            chosen.append(differences[index])
+    return np.array(chosen)
+
+
+def test_candidate_shifts_are_those_of_counting_every_difference():
+    """The compiled vote counts only bins near the fullest ones and still gives what counting
+    every difference gives: shared flashes with drift and jitter, unrelated events, times on a
+    1 ms grid (ties), unsorted times."""
+    from flashsync.match import _candidate_shifts
+
+    rng = np.random.default_rng(8)
+    for _ in range(300):
+        span = rng.choice([1500.0, 60_000.0, 600_000.0])
+        shared = rng.uniform(0, span, rng.integers(0, 40))
+        a = np.concatenate([rng.uniform(0, span, rng.integers(2, 60)), shared + rng.normal(0, 2, len(shared))])
+        b = np.concatenate([rng.uniform(0, span, rng.integers(2, 60)), shared * (1 + 5e-5) + rng.uniform(-1e5, 1e5)])
+        if rng.uniform() < 0.3:
+            a, b = np.round(a), np.round(b)
+        tolerance = rng.choice([5.0, 10.0, 40.0])
+        assert np.array_equal(_candidate_shifts(a, b, tolerance, 8), counting_every_difference(a, b, tolerance))
+
+
+def test_shared_flash_estimate_counts_event_pairs_one_shift_apart():
+    """The most event pairs whose bin differences are two adjacent values, as counted pair by pair."""
+    from flashsync.partners import occupied_bins, shared_flash_estimate
+
+    rng = np.random.default_rng(9)
+    for _ in range(200):
+        a, b = (rng.uniform(0, rng.uniform(100, 60_000), rng.integers(1, 80)) for _ in range(2))
+        bins_a, bins_b = occupied_bins(a, 25.0), occupied_bins(b, 25.0)
+        differences = np.subtract.outer(bins_a, bins_b).ravel()
+        counts = np.bincount(differences - differences.min(), minlength=2)
+        assert shared_flash_estimate(bins_a, bins_b) == np.max(counts[:-1] + counts[1:])
+    assert shared_flash_estimate(occupied_bins(np.zeros(0), 25.0), bins_b) == 0
+
+
+def test_flashes_of_more_than_64_cameras_hold_one_event_per_camera():
+    """70 cameras (a flash's cameras kept in two 64-bit words): event 0 chained through all,
+    event 1 through c64-c69; a bad pair of c0's event 0 with c69's event 1 would put two
+    events of c64-c69 (the second word only) into one flash, and is refused."""
+    from flashsync.match import PairAlignment
+
+    chain = {
+        (f"c{c}", f"c{c + 1}"): PairAlignment(1.0, 0.0, np.array([[0, 0], [1, 1]] if c >= 64 else [[0, 0]]), 0.0, False)
+        for c in range(69)
+    }
+    bad = {("c0", "c69"): PairAlignment(1.0, 0.0, np.array([[0, 1]]), 0.0, False)}
+    groups = group_flashes({f"c{c}": 2 for c in range(70)}, {**chain, **bad})
+    assert groups[("c0", 0)] == groups[("c69", 0)] != groups[("c64", 1)] == groups[("c69", 1)]
+    assert ("c0", 1) not in groups and sorted(set(groups.values())) == [0, 1]

@@ -9,9 +9,12 @@ edge neither moves the fit nor names an effect, while a step or a trend shared b
 weighs in full; each edge is weighted by its camera's edge noise, so a camera with blurry
 bands does not drown one with sharp bands. Each camera's stamps are a second stream: their
 residuals about the model's frame clock (:class:`flashsync.frame_clock.FrameClock` with the
-parts the model's effects switch on) get a Cauchy likelihood of their own.
+parts the model's effects switch on) get a Cauchy likelihood of their own. Where a camera saw
+rolling mains flicker, the time per row its period tells is a third: Gaussian about the
+model's time per row, with the flicker's standard deviation; where the model fits that
+camera's time per row, the flicker enters the fit as one more equation.
 
-A model's score is its Bayesian information criterion over both streams::
+A model's score is its Bayesian information criterion over all its streams::
 
     BIC = 2 * (negative log-likelihood) + (number of parameters) * ln(number of observations)
 """
@@ -30,6 +33,7 @@ from flashsync.diagnose.effects import (
     DRIFT_RATE,
     DROPPED_FRAMES,
     EXPOSURE,
+    FLICKER,
     FLIPPED,
     FRAME_CLOCK,
     PULSE_SHAPE,
@@ -82,7 +86,7 @@ class Candidate:
     scale_ms : float
         Cauchy scale of the weighted edge residuals (:func:`_edge_weights`), ms.
     bic : float
-        Bayesian information criterion over edges and stamps.
+        Bayesian information criterion over edges, stamps and flicker.
     """
 
     measurement: Measurement
@@ -115,9 +119,27 @@ class Candidate:
         """A parameter of the model; 0 where its effect is off."""
         return self.coefficients.get((name, camera), 0.0)
 
+    def _parameters(self, keys: list[tuple[str, int]]) -> np.ndarray:
+        """The named parameters in the order of ``keys``, then the flash times."""
+        return np.concatenate([[self.coefficients[key] for key in keys], self.flash_ms])
+
     def nominal_row_time_ms(self, camera: int) -> float:
         """Frame period / image height, ms."""
         return self.timing[camera].period_ms / self.measurement.cameras[camera].height
+
+    def row_time_ms(self, camera: int) -> float:
+        """The camera's time per row under the model, ms: its base (:func:`_base_row_time_ms`)
+        plus the ``row_time`` effect's correction."""
+        return _base_row_time_ms(self.measurement, self.terms, self.timing, camera) + self.coefficient(ROW_TIME, camera)
+
+    @property
+    def flicker_gap_ms(self) -> list[float]:
+        """Per camera, how far the time per row its rolling flicker tells is off the model's,
+        over the image height, ms; NaN where it saw no flicker."""
+        return [
+            abs(self.row_time_ms(c) - self.measurement.flicker_row_time_ms(c)[0]) * camera.height
+            for c, camera in enumerate(self.measurement.cameras)
+        ]
 
     def exposure_ms(self, camera: int) -> float:
         """The camera's exposure (shared one plus its own offset), ms."""
@@ -139,16 +161,23 @@ class Candidate:
                 drift_ppm=1e6 * self.coefficient(DRIFT, c),
                 drift_rate_ppm_per_s=2e9 * self.coefficient(DRIFT_RATE, c),
                 shift_ms=self.coefficient("shift", c),
-                row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+                row_time_ms=self.row_time_ms(c),
                 nominal_row_time_ms=self.nominal_row_time_ms(c),
                 exposure_ms=self.exposure_ms(c),
                 saturation_ms=self.coefficient(SATURATION, c),
+                saturation_share=self.coefficient(f"{SATURATION}.1", c),
                 pulse_trailing=self.coefficient(PULSE_SHAPE, c),
                 pulse_leading=self.coefficient(f"{PULSE_SHAPE}.1", c),
                 longest_excess_ms=float(np.max(self.features.excess_ms[self.features.camera == c], initial=0.0)),
+                flicker_hz=flicker.hz if flicker else np.nan,
+                flicker_depth=flicker.depth if flicker else np.nan,
+                flicker_period_rows=flicker.period_rows if flicker else np.nan,
+                flicker_row_time_ms=self.measurement.flicker_row_time_ms(c)[0],
                 effects=sorted(t.effect for t in self.terms if t.camera == c),
             )
-            for c, (camera, clock) in enumerate(zip(self.measurement.cameras, self.clocks))
+            for c, (camera, clock, flicker) in enumerate(
+                zip(self.measurement.cameras, self.clocks, self.measurement.flicker or (None,) * len(self.clocks))
+            )
         ]
 
     def sync_model(self) -> SyncModel:
@@ -166,7 +195,12 @@ class Candidate:
         keys, design = _design(measurement, self.terms, self.features)
         weight = _edge_weights(measurement)
         weighted = self.residual_ms * weight
-        covariance = _covariance(design * weight[:, None], weighted, self.scale_ms)
+        rows, observed, row_weight = _flicker_rows(measurement, self.terms, self.timing, keys)
+        covariance = _covariance(
+            np.vstack([design * weight[:, None], rows * row_weight[:, None]]),
+            np.concatenate([weighted, (observed - rows @ self._parameters(keys)) * row_weight]),
+            self.scale_ms,
+        )
         clocks = {}
         for c, (camera, clock, timing) in enumerate(zip(measurement.cameras, self.clocks, self.timing)):
             ladder = timing.times_ms
@@ -181,6 +215,8 @@ class Candidate:
                     gradient[row, keys.index((name, c))] = factor
             block = np.zeros((3 + len(warp),) * 2)
             block[:3, :3] = gradient @ covariance @ gradient.T
+            if Term(FLICKER, c) in self.terms and (ROW_TIME, c) not in keys:
+                block[2, 2] = measurement.flicker_row_time_ms(c)[1] ** 2
             clocks[camera.camera] = CameraClock(
                 camera.camera,
                 ladder,
@@ -188,7 +224,7 @@ class Candidate:
                 camera.width,
                 alpha=1.0 + drift,
                 beta_ms=self.coefficient("shift", c) - drift * mid + rate * half**2,
-                row_time_ms=self.nominal_row_time_ms(c) + self.coefficient(ROW_TIME, c),
+                row_time_ms=self.row_time_ms(c),
                 flipped=bool(self.flipped[c]),
                 covariance=block,
                 exposure_ms=self.exposure_ms(c),
@@ -296,23 +332,39 @@ def _fit(
         mine = edges.camera == c
         frame_ms[mine] = times.times_ms[edges.frame[mine]]
         q[mine] = readout_rows(edges.row[mine], camera.height, flipped[c])
-        observed[mine] = frame_ms[mine] + q[mine] * times.period_ms / camera.height
+        observed[mine] = frame_ms[mine] + q[mine] * _base_row_time_ms(measurement, terms, timing, c)
         frame_ms[mine] -= 0.5 * (times.times_ms[0] + times.times_ms[-1])
     features = Features(
-        edges.camera, frame_ms, q, edges.trailing != reflected[edges.camera], edges.saturated, edges.excess_ms
+        edges.camera,
+        frame_ms,
+        q,
+        edges.trailing != reflected[edges.camera],
+        edges.saturated,
+        edges.excess_ms,
+        edges.clip_ms,
     )
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
     weight = _edge_weights(measurement)
-    solved = cauchy_fit(design * weight[:, None], observed * weight, noise if np.isfinite(noise) else MIN_SCALE_MS)
+    rows, row_observed, row_weight = _flicker_rows(measurement, terms, timing, keys)
+    solved = cauchy_fit(
+        np.vstack([design * weight[:, None], rows * row_weight[:, None]]),
+        np.concatenate([observed * weight, row_observed * row_weight]),
+        noise if np.isfinite(noise) else MIN_SCALE_MS,
+    )
     if solved is None:
         return None
     parameters, weighted, scale = solved
+    weighted = weighted[: len(edges)]
     residual = weighted / weight
     stamp_residuals = [clock.residual_ms for clock in clocks]
-    log_likelihood = -cauchy_nll(weighted, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals)
+    coefficients = dict(zip(keys, parameters[: len(keys)].tolist()))
+    flicker_nll, n_flicker = _flicker_nll(measurement, terms, timing, coefficients)
+    log_likelihood = (
+        -cauchy_nll(weighted, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals) - flicker_nll
+    )
     n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
-    n_observations = len(residual) + sum(len(r) for r in stamp_residuals)
+    n_observations = len(residual) + sum(len(r) for r in stamp_residuals) + n_flicker
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
     return Candidate(
         measurement,
@@ -321,12 +373,59 @@ def _fit(
         timing,
         flipped,
         features,
-        dict(zip(keys, parameters[: len(keys)].tolist())),
+        coefficients,
         parameters[len(keys) :],
         residual,
         scale,
         float(bic),
     )
+
+
+def _base_row_time_ms(
+    measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], camera: int
+) -> float:
+    """The camera's time per row before the ``row_time`` effect, ms: its rolling flicker's
+    where the ``flicker`` effect is on, else frame period / height."""
+    if Term(FLICKER, camera) in terms:
+        return measurement.flicker_row_time_ms(camera)[0]
+    return timing[camera].period_ms / measurement.cameras[camera].height
+
+
+def _flicker_rows(
+    measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], keys: list[tuple[str, int]]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The flicker's equations for the fit: per camera that saw rolling flicker and whose
+    time per row the model fits (``row_time``), ``correction = flicker's time per row -
+    base``; design rows of shape (k, len(keys) + n_flashes), right-hand sides (k,) in ms per
+    row and weights (k,) that put them on the edges' scale (pooled edge noise over the
+    flicker's standard deviation)."""
+    noise = measurement.noise_ms if np.isfinite(measurement.noise_ms) else MIN_SCALE_MS
+    rows, observed, weights = [], [], []
+    for c in range(len(measurement.cameras)):
+        row_time, std = measurement.flicker_row_time_ms(c)
+        if np.isfinite(row_time) and (ROW_TIME, c) in keys:
+            row = np.zeros(len(keys) + measurement.n_flashes)
+            row[keys.index((ROW_TIME, c))] = 1.0
+            rows.append(row)
+            observed.append(row_time - _base_row_time_ms(measurement, terms, timing, c))
+            weights.append(noise / std)
+    width = len(keys) + measurement.n_flashes
+    return np.reshape(rows, (-1, width)), np.asarray(observed, dtype=np.float64), np.asarray(weights, dtype=np.float64)
+
+
+def _flicker_nll(
+    measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], coefficients: dict
+) -> tuple[float, int]:
+    """Gaussian negative log-likelihood of the flicker stream under a model, and its number
+    of observations: each camera's flicker time per row about the model's."""
+    nll, count = 0.0, 0
+    for c in range(len(measurement.cameras)):
+        row_time, std = measurement.flicker_row_time_ms(c)
+        if np.isfinite(row_time):
+            model = _base_row_time_ms(measurement, terms, timing, c) + coefficients.get((ROW_TIME, c), 0.0)
+            nll += 0.5 * ((model - row_time) / std) ** 2 + np.log(np.sqrt(2.0 * np.pi) * std)
+            count += 1
+    return nll, count
 
 
 def _edge_weights(measurement: Measurement) -> np.ndarray:

@@ -34,9 +34,12 @@ drift_rate      a curvature against time                    column ``-t**2`` (ot
                                                             half the drift's change per ms
 exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
                 and leading edges' residuals                exposure minus the reference's, ms
-saturation      the edges of bands clipped at white: the    column ``[saturated] * (+1 trailing,
-                leading ones early, the trailing ones late  -1 leading)``: how far a clipped
-                                                            band's edges move out, ms
+saturation      the edges of bands clipped at white: the    columns ``[saturated] * (+1 trailing,
+                leading ones early, the trailing ones late, -1 leading)`` and that times ``c``
+                the farther the deeper the clip (the        (``c``: the band's length over its
+                longer the band)                            clipped kind's median, ms): how far
+                                                            a clipped band's edges move out, ms,
+                                                            and the share of ``c`` they move by
 stamp_rate      from one frame on, edges run away at a      frame times at one rate throughout
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
@@ -45,7 +48,20 @@ pulse_shape     a band longer than the camera's others has  columns ``[trailing]
                 its trailing edge late and its leading      ``-[leading] * w`` (``w``: the band's
                 edge early, by shares of the excess ``w``   excess length, ms): the shares of it
                                                             on the trailing and the leading edge
+flicker         the camera's rolling mains flicker: its     the camera's time per row is the
+                period in rows off the one the model's      flicker's, ``(1000 / hz) /
+                time per row predicts                       period_rows``, instead of frame
+                                                            period / height
 ==============  ==========================================  ======================================
+
+Rolling mains flicker is a third stream of evidence besides the edges and the stamps: where
+a camera saw it (:attr:`~flashsync.diagnose.measure.Measurement.flicker`), its period in
+rows is ``(1000 / hz) / T_row``, so every model predicts it from the camera's time per row,
+and the model is scored on it (Gaussian, the flicker's standard deviation, 1 % at the
+least). ``flicker`` times the camera's rows by it, with no parameter; ``row_time`` fits a
+time per row to the edges and the flicker together. Where the flashes leave the time per
+row loose (cameras at one frame rate with a steady phase, few flashes: the design notes'
+trap) the flicker is what fixes it.
 
 ``dropped_frames``, ``frame_clock`` and ``stamp_rate`` switch on parts of the pipeline's frame clock
 (:func:`flashsync.frame_clock.fit_frame_clock`). An effect describes what it found from the
@@ -84,6 +100,7 @@ EXPOSURE = "exposure"
 STAMP_RATE = "stamp_rate"
 SATURATION = "saturation"
 PULSE_SHAPE = "pulse_shape"
+FLICKER = "flicker"
 
 #: Scopes: an effect applies to every camera, or to every camera but the reference (whose
 #: clock and exposure define the global ones).
@@ -108,7 +125,9 @@ class Features:
     saturated : bool array
         The edge's band clipped at white.
     excess_ms : float array
-        The edge's band's length minus its camera's median of its kind, ms.
+        The edge's band's length minus its camera's median of its kind where it is widened, ms.
+    clip_ms : float array
+        The same for every band clipped at white, ms (0 for the others).
     """
 
     camera: np.ndarray
@@ -117,6 +136,7 @@ class Features:
     trailing: np.ndarray
     saturated: np.ndarray
     excess_ms: np.ndarray
+    clip_ms: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -146,12 +166,20 @@ class CameraEstimate:
         Time per row under the model and frame period / height, ms.
     exposure_ms : float
     saturation_ms : float
-        How far the edges of a clipped band move out (leading earlier, trailing later), ms.
+        How far the edges of a clipped band of its kind's median length move out (leading
+        earlier, trailing later), ms.
+    saturation_share : float
+        And the share of a clipped band's length over that median that each edge moves out by.
     pulse_trailing, pulse_leading : float
         Shares of a band's excess length that its trailing edge is late and its leading edge
         early by.
     longest_excess_ms : float
         The largest excess length of the camera's bands, ms.
+    flicker_hz, flicker_depth, flicker_period_rows : float
+        The camera's rolling mains flicker: frequency (Hz), depth of its fundamental as the
+        rows saw it, period in readout rows; NaN where it saw none.
+    flicker_row_time_ms : float
+        The time per row that period tells, ms; NaN where none.
     effects : list of str
         The effects the model has on this camera.
     """
@@ -171,9 +199,14 @@ class CameraEstimate:
     nominal_row_time_ms: float
     exposure_ms: float
     saturation_ms: float
+    saturation_share: float
     pulse_trailing: float
     pulse_leading: float
     longest_excess_ms: float
+    flicker_hz: float
+    flicker_depth: float
+    flicker_period_rows: float
+    flicker_row_time_ms: float
     effects: list[str]
 
     @property
@@ -234,13 +267,24 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
 
 
 def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
-    return f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later)"
+    return (
+        f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later) "
+        f"and {camera.saturation_share:.2f} of a band's length over its clipped kind's median"
+    )
 
 
 def _describe_pulse_shape(camera: CameraEstimate, reference: CameraEstimate) -> str:
     return (
         f"bands up to {camera.longest_excess_ms:.3f} ms longer than the camera's others: trailing edges "
         f"{camera.pulse_trailing:.2f} of it late, leading edges {camera.pulse_leading:.2f} of it early"
+    )
+
+
+def _describe_flicker(camera: CameraEstimate, reference: CameraEstimate) -> str:
+    return (
+        f"{camera.flicker_hz:.0f} Hz, depth {100 * camera.flicker_depth:.1f} %, period "
+        f"{camera.flicker_period_rows:.2f} rows: time per row {camera.flicker_row_time_ms:.5f} ms "
+        f"(nominal {camera.nominal_row_time_ms:.5f})"
     )
 
 
@@ -341,10 +385,15 @@ CATALOGUE: dict[str, Effect] = {
             "saturation",
             "the edges of bands clipped at white off the others': the clipped plateau pulls the "
             "half-level crossing of the leading edge early and of the trailing edge late",
-            "adds how far a clipped band's edges move out (ms) on its edges, leading ones earlier",
+            "adds how far a clipped band's edges move out (ms, leading ones earlier) and the share "
+            "of its length over its clipped kind's median that they move out by (a deeper clip "
+            "makes a longer band)",
             EVERY_CAMERA,
             _describe_saturation,
-            column=lambda f: np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0),
+            column=lambda f: (
+                np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0)[:, None]
+                * np.column_stack([np.ones_like(f.clip_ms), f.clip_ms])
+            ),
         ),
         Effect(
             PULSE_SHAPE,
@@ -369,6 +418,16 @@ CATALOGUE: dict[str, Effect] = {
             EVERY_CAMERA,
             _describe_stamp_rate,
             implies=(DROPPED_FRAMES, FRAME_CLOCK),
+        ),
+        Effect(
+            FLICKER,
+            "rolling mains flicker",
+            "the camera's rolling mains flicker: its period in rows off the one the model's time "
+            "per row predicts ((1000 / hz) / time per row)",
+            "times the camera's rows by the flicker: time per row (1000 / hz) / period in rows "
+            "instead of frame period / height",
+            EVERY_CAMERA,
+            _describe_flicker,
         ),
     )
 }

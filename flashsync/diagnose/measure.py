@@ -23,8 +23,10 @@ import numpy as np
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Bands, Events, Flag
+from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
+from flashsync.pipeline import FLICKER_ROW_TIME_STD
 from flashsync.robust import mad_sigma
 from flashsync.timestamps import median_step_ms
 
@@ -70,6 +72,10 @@ class Edges:
         How much longer the edge's band is than the median of its camera's bands of its kind
         (:func:`_length_excess_ms`), ms, where that is more than :data:`WIDE_BAND_SIGMAS`
         robust standard deviations of the camera's band lengths (a widened band); else 0.
+    clip_ms : float array
+        For an edge of a band clipped at white, how much longer its band is than the median
+        of its camera's clipped bands of its kind (:func:`_length_excess_ms`), ms: the deeper
+        the clip, the longer the band and the farther out its edges; else 0.
     """
 
     camera: np.ndarray
@@ -80,6 +86,7 @@ class Edges:
     trailing: np.ndarray
     saturated: np.ndarray
     excess_ms: np.ndarray
+    clip_ms: np.ndarray
 
     def __len__(self) -> int:
         return len(self.camera)
@@ -108,6 +115,9 @@ class Measurement:
         bands of a kind.
     warnings : tuple of str
         Cameras left out and why.
+    flicker : tuple of (Flicker or None)
+        Per camera, the rolling mains flicker whose period in rows times its rows
+        (:func:`_mains_flicker`); None where it saw none to trust.
     """
 
     cameras: tuple[CameraDetection, ...]
@@ -116,6 +126,7 @@ class Measurement:
     noise_ms: float
     camera_noise_ms: np.ndarray
     warnings: tuple[str, ...] = ()
+    flicker: tuple[Flicker | None, ...] = ()
     _clocks: dict = field(default_factory=dict, repr=False, compare=False)
 
     def frame_clock(self, camera: int, count_gaps: bool, least_squares: bool) -> FrameClock:
@@ -130,6 +141,18 @@ class Measurement:
     @property
     def n_flashes(self) -> int:
         return int(self.edges.flash.max()) + 1
+
+    def flicker_row_time_ms(self, camera: int) -> tuple[float, float]:
+        """The time per row the camera's rolling mains flicker tells, ``(1000 / hz) /
+        period_rows``, and its standard deviation (the period's spread, relative
+        :data:`~flashsync.pipeline.FLICKER_ROW_TIME_STD` at the least: through H.264 the
+        period comes out up to 1.7 % off), ms; NaN, NaN where the camera saw no such flicker."""
+        flicker = self.flicker[camera] if self.flicker else None
+        if flicker is None:
+            return float("nan"), float("nan")
+        row_time = 1000.0 / flicker.hz / flicker.period_rows
+        spread = flicker.period_rows_std / flicker.period_rows
+        return row_time, row_time * max(spread if np.isfinite(spread) else 0.0, FLICKER_ROW_TIME_STD)
 
 
 def measure(detections: Sequence[CameraDetection], reference: str | None = None) -> Measurement:
@@ -182,7 +205,13 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
     pulses = [pulses[d.camera] for d in kept]
     excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
     deviations = [e[np.isfinite(e)] for e in excess]
-    edges = _edges(pulses, matching.flashes, cameras, [_widening_ms(e, d) for e, d in zip(excess, deviations)])
+    edges = _edges(
+        pulses,
+        matching.flashes,
+        cameras,
+        [_widening_ms(e, d) for e, d in zip(excess, deviations)],
+        [np.where(np.isfinite(e), e, 0.0) for e in excess],
+    )
     if len(edges) == 0:
         raise NotEnoughDataError(
             "no flash band with both edges inside the image is seen by two cameras; "
@@ -197,6 +226,20 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         pooled,
         np.where(np.isfinite(own), own, pooled),
         warnings,
+        _mains_flicker(cameras),
+    )
+
+
+def _mains_flicker(cameras: tuple[CameraDetection, ...]) -> tuple[Flicker | None, ...]:
+    """Per camera, its rolling flicker where it is the rig's mains (the frequency most
+    cameras identified: one hall, one mains) and a whole period fits in the image, else
+    None: a flicker the camera could not identify, or one longer than the image (40 % off
+    once), times nothing, as in :func:`flashsync.pipeline.synchronize`'s priors."""
+    known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
+    hall_hz = max(set(known), key=known.count) if known else None
+    return tuple(
+        c.flicker if c.flicker and hall_hz and c.flicker.hz == hall_hz and c.flicker.period_rows < c.height else None
+        for c in cameras
     )
 
 
@@ -254,10 +297,13 @@ def _edges(
     flash_of: dict[tuple[str, int], int],
     cameras: tuple[CameraDetection, ...],
     excess_ms: list[np.ndarray],
+    kind_excess_ms: list[np.ndarray],
 ) -> Edges:
-    """Both edges of every clean band that belongs to a flash of two or more kept cameras."""
-    camera, flash, event, frame, row, trailing, saturated, excess = [], [], [], [], [], [], [], []
-    for index, (named, mine, longer) in enumerate(zip(cameras, pulses, excess_ms)):
+    """Both edges of every clean band that belongs to a flash of two or more kept cameras;
+    ``excess_ms`` per camera and band its widening, ``kind_excess_ms`` its length over its
+    kind's median (0 where unknown)."""
+    camera, flash, event, frame, row, trailing, saturated, excess, clip = [], [], [], [], [], [], [], [], []
+    for index, (named, mine, longer, over) in enumerate(zip(cameras, pulses, excess_ms, kind_excess_ms)):
         clipped = mine.events.has_flag(Flag.SATURATED)
         for band in np.flatnonzero(mine.clean):
             if (named.camera, band) not in flash_of:
@@ -271,6 +317,7 @@ def _edges(
                 trailing.append(is_trailing)
                 saturated.append(bool(clipped[edge]))
                 excess.append(float(longer[band]))
+                clip.append(float(over[band]) if clipped[edge] else 0.0)
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -281,6 +328,7 @@ def _edges(
         np.asarray(trailing, dtype=bool)[keep],
         np.asarray(saturated, dtype=bool)[keep],
         np.asarray(excess, dtype=np.float64)[keep],
+        np.asarray(clip, dtype=np.float64)[keep],
     )
 
 

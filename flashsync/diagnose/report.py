@@ -17,7 +17,7 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
     lines = [
         f"{len(d.cameras)} cameras (reference {d.reference}), {d.n_flashes} flashes, "
         f"{d.n_edges} band edges; an effect is added where it lowers the BIC by more than "
-        f"{THRESHOLD:g} and shrinks the RMS of the edges or the stamps",
+        f"{THRESHOLD:g} and shrinks the RMS of the edges or the stamps or the flicker's gap",
         f"{'step':>4}  {'effect':<32} {'camera':<10} {'RMS before ms':>13} {'after ms':>9}  evidence",
         f"{0:>4}  {'plain model':<32} {'':<10} {'':>13} {d.initial_rms_ms:>9.4f}  "
         "shift per camera, one exposure, time per row = period / height, frame index x median step",
@@ -31,7 +31,7 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
     if not d.steps:
         lines.append(
             "      no effect of the catalogue, alone or paired on one camera, lowers the BIC by "
-            "more than the threshold and shrinks the RMS of the edges or the stamps"
+            "more than the threshold and shrinks the RMS of the edges or the stamps or the flicker's gap"
         )
     lines.append(d.verdict)
     lines.append(

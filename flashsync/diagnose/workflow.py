@@ -28,7 +28,7 @@ import numpy as np
 
 from flashsync.detect import CameraDetection
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
-from flashsync.diagnose.effects import CATALOGUE, OTHER_CAMERAS
+from flashsync.diagnose.effects import CATALOGUE, FLICKER, OTHER_CAMERAS
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import NotEnoughDataError
@@ -49,7 +49,7 @@ class Step:
     camera : str
         The camera (a pair on two cameras: both, joined by ``+``).
     delta_bic : float
-        How much the BIC fell, over edges and stamps (for a removal: how much the effect
+        How much the BIC fell, over edges, stamps and flicker (for a removal: how much the effect
         still lowered it).
     estimate : str
         What the effect's parameter came out as (the structure it explains).
@@ -57,6 +57,9 @@ class Step:
         RMS of the edge residuals before and after, ms.
     stamp_rms_before_ms, stamp_rms_after_ms : float
         RMS of the camera's stamps about its frame clock before and after, ms.
+    flicker_gap_before_ms, flicker_gap_after_ms : float
+        How far the time per row the camera's rolling flicker tells is off the model's, over
+        the image height, before and after, ms; NaN where it saw none.
     removed : bool
         The effect was taken out of the model.
     """
@@ -70,13 +73,20 @@ class Step:
     rms_after_ms: float
     stamp_rms_before_ms: float
     stamp_rms_after_ms: float
+    flicker_gap_before_ms: float = float("nan")
+    flicker_gap_after_ms: float = float("nan")
     removed: bool = False
 
     @property
     def evidence(self) -> str:
         if self.removed:
             return f"ΔBIC {self.delta_bic:.1f} <= {THRESHOLD:g}, no longer needed: {self.estimate}"
-        return f"ΔBIC {self.delta_bic:.1f} > {THRESHOLD:g}: {self.estimate}"
+        gap = ""
+        if np.isfinite(self.flicker_gap_before_ms) and self.flicker_gap_after_ms != self.flicker_gap_before_ms:
+            gap = (
+                f"; flicker's gap {self.flicker_gap_before_ms:.3f} -> {self.flicker_gap_after_ms:.3f} ms over the image"
+            )
+        return f"ΔBIC {self.delta_bic:.1f} > {THRESHOLD:g}: {self.estimate}{gap}"
 
 
 @dataclass(frozen=True)
@@ -217,7 +227,8 @@ def _best_addition(
 ) -> tuple[tuple[Term, ...], Candidate] | None:
     """The effect, else the pair of effects (on one camera or two), whose model has the
     lowest BIC among those that lower it by more than :data:`THRESHOLD` and shrink the gap:
-    the RMS of the edges, or of the stamps about their clocks."""
+    the RMS of the edges, or of the stamps about their clocks, or the flicker's time per row
+    off the model's."""
     singles = _candidates(measurement, current.terms | removed)
     pairs = [(a, b) for a, b in combinations(singles, 2) if b not in _with_implied(a) and a not in _with_implied(b)]
     for groups in ([(term,) for term in singles], pairs):
@@ -227,7 +238,11 @@ def _best_addition(
             if (
                 trial is not None
                 and current.bic - trial.bic > THRESHOLD
-                and (trial.rms_ms < current.rms_ms or sum(trial.stamp_rms_ms) < sum(current.stamp_rms_ms))
+                and (
+                    trial.rms_ms < current.rms_ms
+                    or sum(trial.stamp_rms_ms) < sum(current.stamp_rms_ms)
+                    or np.nansum(trial.flicker_gap_ms) < np.nansum(current.flicker_gap_ms)
+                )
                 and (best is None or trial.bic < best[1].bic)
             ):
                 best = (group, trial)
@@ -257,6 +272,8 @@ def _step(terms: tuple[Term, ...], without: Candidate, with_terms: Candidate, re
         after.rms_ms,
         before.stamp_rms_ms[camera],
         after.stamp_rms_ms[camera],
+        before.flicker_gap_ms[camera],
+        after.flicker_gap_ms[camera],
         removed,
     )
 
@@ -278,12 +295,15 @@ def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, .
 
 
 def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
-    """Every effect on every camera it applies to, not yet in the model, catalogue order."""
+    """Every effect on every camera it applies to, not yet in the model, catalogue order
+    (the flicker only where the camera saw rolling mains flicker)."""
     return [
         Term(effect.name, c)
         for effect in CATALOGUE.values()
         for c in range(len(measurement.cameras))
-        if Term(effect.name, c) not in terms and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)
+        if Term(effect.name, c) not in terms
+        and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)
+        and not (effect.name == FLICKER and np.isnan(measurement.flicker_row_time_ms(c)[0]))
     ]
 
 
@@ -361,6 +381,7 @@ def _camera_models(fit: Candidate) -> list[dict]:
             "row_time_ms": e.row_time_ms,
             "exposure_ms": e.exposure_ms,
             "saturation_ms": e.saturation_ms,
+            "saturation_share": e.saturation_share,
             "effects": e.effects,
         }
         for e in fit.estimates()

@@ -465,6 +465,45 @@ RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
 }
 
 
+#: x264 constant rate factor of :func:`second_world`'s cameras (the middle of the recipes' 18-30).
+SECOND_WORLD_CRF = 23
+
+
+def second_world(scenario: Scenario, seed: int = 0, pulses: tuple[str, ...] | None = None) -> Scenario:
+    """`scenario` re-dressed in the second world, all else kept (clocks, geometry, stamps,
+    exposures, hidden rows, white levels, the flashes' instants and strengths): each
+    camera's sensor as a recipe's (tone sRGB or gamma, black level U(4, 16) DN, noise
+    U(0.5, 2.5) DN, flash gain U(0.7, 1.3)) encoded by x264 at crf
+    :data:`SECOND_WORLD_CRF`, and every flash a xenon or an LED pulse, its shape drawn as in
+    `random_rig`: one kind per rig, or the kinds of `pulses` (of `PULSES`) in turn.
+
+    Examples
+    --------
+    >>> from flashsync.simulation import preset
+    >>> {c.tone for c in second_world(preset("tiny")).cameras} <= {"srgb", "gamma"}
+    True
+    """
+    rng = np.random.default_rng([seed, zlib.crc32(b"second world")])
+    cameras = tuple(
+        dataclasses.replace(
+            camera,
+            tone=str(rng.choice(["srgb", "gamma"])),
+            black_level=float(rng.uniform(4.0, 16.0)),
+            noise_std=float(rng.uniform(0.5, 2.5)),
+            flash_gain=float(rng.uniform(0.7, 1.3)),
+            crf=SECOND_WORLD_CRF,
+        )
+        for camera in scenario.cameras
+    )
+    kinds = pulses or (("xenon", "led")[rng.integers(2)],)
+    flashes = tuple(
+        pulse(kinds[i % len(kinds)], flash.world_ms, flash.strength, rng) for i, flash in enumerate(scenario.flashes)
+    )
+    dressed = dataclasses.replace(scenario, cameras=cameras, flashes=flashes)
+    check_scenario(dressed, f"{scenario.name} in the second world")
+    return dressed
+
+
 def recipe(name: str, seed: int = 0, duration_ms: float | None = None) -> Scenario:
     """The named rig of `RECIPES`, its random settings drawn from `seed`.
 
