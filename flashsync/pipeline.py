@@ -42,7 +42,7 @@ from flashsync.match import (
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.segments import SEGMENT_MS
-from flashsync.solve import CameraSolution, Durations, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.solve import CameraSolution, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: frame period / (NOMINAL_HIDDEN_ROWS x
@@ -569,12 +569,6 @@ class Matches:
     def __len__(self) -> int:
         return len(self.flash)
 
-    def observations(self) -> Observations:
-        """What the solve needs of them: saturated edges count as :data:`SATURATED_EDGE_SIGMA`
-        times noisier."""
-        sigma_factor = np.where(self.saturated, SATURATED_EDGE_SIGMA, 1.0)
-        return Observations(self.camera_index, self.flash, self.t_frame_ms, self.q, sigma_factor)
-
     def table(self, solution: Solution) -> pd.DataFrame:
         """The matched events with the solve's results (:data:`~flashsync.model.MATCHED_EVENT_COLUMNS`)."""
         n_events = len(self)
@@ -602,7 +596,7 @@ class _Attempt:
     alignments: dict[tuple[str, str], PairAlignment]
     warnings: list[str]
     matches: Matches
-    durations: Durations
+    observations: Observations
     solution: Solution
 
     @cached_property
@@ -622,25 +616,29 @@ class _Attempt:
 
     @cached_property
     def score(self) -> float:
-        """Log-likelihood of all the cameras' sync events under these readout directions:
-        inliers Gaussian with their camera's edge noise (the solve's group scale, times the
-        event's sigma factor), every other event (rejected, or matched to nothing, or of a
-        camera whose time per row is :attr:`implausible`) uniform over a frame period.
-        Counting inliers alone would prefer a wrong direction whose loose fit (a scale ten
-        times larger) lets one more event in; one scale for all cameras would let a camera
-        read the wrong way up win by dropping its misfits from the rig's scale (rig-5: its
-        other cameras' scale fell 30 %). A camera's scale counts as
-        :data:`SCORE_MIN_SIGMA_MS` at least: with few flashes a wrong reading can fit its
-        few events almost exactly (a scale of a few microseconds) and outscore the right
-        one, which matched more events."""
-        n = len(self.matches)
-        inlier = self.solution.inlier[:n] & ~np.isin(self.matches.camera, self.implausible)
-        edge = np.array([c.edge_sigma_ms for c in self.solution.cameras])[self.matches.camera_index]
-        sigma = np.maximum(np.nan_to_num(edge, nan=SCORE_MIN_SIGMA_MS), SCORE_MIN_SIGMA_MS)
-        sigma = (sigma * self.solution.sigma_factor[:n])[inlier]
-        n_outliers = sum(len(_sync_events(d)) for d in self.cameras.values()) - len(sigma)
+        """Log-likelihood of all the cameras' band edges under these readout directions (both
+        edges of every band are fitted, :func:`_observations`): inliers Gaussian with their
+        camera's noise for edges of their kind (the solve's group scale, times the edge's
+        sigma factor), every other edge (rejected, or matched to nothing, or of a camera
+        whose time per row is :attr:`implausible`) uniform over a frame period. Counting
+        inliers alone would prefer a wrong direction whose loose fit (a scale ten times
+        larger) lets one more event in; one scale for all cameras would let a camera read
+        the wrong way up win by dropping its misfits from the rig's scale (rig-5: its other
+        cameras' scale fell 30 %). A camera's scale counts as :data:`SCORE_MIN_SIGMA_MS` at
+        least: with few flashes a wrong reading can fit its few events almost exactly (a
+        scale of a few microseconds) and outscore the right one, which matched more events."""
+        camera = self.observations.camera
+        implausible = [self.connected.index(name) for name in self.implausible]
+        inlier = self.solution.inlier & ~np.isin(camera, implausible)
+        noise = np.array([[c.edge_sigma_ms, c.trailing_sigma_ms] for c in self.solution.cameras])
+        sigma = np.maximum(
+            np.nan_to_num(noise[camera, self.observations.trailing.astype(np.int64)], nan=SCORE_MIN_SIGMA_MS),
+            SCORE_MIN_SIGMA_MS,
+        )
+        sigma = (sigma * self.solution.sigma_factor)[inlier]
+        n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
         period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
-        return float(np.sum(-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - n_outliers * np.log(period))
+        return float(np.sum(-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_edges - len(sigma)) * np.log(period))
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}
@@ -656,7 +654,7 @@ class _Attempt:
                 s.row_time_ms,
                 d.flipped,
                 _with_edge_bias(s),
-                _exposure_ms(d, self.matches.event[self.matches.camera_index == index], s.alpha, s.row_time_ms),
+                float(s.exposure_ms) if s.exposure_ms > 0 else None,
                 str(d.video),
                 s.knots_ms,
                 s.warp_ms,
@@ -709,8 +707,8 @@ def _attempt(
             "same flashes, or record more flashes"
         )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
-    durations = _durations([cameras[name] for name in connected])
     chosen = [cameras[name] for name in connected]
+    observations = _observations(chosen, matches)
 
     rate_std = rate_std or {}
     wider = {
@@ -720,9 +718,7 @@ def _attempt(
 
     def solve(given: dict[str, float]) -> Solution:
         priors = Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
-        return solve_with_drift_model(
-            matches.observations(), len(connected), connected.index(reference), durations=durations, priors=priors
-        )
+        return solve_with_drift_model(observations, len(connected), connected.index(reference), priors=priors)
 
     given = {name: value for name, value in (row_times or {}).items() if name in connected}
     solution = solve(given)
@@ -735,7 +731,7 @@ def _attempt(
             )
         if contradicted:
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
-    return _Attempt(cameras, connected, matching.alignments, warnings, matches, durations, solution)
+    return _Attempt(cameras, connected, matching.alignments, warnings, matches, observations, solution)
 
 
 #: No edge is located better than this (ms): a residual scale below it is a fit with almost
@@ -840,40 +836,6 @@ def _with_edge_bias(camera: CameraSolution) -> np.ndarray:
 ROW_TIME_BIAS = 0.003
 
 
-def _exposure_ms(detection: CameraDetection, matched: np.ndarray, alpha: float, row_time_ms: float) -> float | None:
-    """Exposure time (ms, reference clock) from the camera's bands, or None without any (or
-    where the bands give no positive duration: a time per row the events could not tell).
-
-    The detector's exposure in rows (:attr:`~flashsync.detect.CameraDetection.exposure_rows`,
-    shared by the camera's bands within one frame) times the time per row where it has one.
-    Else the median band: a band's trailing edge comes one exposure after its leading edge
-    (the detector fits the pulse integrated over the exposure, :mod:`flashsync.ramp`).
-    Only bands matched to a flash (``matched``: event numbers) count there: a player or a
-    codec echo makes bands of any length. Bands within one frame are used where there are
-    any: a band split across frames also carries the frame gap and the hidden rows.
-    """
-    if detection.exposure_rows is not None:
-        exposure = detection.exposure_rows * row_time_ms
-        return exposure if exposure > 0 else None
-    events = detection.events
-    bands = events.bands()
-    first = bands.first_edges()
-    bands = bands.take(
-        bands.complete
-        & (events.band[first] == Band.PULSE)
-        & ~events.has_flag(Flag.SATURATED)[first]
-        & np.isin(bands.event, matched)
-    )
-    if not len(bands):
-        return None
-    q = _readout_rows(detection, events)
-    dt = alpha * (events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
-    duration = dt + (q[bands.trailing] - q[bands.leading]) * row_time_ms
-    whole = dt == 0
-    exposure = float(np.median(duration[whole] if whole.any() else duration))
-    return exposure if exposure > 0 else None
-
-
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
     """Readout rows of the camera's events."""
     return readout_rows(events.row, detection.height, detection.flipped)
@@ -885,21 +847,43 @@ def _sync_events(detection: CameraDetection) -> Events:
     return events.take(events.edge == Edge.LEADING)
 
 
-def _durations(detections: list[CameraDetection]) -> Durations:
-    """Pulse bands with both edges visible and unsaturated, camera indices in list order."""
-    camera, dt, dq = [], [], []
-    for index, detection in enumerate(detections):
-        events = detection.events
-        bands = events.bands()
-        first = bands.first_edges()
-        bands = bands.take(
-            bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.SATURATED)[first]
-        )
-        q = _readout_rows(detection, events)
-        camera += [index] * len(bands)
-        dt += list(events.t_frame_ms[bands.trailing] - events.t_frame_ms[bands.leading])
-        dq += list(q[bands.trailing] - q[bands.leading])
-    return Durations(np.asarray(camera, dtype=np.int64), np.asarray(dt), np.asarray(dq))
+def _trailing_edges(detection: CameraDetection) -> Events:
+    """The trailing edges that are timing evidence: of pulse bands with both edges visible
+    and unclipped (a band clipped at white is wider than the exposure)."""
+    events = detection.events
+    bands = events.bands()
+    first = bands.first_edges()
+    bands = bands.take(bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.SATURATED)[first])
+    return events.take(bands.trailing)
+
+
+def _observations(cameras: list[CameraDetection], matches: Matches) -> Observations:
+    """What the solve fits: the matched leading edges (in the order of ``matches``; saturated
+    ones :data:`SATURATED_EDGE_SIGMA` times noisier), then the trailing edges
+    (:func:`_trailing_edges`) of their bands, on the same flashes."""
+    camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
+    for index, detection in enumerate(cameras):
+        mine = matches.camera_index == index
+        flash_of = dict(zip(matches.event[mine].tolist(), matches.flash[mine].tolist()))
+        edges = _trailing_edges(detection)
+        edges = edges.take(np.isin(edges.event, list(flash_of)))
+        camera.append(np.full(len(edges), index, dtype=np.int64))
+        flash.append(np.array([flash_of[e] for e in edges.event.tolist()], dtype=np.int64))
+        t_frame.append(edges.t_frame_ms)
+        q.append(_readout_rows(detection, edges))
+    n_leading = len(matches)
+    trailing = np.arange(sum(len(c) for c in camera)) >= n_leading
+    sigma_factor = np.where(
+        np.concatenate([matches.saturated, np.zeros(int(trailing.sum()), dtype=bool)]), SATURATED_EDGE_SIGMA, 1.0
+    )
+    return Observations(
+        np.concatenate(camera),
+        np.concatenate(flash),
+        np.concatenate(t_frame),
+        np.concatenate(q),
+        sigma_factor,
+        trailing,
+    )
 
 
 def _matches(

@@ -6,16 +6,21 @@ of them, so cameras need not share flashes with the reference directly)::
 
     alpha_c * t + beta_c + q * T_row_c - tau_k = 0          (reference: alpha = 1, beta = 0)
 
-Information inside one camera enters too (docs/architecture.md, "a trap"): a band lasts the same
-time ``D_c`` in every frame of a camera, so a band split across two frames, whose rows
-skip the hidden rows, ties ``T_row_c`` to the frame period::
+A band's trailing edge is timing evidence too: its row's exposure *started* at the flash,
+one exposure ``E_c`` (ms, reference clock; one unknown per camera) after the leading edge's
+ended::
 
-    (t_trailing - t_leading) + (q_trailing - q_leading) * T_row_c - D_c = 0
+    alpha_c * t + beta_c + q * T_row_c - tau_k - E_c = 0
+
+So both edges of every band measure the flash, and information inside one camera enters
+(docs/architecture.md, "a trap"): a band split across two frames, whose rows skip the hidden
+rows, is as long as the camera's unbroken bands, which ties ``T_row_c`` to the frame period.
 
 All equations form one sparse system. Drift is solved as ``alpha - 1`` about the camera's
 mid time for conditioning. Iteratively reweighted least squares with Cauchy weights keeps a
 bad event from moving a camera; equations beyond ``reject_sigma`` robust sigmas are
-rejected and the final fit uses the rest. Priors (a datasheet ``T_row``, a weak nominal
+rejected and the final fit uses the rest, each weighed by the noise of its camera's edges
+of its kind (leading, trailing: a pulse's tail blurs the trailing ones). Priors (a datasheet ``T_row``, a weak nominal
 one, clock drift within a few tens of ppm) enter as pseudo-observations.
 """
 
@@ -39,7 +44,9 @@ class Observations:
 
     ``camera``, ``flash``: int arrays (n,); ``t_frame_ms``: frame timestamps (n,), ms;
     ``q``: readout rows (n,); ``sigma_factor``: each event's noise in units of a clean
-    edge's (n,; None: all 1), e.g. :data:`flashsync.detect.SATURATED_EDGE_SIGMA` for a clipped band.
+    edge's (n,; None: all 1), e.g. :data:`flashsync.detect.SATURATED_EDGE_SIGMA` for a clipped band;
+    ``trailing``: bool (n,), the edge is a band's trailing edge, one exposure after the
+    flash (None: all leading).
     """
 
     camera: np.ndarray
@@ -47,17 +54,7 @@ class Observations:
     t_frame_ms: np.ndarray
     q: np.ndarray
     sigma_factor: np.ndarray | None = None
-
-
-@dataclass(frozen=True)
-class Durations:
-    """Bands with both edges: one entry per band. ``camera`` (n,); ``dt_frame_ms``: frame
-    time of the trailing edge minus that of the leading edge (0 unless split), ms; ``dq``:
-    trailing minus leading readout row."""
-
-    camera: np.ndarray
-    dt_frame_ms: np.ndarray
-    dq: np.ndarray
+    trailing: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -76,8 +73,10 @@ class Priors:
 class CameraSolution:
     """One camera's solved clock: ``alpha``, ``beta_ms``, ``row_time_ms``, the warp of a
     clock whose rate changes (values ``warp_ms`` (k,) at the interior of ``knots_ms``
-    (k + 2,), both empty for an affine clock), the covariance (3 + k, 3 + k) in that order
-    and ``edge_sigma_ms``, the noise of its sync events (ms, a clean edge's; NaN without)."""
+    (k + 2,), both empty for an affine clock), the covariance (3 + k, 3 + k) in that order,
+    ``edge_sigma_ms`` and ``trailing_sigma_ms``, the noise of its leading and trailing edges
+    (ms, a clean edge's; NaN without), and its exposure (ms, reference clock) with its
+    standard deviation (NaN without trailing edges)."""
 
     alpha: float
     beta_ms: float
@@ -86,6 +85,9 @@ class CameraSolution:
     knots_ms: np.ndarray
     warp_ms: np.ndarray
     edge_sigma_ms: float = float("nan")
+    trailing_sigma_ms: float = float("nan")
+    exposure_ms: float = float("nan")
+    exposure_std_ms: float = float("nan")
 
 
 @dataclass(frozen=True)
@@ -93,7 +95,7 @@ class Solution:
     """Result of :func:`solve_clocks`.
 
     ``residual_ms``, ``inlier`` and ``sigma_factor`` (the equations' noise in units of a
-    clean edge's) have one entry per event then one per duration; ``flash_ms`` the global
+    clean edge's) have one entry per event; ``flash_ms`` the global
     time of each flash index (NaN for an index no inlier event names); ``sigma_ms`` is the
     robust scale of the residuals over their sigma factors.
     """
@@ -111,7 +113,6 @@ def solve_clocks(
     events: Observations,
     n_cameras: int,
     reference: int = 0,
-    durations: Durations | None = None,
     priors: Priors | None = None,
     drift_knots: dict[int, np.ndarray] | None = None,
     event_sigma_ms: float = 0.05,
@@ -123,11 +124,9 @@ def solve_clocks(
 
     Parameters
     ----------
-    events : matched sync events.
+    events : matched band edges, leading and trailing.
     n_cameras : number of cameras (indices 0..n_cameras-1).
     reference : index of the reference camera.
-    durations : bands with both edges; used for cameras where they can tell ``T_row``
-        (at least two different frame gaps, i.e. split and unsplit bands).
     priors : pseudo-observations, weighed against events of ``event_sigma_ms`` noise;
         None: the events alone.
     drift_knots : per camera index (not the reference), knots in camera time (ms, shape
@@ -141,9 +140,7 @@ def solve_clocks(
     """
     with threadpool_limits(1, user_api="blas"):  # small dense factorisations: threads only cost
         return _solve(
-            _System(
-                events, n_cameras, reference, durations, priors or Priors({}, None), drift_knots or {}, event_sigma_ms
-            ),
+            _System(events, n_cameras, reference, priors or Priors({}, None), drift_knots or {}, event_sigma_ms),
             n_cameras,
             reject_sigma,
             cauchy_k,
@@ -164,28 +161,39 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
     sigma = mad_sigma(residual, MIN_SCALE_MS)
     inlier = np.abs(residual) <= reject_sigma * sigma
-    n_events = len(system.flash_index)
-    idle = np.zeros(system.n_equations)
-    idle[n_events:] = IDLE_WEIGHT * _all_rejected(system.group[n_events:], inlier[n_events:])
+    idle = IDLE_WEIGHT * (system.trailing & _all_rejected(system.group, inlier))
     weights = inlier + idle
     x = system.solve(weights)
     scale = np.full(system.n_equations, np.nan)
+    leading = ~system.trailing
     for _ in range(GROUP_SCALE_ROUNDS):
         scale = system.group_scales(x, weights, inlier)
-        scale[:n_events] = np.maximum(scale[:n_events], _edge_floor_ms(system, x, n_cameras)[system.group[:n_events]])
-        scale[n_events:] = np.maximum(scale[n_events:], _duration_floor_ms(system, scale, n_cameras))
+        floor = _edge_floor_ms(system, x, n_cameras)
+        scale[leading] = np.maximum(scale[leading], floor[system.camera[leading]])
+        # trailing edges no less noisy than their camera's leading ones: a camera of a few bands fits
+        # them almost exactly (rig-20: two bands, a scale of 3 microseconds) and its time per row,
+        # which its split bands tie to the frame period, would claim 0.02 % while 1.6 % off
+        floor = np.fmax(floor, _camera_values(system.camera[leading], scale[leading], n_cameras))
+        scale[~leading] = np.maximum(scale[~leading], floor[system.camera[~leading]])
         weights = inlier * (system.event_sigma_ms / scale) ** 2 + idle
         x = system.solve(weights)
-    edge_sigma = np.full(n_cameras, np.nan)
-    edge_sigma[system.group[:n_events]] = scale[:n_events]
     residual = system.residuals(x)
     sigma = mad_sigma(residual[inlier], MIN_SCALE_MS)
     covariance = system.covariance(weights, system.event_sigma_ms**2)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
-    seen = np.bincount(system.flash_index[inlier[: len(system.flash_index)]], minlength=len(system.flash_ids)) > 0
+    seen = np.bincount(system.flash_index[inlier], minlength=len(system.flash_ids)) > 0
     flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
+    edge_sigma = _camera_values(system.camera[leading], scale[leading], n_cameras)
+    trailing_sigma = _camera_values(system.camera[~leading], scale[~leading], n_cameras)
     return Solution(
-        [replace(system.camera_solution(x, covariance, c), edge_sigma_ms=edge_sigma[c]) for c in range(n_cameras)],
+        [
+            replace(
+                system.camera_solution(x, covariance, c),
+                edge_sigma_ms=edge_sigma[c],
+                trailing_sigma_ms=trailing_sigma[c],
+            )
+            for c in range(n_cameras)
+        ],
         flash_ms,
         residual * system.sigma_factor,
         inlier,
@@ -195,25 +203,21 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     )
 
 
+def _camera_values(camera: np.ndarray, values: np.ndarray, n_cameras: int) -> np.ndarray:
+    """Per camera (shape (n_cameras,)), the value its equations share (``values``, one per
+    equation of ``camera``); NaN for a camera with none."""
+    out = np.full(n_cameras, np.nan)
+    out[camera] = values
+    return out
+
+
 def _all_rejected(group: np.ndarray, inlier: np.ndarray) -> np.ndarray:
     """The equations of groups (shape (n,) each) none of whose equations is an inlier. A
-    camera's band durations all rejected would leave its duration unknown undetermined and
-    fail the whole solve (rig-5 read the right way up: one camera's durations off by
+    camera's trailing edges all rejected would leave its exposure unknown undetermined and
+    fail the whole solve (rig-5 read the right way up: one camera's band lengths off by
     0.2-7 ms); they stay in the fit with :data:`IDLE_WEIGHT`, not as inliers."""
     kept = np.bincount(group, inlier, minlength=group.max() + 1 if group.size else 0) > 0
     return ~kept[group]
-
-
-def _duration_floor_ms(system: _System, scale: np.ndarray, n_cameras: int) -> np.ndarray:
-    """Each band duration's least noise, ms (shape (n_durations,)): two edges', each as noisy
-    as its camera's sync events (``scale``: each equation's noise, ms). A camera of a few
-    bands fits its durations almost exactly (rig-20: two bands, a scale of 3 microseconds)
-    and its time per row, which the split bands tie to the frame period, would claim a
-    precision of 0.02 % while 1.6 % off."""
-    n_events = len(system.flash_index)
-    edge = np.zeros(n_cameras)
-    edge[system.group[:n_events]] = scale[:n_events]
-    return np.sqrt(2.0) * edge[system.group[n_events:] - n_cameras]
 
 
 def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray:
@@ -230,8 +234,8 @@ IDLE_WEIGHT = 1e-6
 #: The least noise of a band edge, rows: clean edges are located to 0.10-0.16 rows RMS
 #: (`benchmarks/bench_edges.py`, README "Edge precision").
 EDGE_FLOOR_ROWS = 0.15
-#: Rounds of reweighting by the groups' noise scales (each camera's events, each camera's
-#: band durations): their edges differ (exposure, pulse, size, codec), by a factor of ten.
+#: Rounds of reweighting by the groups' noise scales (each camera's leading edges, each
+#: camera's trailing edges): their edges differ (exposure, pulse, size, codec), by a factor of ten.
 GROUP_SCALE_ROUNDS = 3
 #: The pooled scale counts as this many equations of each group's own (a group of a few
 #: events does not get a scale from them alone).
@@ -251,12 +255,13 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
 
     Each camera's clock is tried affine, then with its rate changing piecewise-linearly
     over 2, 4, 8 and 16 equal segments of its recording (cameras with fewer than
-    :data:`MIN_EVENTS_PER_SEGMENT` events per segment stay at what they support). A richer
+    :data:`MIN_EVENTS_PER_SEGMENT` leading edges per segment stay at what they support). A richer
     model is kept only if it lowers the Bayesian information criterion (on the inlier
     equations) by :data:`MIN_BIC_GAIN`: strong evidence.
     """
-    camera = np.asarray(events.camera)
-    t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
+    leading = np.ones(len(events.camera), dtype=bool) if events.trailing is None else ~np.asarray(events.trailing)
+    camera = np.asarray(events.camera)[leading]
+    t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)[leading]
     best = solve_clocks(events, n_cameras, reference, **options)
     best_bic = _bic(best)
     knots = {}
@@ -288,10 +293,9 @@ class _System:
     """The sparse design of :func:`solve_clocks`, columns scaled to unit norm.
 
     Columns: per camera (drift about mid time, shift at mid time, row time), the
-    reference's first two left out; the warp values of cameras with drift knots; one band
-    duration per camera that has informative durations; one global time per flash. Rows:
-    events, durations, then priors; each row divided by its sigma factor (priors carry
-    their own weight).
+    reference's first two left out; the warp values of cameras with drift knots; one
+    exposure per camera that has trailing edges; one global time per flash. Rows: events,
+    then priors; each event row divided by its sigma factor (priors carry their own weight).
     """
 
     def __init__(
@@ -299,7 +303,6 @@ class _System:
         events: Observations,
         n_cameras: int,
         reference: int,
-        durations: Durations | None,
         priors: Priors,
         drift_knots: dict[int, np.ndarray],
         event_sigma_ms: float,
@@ -307,10 +310,16 @@ class _System:
         camera = np.asarray(events.camera, dtype=np.int64)
         t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)
         q = np.asarray(events.q, dtype=np.float64)
+        n_events = len(camera)
+        trailing = np.zeros(n_events, dtype=bool) if events.trailing is None else np.asarray(events.trailing, bool)
+        self.camera, self.trailing = camera, trailing
         self.flash_ids, flash = np.unique(np.asarray(events.flash, dtype=np.int64), return_inverse=True)
         self.flash_index = flash
         self.mid_ms = np.array(
-            [np.median(t_frame[camera == c]) if np.any(camera == c) else 0.0 for c in range(n_cameras)]
+            [
+                np.median(t_frame[(camera == c) & ~trailing]) if np.any((camera == c) & ~trailing) else 0.0
+                for c in range(n_cameras)
+            ]
         )
         self.param_columns = np.full((n_cameras, 3), -1)
         n_columns = 0
@@ -324,36 +333,29 @@ class _System:
         for c, knots in self.knots.items():
             self.warp_columns[c] = n_columns + np.arange(len(knots) - 2)
             n_columns += len(knots) - 2
-        durations = _informative(durations, n_cameras)
-        duration_cameras = np.unique(durations.camera)
-        duration_column = {c: n_columns + i for i, c in enumerate(duration_cameras)}
-        n_columns += len(duration_cameras)
+        self.exposure_columns = np.full(n_cameras, -1)
+        for c in np.unique(camera[trailing]):
+            self.exposure_columns[c] = n_columns
+            n_columns += 1
         self.n_camera_columns = n_columns
         self.flash_columns = n_columns + np.arange(len(self.flash_ids))
         self.n_unknowns = n_columns + len(self.flash_ids)
 
         triplets = _Triplets()
-        n_events = len(camera)
         rows = np.arange(n_events)
         for k, value in enumerate([t_frame - self.mid_ms[camera], np.ones(n_events), q]):
             triplets.add(rows, self.param_columns[camera, k], value)
         triplets.add(rows, self.flash_columns[flash], -np.ones(n_events))
+        triplets.add(rows[trailing], self.exposure_columns[camera[trailing]], -np.ones(int(trailing.sum())))
         for c, knots in self.knots.items():
             mine = np.flatnonzero(camera == c)
             hats = hat_basis(knots, t_frame[mine])
             for j, column in enumerate(self.warp_columns[c]):
                 triplets.add(mine, np.full(len(mine), column), hats[:, j])
         rhs = [-t_frame]
-
-        rows = n_events + np.arange(len(durations.camera))
-        triplets.add(rows, self.param_columns[durations.camera, 2], durations.dq)
-        triplets.add(
-            rows, np.array([duration_column[c] for c in durations.camera], dtype=np.int64), -np.ones(len(rows))
-        )
-        rhs.append(-durations.dt_frame_ms)
-        self.n_equations = n_events + len(rows)
-        #: noise group of each equation: camera c's events are c, its durations n_cameras + c
-        self.group = np.concatenate([camera, n_cameras + np.asarray(durations.camera, dtype=np.int64)])
+        self.n_equations = n_events
+        #: noise group of each equation: camera c's leading edges are c, its trailing ones n_cameras + c
+        self.group = camera + n_cameras * trailing
         self.event_sigma_ms = event_sigma_ms
 
         prior_rows = []
@@ -368,7 +370,7 @@ class _System:
         rhs.append(np.array([weight * mean for _, weight, mean in prior_rows]))
         self.n_priors = len(prior_rows)
         factor = np.ones(n_events) if events.sigma_factor is None else np.asarray(events.sigma_factor, np.float64)
-        self.sigma_factor = np.concatenate([factor, np.ones(self.n_equations - n_events)])
+        self.sigma_factor = factor
         row_weight = np.concatenate([1.0 / self.sigma_factor, np.ones(self.n_priors)])
         self.rhs = np.concatenate(rhs) * row_weight
         matrix = sparse.diags(row_weight) @ triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
@@ -441,21 +443,21 @@ class _System:
         """Each equation's noise (ms, a clean edge's; shape (n_equations,)): the RMS of its
         group's inlier residuals over the degrees of freedom they leave (their count less
         their leverages, i.e. the trace of the inverse normal matrix times the group's own),
-        shrunk towards the pooled scale of its kind (sync events, band durations: trailing
-        edges are noisier) with :data:`POOLED_EQUATIONS`; at least
+        shrunk towards the pooled scale of its kind (leading, trailing edges: a pulse's tail
+        blurs the trailing ones) with :data:`POOLED_EQUATIONS`; at least
         :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
         leverages = self._leverages(weights)
         if leverages is None:
             return np.full(self.n_equations, self.event_sigma_ms)
-        groups = self.group.max() + 1
+        n_cameras = len(self.param_columns)
+        groups = 2 * n_cameras
         leverage = np.bincount(self.group, leverages, minlength=groups)
         squares = np.where(inlier, residual**2, 0.0)
         sums = np.bincount(self.group, squares, minlength=groups)
         dof = np.maximum(np.bincount(self.group, inlier.astype(np.float64), minlength=groups) - leverage, 0.0)
-        n_cameras = len(self.param_columns)
         pooled = np.zeros(groups)
-        for kind in (slice(0, n_cameras), slice(n_cameras, groups)):  # events, then durations
+        for kind in (slice(0, n_cameras), slice(n_cameras, groups)):  # leading, then trailing edges
             pooled[kind] = sums[kind].sum() / max(dof[kind].sum(), 1.0)
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
         return np.maximum(scale[self.group], MIN_SCALE_MS)
@@ -493,7 +495,7 @@ class _System:
         return w[: self.n_equations] * (own - 2 * f * cross + f**2 * flash_term[k])
 
     def residuals(self, x: np.ndarray) -> np.ndarray:
-        """Residuals of the events and durations over their sigma factors, ms (what a clean
+        """Residuals of the events over their sigma factors, ms (what a clean
         edge off by as much would be)."""
         return ((self.matrix @ (x / self.column_scale)) - self.rhs)[: self.n_equations]
 
@@ -507,7 +509,7 @@ class _System:
 
     def camera_solution(self, x: np.ndarray, covariance: np.ndarray, c: int) -> CameraSolution:
         """Camera ``c``'s (alpha, beta, T_row, warp) and their covariance, from the solved
-        (drift, shift at mid time, T_row, warp)."""
+        (drift, shift at mid time, T_row, warp); and its exposure with its standard deviation."""
         warp = self.warp_columns.get(c, np.zeros(0, dtype=np.int64))
         columns = np.concatenate([self.param_columns[c], warp])
         used = columns >= 0
@@ -517,6 +519,7 @@ class _System:
         jacobian = np.eye(len(columns))
         jacobian[1, 0] = -self.mid_ms[c]
         drift, shift, row_time = values[:3]
+        exposure = self.exposure_columns[c]
         return CameraSolution(
             1.0 + drift,
             shift - drift * self.mid_ms[c],
@@ -524,6 +527,8 @@ class _System:
             jacobian @ local @ jacobian.T,
             self.knots.get(c, np.zeros(0)),
             values[3:],
+            exposure_ms=float(x[exposure]) if exposure >= 0 else float("nan"),
+            exposure_std_ms=float(np.sqrt(max(covariance[exposure, exposure], 0.0))) if exposure >= 0 else float("nan"),
         )
 
 
@@ -533,30 +538,6 @@ def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
     if info != 0:
         raise linalg.LinAlgError("the Cholesky factor is singular")
     return np.triu(inverse) + np.triu(inverse, 1).T if not factor[1] else np.tril(inverse) + np.tril(inverse, -1).T
-
-
-def _informative(durations: Durations | None, n_cameras: int) -> Durations:
-    """The durations of cameras with :data:`MIN_BANDS_PER_GAP` bands at least within one
-    frame and as many split across frames (else the duration and ``T_row`` cannot be told
-    apart)."""
-    if durations is None or len(durations.camera) == 0:
-        return Durations(np.empty(0, np.int64), np.empty(0), np.empty(0))
-    camera = np.asarray(durations.camera, dtype=np.int64)
-    dt = np.asarray(durations.dt_frame_ms, dtype=np.float64)
-    keep = np.zeros(len(camera), dtype=bool)
-    for c in range(n_cameras):
-        mine = camera == c
-        split = dt[mine] > dt[mine].min() if mine.any() else np.zeros(0, dtype=bool)
-        if min(int(split.sum()), int((~split).sum())) >= MIN_BANDS_PER_GAP:
-            keep |= mine
-    return Durations(camera[keep], dt[keep], np.asarray(durations.dq, dtype=np.float64)[keep])
-
-
-#: Fewest bands within one frame, and fewest split across frames, for a camera's band
-#: durations to tell its time per row. One of each is enough now that a duration is at
-#: least as noisy as two edges (rig-20's single split band no longer claims 0.02 %); two
-#: left a 16 ms camera's time per row to the events alone, 0.67 % off (tests/test_exposure.py).
-MIN_BANDS_PER_GAP = 1
 
 
 class _Triplets:

@@ -50,6 +50,46 @@ def test_noise_gives_honest_uncertainty():
         assert abs(solved.row_time_ms - truth[2]) < 5 * std[2]
 
 
+def test_trailing_edges_give_each_cameras_exposure_and_their_own_noise():
+    """Trailing edges one exposure (ms, one unknown per camera) after the flash: the solve
+    finds each camera's exposure within its stated std, weighs trailing edges by their own
+    noise (three times the leading edges' here, a pulse's tail) and, as second measurements
+    of every flash, puts each camera's clock closer to the truth than the leading edges alone."""
+    rng = np.random.default_rng(21)
+    (camera, flash, t_frame, q), tau = observations(rng, n_flashes=40)
+    row_time = np.array([c[2] for c in CAMERAS])
+    exposure = np.array([4.0, 1.5, 8.0])
+    lead_ms, trail_ms = 0.02, 0.06
+    lead_q = q + rng.normal(0, lead_ms, len(q)) / row_time[camera]
+    trail_q = q + (exposure[camera] + rng.normal(0, trail_ms, len(q))) / row_time[camera]
+    leading_only = solve_clocks(Observations(camera, flash, t_frame, lead_q), n_cameras=3)
+    trailing = np.arange(2 * len(q)) >= len(q)
+    both = solve_clocks(
+        Observations(
+            np.tile(camera, 2),
+            np.tile(flash, 2),
+            np.tile(t_frame, 2),
+            np.concatenate([lead_q, trail_q]),
+            None,
+            trailing,
+        ),
+        n_cameras=3,
+    )
+    for c, solved in enumerate(both.cameras):
+        assert abs(solved.exposure_ms - exposure[c]) < 4 * solved.exposure_std_ms < 0.05
+        assert 0.6 * lead_ms < solved.edge_sigma_ms < 1.5 * lead_ms
+        assert 0.6 * trail_ms < solved.trailing_sigma_ms < 1.5 * trail_ms
+    assert np.isnan(leading_only.cameras[1].exposure_ms)
+
+    def error(solution):  # each camera's time of its first row over the recording against the truth
+        return [
+            np.hypot(s.beta_ms - truth[1] + (s.alpha - truth[0]) * 60_000, 0.0)
+            for s, truth in zip(solution.cameras[1:], CAMERAS[1:])
+        ]
+
+    assert np.mean(error(both)) < np.mean(error(leading_only))
+
+
 def test_one_wrong_event_does_not_move_a_camera():
     (camera, flash, t_frame, q), _ = observations(np.random.default_rng(3))
     clean = solve_clocks(Observations(camera, flash, t_frame, q), n_cameras=3)
@@ -183,17 +223,20 @@ def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_
 
 def test_the_flash_eliminated_leverages_and_covariance_are_the_dense_normal_equations():
     """Group scales' leverages and the covariance come from the Schur complement of the flash
-    block; on a small system (warp knots, durations, priors, weights with rejections) they are
-    those of the dense normal matrix's inverse."""
-    from flashsync.solve import Durations, Priors, _System
+    block; on a small system (warp knots, trailing edges with their exposures, priors, weights
+    with rejections) they are those of the dense normal matrix's inverse."""
+    from flashsync.solve import Priors, _System
 
     (camera, flash, t_frame, q), _ = observations(np.random.default_rng(11), n_flashes=30)
     knots = {2: np.linspace(t_frame[camera == 2].min(), t_frame[camera == 2].max(), 4)}
-    durations = Durations(
-        np.array([1, 1, 1, 2, 2]), np.array([0.0, 33.3, 0.0, 20.0, 0.0]), np.array([50.0, -950, 52, -930, 49])
-    )
+    band = np.flatnonzero(camera > 0)[:5]  # trailing edges of five bands of cameras 1 and 2, one split
+    split = np.array([0.0, 33.3, 0.0, 0.0, 0.0])
+    trailing = np.arange(len(camera) + len(band)) >= len(camera)
+    camera, flash = np.concatenate([camera, camera[band]]), np.concatenate([flash, flash[band]])
+    t_frame = np.concatenate([t_frame, t_frame[band] + split])
+    q = np.concatenate([q, q[band] + np.where(split > 0, -950.0, 50.0)])
     priors = Priors({0: (0.037, 0.003)}, drift_std=50e-6)
-    system = _System(Observations(camera, flash, t_frame, q), 3, 0, durations, priors, knots, 0.05)
+    system = _System(Observations(camera, flash, t_frame, q, trailing=trailing), 3, 0, priors, knots, 0.05)
     rng = np.random.default_rng(12)
     weights = rng.uniform(0.5, 2.0, system.n_equations) * (rng.uniform(size=system.n_equations) > 0.05)
     weights[np.flatnonzero(system.flash_index == 0)[1:]] = 0.0  # a flash left with one equation
