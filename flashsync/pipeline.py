@@ -218,9 +218,15 @@ def synchronize(
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
     spreads, readout_warnings = _readout_doubts(best, rivals, search_reference)
+    best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
+    if search_reference != reference:
+        more_spreads, more_warnings = _doubts_on_reference(
+            best, cameras, undecided, set(spreads), reference, attempt_on(reference)
+        )
+        spreads.update(more_spreads)
+        readout_warnings += more_warnings
     for name, spread in spreads.items():
         frame_std[name] = np.hypot(frame_std[name], spread)
-    best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
     report.alignments = best.alignments
     report.warnings = (
         best.warnings + clock_warnings + readout_warnings + _few_flashes(best, reference) + _row_time_doubts(best)
@@ -360,29 +366,34 @@ def _best_readout(
                 tried[key] = None
         return tried[key]
 
+    def evidence(result: _Attempt) -> float:
+        """The score less :data:`UPSIDE_DOWN_PRIOR` per camera read the other way than detected."""
+        turned = sum(result.cameras[n].flipped != cameras[n].flipped for n in undecided)
+        return result.score - UPSIDE_DOWN_PRIOR * turned
+
     best = tries(cameras, set())
     every = 2 ** len(undecided) <= EVERY_READING
     if every:
         readings = product((False, True), repeat=len(undecided))
         results = [r for flips in readings if (r := tries(cameras, set(compress(undecided, flips)))) is not None]
-        top = max(results, key=lambda r: r.score, default=None)
-        if best is None or (top is not None and top.score >= best.score + DECIDED_LOG_LIKELIHOOD):
+        top = max(results, key=evidence, default=None)
+        if best is None or (top is not None and evidence(top) >= evidence(best) + DECIDED_LOG_LIKELIHOOD):
             best = top
     while not every:
         start = best.cameras if best is not None else cameras
         singles = {name: tries(start, {name}) for name in undecided}
         steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
-            best = max(steps, key=lambda r: r.score)
+            best = max(steps, key=evidence)
             continue
-        better = [r for r in steps if best is not None and r.score >= best.score + DECIDED_LOG_LIKELIHOOD]
+        better = [r for r in steps if best is not None and evidence(r) >= evidence(best) + DECIDED_LOG_LIKELIHOOD]
         if not better and best is not None:
             groups = [{name, *_losing(best, r, undecided)} for name, r in singles.items() if r is not None]
             steps = [tries(start, group) for group in groups if len(group) > 1]
-            better = [r for r in steps if r is not None and r.score >= best.score + DECIDED_LOG_LIKELIHOOD]
+            better = [r for r in steps if r is not None and evidence(r) >= evidence(best) + DECIDED_LOG_LIKELIHOOD]
         if not better:
             break
-        best = max(better, key=lambda r: r.score)
+        best = max(better, key=evidence)
     if best is None:
         raise failure
     rivals = {}
@@ -433,6 +444,15 @@ def _search_reference(
     counts = {name: int(np.sum(start.matches.camera == name)) for name in start.connected}
     return max(sorted(counts), key=lambda name: counts[name])
 
+
+#: Log prior odds of a camera mounted upright against upside down: a reading costs this
+#: much of its log-likelihood per camera read the other way than detected (top-down, the
+#: usual mounting). Where every camera runs at one frame rate, the mirror of a reading
+#: (every camera flipped) fits about as well (the identifiability trap): on the four 25 fps
+#: cameras of tests/test_accuracy.py it led the upright reading by 3.2 in one render and by
+#: more than the margin in another, and read all four upside down; on random rig 18 (three
+#: 59.94 fps cameras) one wrong flip led by 5.3.
+UPSIDE_DOWN_PRIOR = 2.0
 
 #: Rigs with at most this many readings of their undecided cameras (two ways up each) have
 #: every reading solved, not an ascent: three cameras of rig-14 (cam6 upright, cam8 and cam10
@@ -510,10 +530,36 @@ def _readout_doubts(
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
-            f"{DECIDED_LOG_LIKELIHOOD:g}); its times may be off by up to {float(spreads[name].max()):.2f} ms "
+            f"{DECIDED_LOG_LIKELIHOOD:g}, and {UPSIDE_DOWN_PRIOR:g} more per camera read upside down); its times "
+            f"may be off by up to {float(spreads[name].max()):.2f} ms "
             "(in its sigma); give its mounting (--flipped) if known"
         )
     return spreads, warnings
+
+
+def _doubts_on_reference(
+    final: _Attempt,
+    cameras: dict[str, CameraDetection],
+    undecided: list[str],
+    warned: set[str],
+    reference: str,
+    attempt: Callable[[dict[str, CameraDetection]], _Attempt],
+) -> tuple[dict[str, np.ndarray], list[str]]:
+    """:func:`_readout_doubts` of the readings chosen on the search reference, checked on the
+    ``reference`` given (``final`` and ``attempt`` solve on it) against the detected reading of
+    the cameras it flipped (not already ``warned`` about). The score depends a little on the
+    reference, and a flip that leads by the margin on one may trail on the other: rig-18 of
+    the random rigs (three 59.94 fps cameras) flipped cam1 with a lead of 5.3 on cam2 that
+    trailed by 5.3 on cam1, 15 ms off, with a σ of 0.7 ms and no warning."""
+    flipped = [n for n in undecided if n not in warned and final.cameras[n].flipped != cameras[n].flipped]
+    if not flipped:
+        return {}, []
+    detected = {n: d.read_flipped(cameras[n].flipped) if n in flipped else d for n, d in final.cameras.items()}
+    try:
+        rival = attempt(detected)
+    except FlashsyncError:
+        return {}, []
+    return _readout_doubts(final, dict.fromkeys(flipped, rival), reference)
 
 
 def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[str, str, SyncModel | str]]:
