@@ -416,9 +416,9 @@ def _mirror(flips: tuple[bool, ...], cameras: dict[str, CameraDetection]) -> boo
     all run at one frame rate (periods within 0.1 %): that mirror of the detected reading
     fits about as well (with one frame rate every camera's rows reversed are taken up by
     the shifts and the times per row), so the flashes cannot choose it and the usual
-    mounting stands. On the four 25 fps cameras of
-    tests/test_accuracy.py it led the upright reading by 3.2 in one render and by 20.7 in
-    another (the upright reading's log-likelihood 85.6 there, 68.0 here)."""
+    mounting stands. On the four 25 fps cameras of tests/test_accuracy.py it led the
+    upright reading by 3.2 in one render and by 20.7 in another (the upright reading's
+    log-likelihood 85.6 there, 68.0 here)."""
     if len(flips) < len(cameras) or not all(flips):
         return False
     periods = [float(np.median(np.diff(d.frame_times_ms))) for d in cameras.values()]
@@ -467,11 +467,8 @@ def _search_reference(
 
 #: Log prior odds of a camera mounted upright against upside down: a reading costs this
 #: much of its log-likelihood per camera read the other way than detected (top-down, the
-#: usual mounting). Where every camera runs at one frame rate, the mirror of a reading
-#: (every camera flipped) fits about as well (the identifiability trap): on the four 25 fps
-#: cameras of tests/test_accuracy.py it led the upright reading by 3.2 in one render and by
-#: more than the margin in another, and read all four upside down; on random rig 18 (three
-#: 59.94 fps cameras) one wrong flip led by 5.3.
+#: usual mounting). On random rig 18 (three 59.94 fps cameras) one wrong flip led the
+#: upright reading by 5.3 on the search reference.
 UPSIDE_DOWN_PRIOR = 2.0
 
 #: Rigs with at most this many readings of their undecided cameras (two ways up each) have
