@@ -56,9 +56,14 @@ def test_every_camera_is_read_the_right_way_up_or_warned(solved):
 
 
 def test_sigma_is_calibrated(solved):
-    """Error / sigma of every non-reference camera against the reference (both sigmas) has
+    """Error / sigma of the non-reference cameras against the reference (both sigmas) has
     an RMS of at most 2, pairwise too, and over the rigs 90 % of the probes lie within 2
-    sigma (the issue's measure; one camera alone may have fewer). Sigma is not too wide
+    sigma (the issue's measure; one camera alone may have fewer). Per camera: none over 3
+    and at most one over 2. A camera's RMS is one draw too, and an exact sigma puts it over
+    2 for about 2 % of cameras (chi-square of two degrees of freedom over two above 4:
+    e^-4), over 3 for 0.01 %: with "every camera at most 2" one suite run in ten or so
+    would fail with a perfect sigma (a fresh-clone run did: rig-20's camera at 2.07, every
+    other camera of the three rigs under 0.7). Sigma is not too wide
     either: the RMS of error / sigma over all cameras' probes is 0.5 at least. Per camera
     it may be less: a camera's error is one draw of its few parameters' errors (shift, time
     per row), and a calibrated sigma gives an RMS under 0.5 to a fifth of the cameras
@@ -67,10 +72,11 @@ def test_sigma_is_calibrated(solved):
     used to tie the reference's time per row 1.6 % off at a claimed 0.02 % (error / sigma 2.5)."""
     tables = pd.concat([table.assign(rig=scenario.name) for scenario, _, _, table in solved])
     others = tables[~tables["reference"]]
-    assert (others["z_rms"] <= 2.0).all(), others
+    for z in (others["z_rms"], tables["pair_z_rms"]):
+        assert (z <= 3.0).all() and (z > 2.0).sum() <= 1, tables
     assert 0.4 <= np.sqrt(np.mean(others["z_rms"] ** 2)) <= 2.0, others
     assert others["within_2sigma"].mean() >= 0.9, others
-    assert (tables["pair_z_rms"] <= 2.0).all() and tables["pair_within_2sigma"].mean() >= 0.9, tables
+    assert tables["pair_within_2sigma"].mean() >= 0.9, tables
     assert 0.4 <= np.sqrt(np.mean(tables["pair_z_rms"] ** 2)), tables
 
 
