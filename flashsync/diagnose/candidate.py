@@ -342,6 +342,7 @@ def _fit(
         edges.saturated,
         edges.excess_ms,
         edges.clip_ms,
+        edges.split,
     )
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms

@@ -128,6 +128,8 @@ class Features:
         The edge's band's length minus its camera's median of its kind where it is widened, ms.
     clip_ms : float array
         The same for every band clipped at white, ms (0 for the others).
+    split : bool array
+        The edge's band is split across two frames.
     """
 
     camera: np.ndarray
@@ -137,6 +139,7 @@ class Features:
     saturated: np.ndarray
     excess_ms: np.ndarray
     clip_ms: np.ndarray
+    split: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -266,6 +269,19 @@ def _describe_frame_clock(camera: CameraEstimate, reference: CameraEstimate) -> 
     )
 
 
+def _saturation_columns(f: Features) -> np.ndarray:
+    """The saturation effect's columns, shape (n_edges, 4): how far a clipped band's edges of
+    its kind's median length move out (leading earlier, trailing later), ms, on a band in one
+    frame; the share of ``clip_ms`` they move out by; the same offset on a band split across
+    two frames (its kind's median is another band's, so its offset is another); the share of
+    ``clip_ms`` a trailing edge moves beyond the leading one's (a pulse's tail: the deeper
+    the clip, the farther down the tail the trailing edge's half level falls)."""
+    out = np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0)
+    return np.column_stack(
+        [out * ~f.split, out * f.clip_ms, out * f.split, np.where(f.saturated & f.trailing, f.clip_ms, 0.0)]
+    )
+
+
 def _describe_saturation(camera: CameraEstimate, reference: CameraEstimate) -> str:
     return (
         f"edges of clipped bands {camera.saturation_ms:+.3f} ms out (leading earlier, trailing later) "
@@ -390,10 +406,7 @@ CATALOGUE: dict[str, Effect] = {
             "makes a longer band)",
             EVERY_CAMERA,
             _describe_saturation,
-            column=lambda f: (
-                np.where(f.saturated, np.where(f.trailing, 1.0, -1.0), 0.0)[:, None]
-                * np.column_stack([np.ones_like(f.clip_ms), f.clip_ms])
-            ),
+            column=lambda f: _saturation_columns(f),
         ),
         Effect(
             PULSE_SHAPE,

@@ -76,6 +76,8 @@ class Edges:
         For an edge of a band clipped at white, how much longer its band is than the median
         of its camera's clipped bands of its kind (:func:`_length_excess_ms`), ms: the deeper
         the clip, the longer the band and the farther out its edges; else 0.
+    split : bool array
+        The edge's band is split across two frames (its kind for :attr:`clip_ms`).
     """
 
     camera: np.ndarray
@@ -87,6 +89,7 @@ class Edges:
     saturated: np.ndarray
     excess_ms: np.ndarray
     clip_ms: np.ndarray
+    split: np.ndarray
 
     def __len__(self) -> int:
         return len(self.camera)
@@ -217,8 +220,11 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
             "no flash band with both edges inside the image is seen by two cameras; "
             "record more flashes, away from the top and bottom of the image"
         )
-    pooled = _edge_noise_ms(np.concatenate(deviations))
-    own = np.array([_edge_noise_ms(d) for d in deviations])
+    unclipped = [
+        e[np.isfinite(e) & ~mine.events.has_flag(Flag.SATURATED)[mine.bands.leading]] for e, mine in zip(excess, pulses)
+    ]
+    pooled = _edge_noise_ms(np.concatenate(unclipped))
+    own = np.array([_edge_noise_ms(d) for d in unclipped])
     return Measurement(
         cameras,
         [c.camera for c in cameras].index(reference),
@@ -302,7 +308,7 @@ def _edges(
     """Both edges of every clean band that belongs to a flash of two or more kept cameras;
     ``excess_ms`` per camera and band its widening, ``kind_excess_ms`` its length over its
     kind's median (0 where unknown)."""
-    camera, flash, event, frame, row, trailing, saturated, excess, clip = [], [], [], [], [], [], [], [], []
+    camera, flash, event, frame, row, trailing, saturated, excess, clip, split = ([] for _ in range(10))
     for index, (named, mine, longer, over) in enumerate(zip(cameras, pulses, excess_ms, kind_excess_ms)):
         clipped = mine.events.has_flag(Flag.SATURATED)
         for band in np.flatnonzero(mine.clean):
@@ -318,6 +324,9 @@ def _edges(
                 saturated.append(bool(clipped[edge]))
                 excess.append(float(longer[band]))
                 clip.append(float(over[band]) if clipped[edge] else 0.0)
+                split.append(
+                    bool(mine.events.frame[mine.bands.trailing[band]] != mine.events.frame[mine.bands.leading[band]])
+                )
     keep, flash = shared_flashes(camera, flash)
     return Edges(
         np.asarray(camera, dtype=np.int64)[keep],
@@ -329,6 +338,7 @@ def _edges(
         np.asarray(saturated, dtype=bool)[keep],
         np.asarray(excess, dtype=np.float64)[keep],
         np.asarray(clip, dtype=np.float64)[keep],
+        np.asarray(split, dtype=bool)[keep],
     )
 
 
