@@ -35,11 +35,15 @@ drift_rate      a curvature against time                    column ``-t**2`` (ot
 exposure        a constant gap between a camera's trailing  column ``[trailing]`` (others):
                 and leading edges' residuals                exposure minus the reference's, ms
 saturation      the edges of bands clipped at white: the    columns ``[saturated] * (+1 trailing,
-                leading ones early, the trailing ones late, -1 leading)`` and that times ``c``
-                the farther the deeper the clip (the        (``c``: the band's length over its
-                longer the band)                            clipped kind's median, ms): how far
-                                                            a clipped band's edges move out, ms,
-                                                            and the share of ``c`` they move by
+                leading ones early, the trailing ones late, -1 leading)`` on bands in one frame
+                the farther the deeper the clip (the        and on bands split across two, that
+                longer the band), the trailing ones the     times ``c`` (``c``: the band's length
+                farther under a pulse's tail                over its clipped kind's median, ms)
+                                                            and ``[saturated and trailing] * c``:
+                                                            how far a clipped band's edges move
+                                                            out per kind, ms, the share of ``c``
+                                                            they move by, and the share the
+                                                            trailing edge moves farther
 stamp_rate      from one frame on, edges run away at a      frame times at one rate throughout
                 steady rate: the stamps changed rate, the   (one of the stamps' segments', the
                 sensor did not                              best fit), with dropped_frames and
