@@ -460,8 +460,11 @@ def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loo
     closes), the flashes carry it to the reference, and the model ``diagnose -o`` writes is
     within 0.1 ms RMS of the truth (0.026 in the first world, 0.074 in the second, where the
     tone curve leaves 1.8 % of the flicker's 5 % and the period comes out 0.26 % long), where
-    the same workflow blind to the flicker is 2.1 ms off: the flashes cannot see the hidden
-    rows."""
+    the same workflow blind to the flicker is 2.1 ms off in the first world: the flashes
+    cannot see the hidden rows. In the second world the blind workflow may take the time per
+    row of both cameras as a pair from the three flashes (ΔBIC 10.9 against the threshold of
+    10 once the edge noise comes from unclipped bands alone) and land 0.09 ms off: there it
+    must name that pair to be right."""
     cameras, truth, world = flickering
     d = diagnose(cameras)
     step = d.steps[0]
@@ -472,7 +475,10 @@ def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loo
     blind = diagnose([replace(camera, flicker=None) for camera in cameras])
     assert "flicker" not in {s.effect for s in blind.steps}, format_diagnosis(blind)
     error = pooled_error_ms(d.sync_model, truth)
-    assert error < 0.1 and pooled_error_ms(blind.sync_model, truth) > 5.0 * error, format_diagnosis(d)
+    assert error < 0.1, format_diagnosis(d)
+    blind_error = pooled_error_ms(blind.sync_model, truth)
+    found_rows = any(s.effect == "row_time+row_time" for s in blind.steps)
+    assert blind_error > 5.0 * error or (world == SECOND and found_rows and blind_error < 0.1), format_diagnosis(blind)
     save_model(d.sync_model, tmp_path / "sync.json")
     written = load_model(tmp_path / "sync.json").camera("cam1")
     flicker = cameras[1].flicker
