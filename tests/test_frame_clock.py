@@ -39,6 +39,37 @@ def test_jitter_of_a_few_ms_is_estimated_and_the_steady_clock_behind_it_used(jit
     assert np.all(clock.std_ms == 0)  # no wander followed: the error is affine, the solve absorbs it
 
 
+def test_stamps_jittered_a_sixth_of_a_59_94_fps_period_keep_every_frame_on_its_slot():
+    """3 ms of jitter at 59.94 fps (16.7 ms): now and then a stamp lands past half a period
+    and rounds onto its neighbour's slot; the one farther from that slot moves (moving the
+    later one always, every slot after it came out one late in 13 of 30 draws of 360 frames).
+    Ten draws, every frame on its own slot, one steady segment."""
+    period = 1000.0 / 59.94
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        truth = np.arange(360) * period
+        clock = fit_frame_clock(truth + 3.0 * rng.standard_normal(len(truth)))
+        assert np.array_equal(clock.slots, np.arange(len(truth))), seed
+        assert clock.steady and len(clock.segments) == 1, seed
+
+
+def test_stamps_5_percent_fast_within_jitter_are_a_rate_change_not_a_white_clock():
+    """From frame 150 on the stamps of a 59.94 fps camera run 5 % fast, with 1.2 ms of jitter:
+    they stay within half a period of the old clock for 20 frames at a time, a sawtooth whose
+    running mean and steps look white (every draw was one white clock with a drop every 20
+    frames). Its RMS is three times the scatter the second differences show, so the stamps
+    split, and the one-rate alternative is the truth (9 of 10 draws; 0 before)."""
+    period = 1000.0 / 59.94
+    truth = np.arange(360) * period
+    stamps = np.where(np.arange(360) < 150, truth, truth[150] + (truth - truth[150]) * 1.05)
+    right = 0
+    for seed in range(10):
+        clock = fit_frame_clock(stamps + 1.2 * np.random.default_rng(seed).standard_normal(len(truth)))
+        errors = [times - truth - np.mean(times - truth) for _, times in clock.one_rate_alternatives()]
+        right += any(np.sqrt(np.mean(e**2)) < 0.5 for e in errors)
+    assert right >= 9
+
+
 def test_a_rate_change_splits_the_clock_and_offers_the_steady_sensor():
     """From frame 451 on the stamps advance 1.5x as fast (a muxer fault): two segments, and
     the one-rate alternative is the truth."""
