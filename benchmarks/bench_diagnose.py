@@ -7,7 +7,7 @@ Renders each rig once (kept in --folder for the next run, each in its own sub-fo
 ``flashsync sync`` writes) and ``diagnose`` (whose final model ``flashsync diagnose -o``
 writes), and prints per rig and model the error against truth over every frame and every
 8th row (RMS over all cameras, then each camera's RMS, ms), the effects diagnose named and
-its verdict. Rigs:
+its verdict (a command that fails: its error). Rigs:
 
 =====================  ===================================================================
 ``jittered-stamps``    the second world's recipe, its 25 fps camera and the 30 fps one whose
@@ -130,9 +130,12 @@ def main() -> None:
             render_scenario(scenario, folder)
         truth = load_ground_truth(folder / "truth.json")
         videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
-        model, _ = synchronize(detect_videos(videos))
         print(f"{name}:")
-        print(f"  sync         {errors(model, truth)}")
+        try:
+            model, _ = synchronize(detect_videos(videos))
+            print(f"  sync         {errors(model, truth)}")
+        except FlashsyncError as error:
+            print(f"  sync         {error}")
         try:
             d = diagnose(detect_videos(videos, estimate_readout=False))
         except FlashsyncError as error:

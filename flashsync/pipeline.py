@@ -219,7 +219,7 @@ def synchronize(
     else:
         start, search_reference = cameras, reference
     attempt = attempt_on(search_reference)
-    best, rivals = _best_readout(start, undecided, attempt)
+    best, rivals = _first_readout(start, report, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
@@ -310,8 +310,12 @@ def _best_frame_times(
         change = f"{video}: its frame stamps change rate at frame {frame} ({before:.3f} -> {after:.3f} ms per frame)"
         choices = [(STAMPS_OWN_RATES, clock.times_ms), *clock.one_rate_alternatives()]
         # on the wrong frame times too few flashes may match to tie the camera at all
-        tried = [(best.score, choices[0][0], clock.times_ms, best)] if name in best.connected else []
-        for description, times in choices[1:]:
+        tried = []
+        for description, times in choices:
+            if np.array_equal(times, best.cameras[name].frame_times_ms):  # the times it was solved on
+                if name in best.connected:
+                    tried.append((best.score, description, times, best))
+                continue
             trial = dict(best.cameras)
             trial[name] = trial[name].retimed(times)
             try:
@@ -336,6 +340,32 @@ def _best_frame_times(
         else:
             warnings.append(f"{change}; the flashes fit {tried[0][1]}")
     return best, frame_std, warnings
+
+
+def _first_readout(
+    cameras: dict[str, CameraDetection],
+    report: SyncReport,
+    undecided: list[str],
+    attempt: Callable[[dict[str, CameraDetection]], _Attempt],
+) -> tuple[_Attempt, dict[str, _Attempt]]:
+    """:func:`_best_readout` on the stamps' own rates; where nothing solves on them and a
+    camera's stamps change rate, on each of its one-rate frame times in turn, the first that
+    solves (on stamps that slow to half their rate the flashes after the change are too far
+    off to match: none was tied). Raises the own rates' failure where none solves; the frame
+    times are chosen after (:func:`_best_frame_times`)."""
+    try:
+        return _best_readout(cameras, undecided, attempt)
+    except FlashsyncError as error:
+        failure = error
+    for name, clock in report.frame_clocks.items():
+        for _, times in clock.one_rate_alternatives():
+            trial = dict(cameras)
+            trial[name] = trial[name].retimed(times)
+            try:
+                return _best_readout(trial, undecided, attempt)
+            except FlashsyncError:
+                continue
+    raise failure
 
 
 def _best_readout(
