@@ -507,8 +507,10 @@ def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loo
     tone curve leaves 1.8 % of the flicker's 5 % and the period comes out 0.26 % long), where
     the same workflow blind to the flicker is 2.1 ms off: the flashes cannot see the hidden
     rows. ``sync`` (the same flicker, :func:`~flashsync.pipeline.mains_flicker`, is its
-    prior) is within 0.1 ms of the truth and of ``diagnose -o``: 0.021 and 0.071 ms, and
-    0.022 and 0.068 without the prior (both edges of every band pin its time per row here)."""
+    prior) is within 0.1 ms of the truth: 0.021 and 0.071 ms, and 0.022 and 0.068 without
+    the prior (both edges of every band pin its time per row here); and of ``diagnose -o``
+    in the first world; in the second both are up to 0.1 off, in opposite directions (0.109
+    ms apart on cam1 in one suite run), so within the sum of their bounds."""
     cameras, truth, world = flickering
     d = diagnose(cameras)
     step = d.steps[0]
@@ -522,7 +524,7 @@ def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loo
     assert error < 0.1 and pooled_error_ms(blind.sync_model, truth) > 5.0 * error, format_diagnosis(d)
     model, _ = synchronize(cameras)  # the same flicker (pipeline.mains_flicker) as its prior
     assert pooled_error_ms(model, truth) < 0.1
-    assert max(gap_ms(model, d.sync_model, truth).values()) < 0.1
+    assert max(gap_ms(model, d.sync_model, truth).values()) < (0.1 if world == FIRST else 0.2)
     save_model(d.sync_model, tmp_path / "sync.json")
     written = load_model(tmp_path / "sync.json").camera("cam1")
     flicker = cameras[1].flicker
