@@ -7,7 +7,7 @@ Renders each rig once (kept in --folder for the next run, each in its own sub-fo
 ``flashsync sync`` writes) and ``diagnose`` (whose final model ``flashsync diagnose -o``
 writes), and prints per rig and model the error against truth over every frame and every
 8th row (RMS over all cameras, then each camera's RMS, ms), the effects diagnose named and
-its verdict. Rigs:
+its verdict (a command that fails: its error). Rigs:
 
 =====================  ===================================================================
 ``jittered-stamps``    the second world's recipe, its 25 fps camera and the 30 fps one whose
@@ -19,6 +19,10 @@ its verdict. Rigs:
 ``short-exposure``     320x180, 6 s: 25 fps with an 8 ms exposure and 30 fps with 1 ms,
                        linear sensors, the default (xenon-like) flash
 ``rolling-flicker``    the same under 5 % 100 Hz mains flicker
+``jittered-60fps``     320x180, 6 s: 25 fps and 59.94 fps whose stamps are jittered 3 ms (a
+                       sixth of its period)
+``fast-stamps-60fps``  the same, its stamps 5 % fast from frame 150 on, jittered 1.2 ms
+``slowing-stamps``     the same, its stamps half as fast from frame 150 on, not jittered
 =====================  ===================================================================
 """
 
@@ -32,6 +36,7 @@ import numpy as np
 
 from flashsync import detect_videos, synchronize
 from flashsync.diagnose import diagnose
+from flashsync.errors import FlashsyncError
 from flashsync.evaluate import sync_errors
 from flashsync.io import load_ground_truth
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
@@ -74,6 +79,21 @@ def short_exposure(flicker_depth: float = 0.0) -> Scenario:
     )
 
 
+def sixty_fps(jitter_ms: float, **fault) -> Scenario:
+    rng = np.random.default_rng(2)
+    instants = 300.0 + np.cumsum(120.0 + rng.exponential(150.0, 100))
+    flashes = tuple(
+        FlashSpec(round(float(t), 3), round(float(rng.uniform(0.35, 0.7)), 3)) for t in instants[instants < 5700.0]
+    )
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
+        CameraSpec(
+            "cam1", 320, 180, NTSC_60, exposure_ms=4.0, start_ms=3000.0, offset_ms=-2830.0, jitter_ms=jitter_ms, **fault
+        ),
+    )
+    return Scenario("sixty", cameras, duration_ms=6000.0, flashes=flashes, n_players=0, seed=2)
+
+
 def two_of(name: str) -> Scenario:
     scenario = recipe(name, seed=0, duration_ms=6000.0)
     return dataclasses.replace(scenario, cameras=scenario.cameras[:2])
@@ -85,6 +105,9 @@ RIGS = {
     "drifting": drifting,
     "short-exposure": short_exposure,
     "rolling-flicker": lambda: short_exposure(0.05),
+    "jittered-60fps": lambda: sixty_fps(3.0),
+    "fast-stamps-60fps": lambda: sixty_fps(1.2, stamp_rate_changes=((150, 1.05),)),
+    "slowing-stamps": lambda: sixty_fps(0.0, stamp_rate_changes=((150, 0.5),)),
 }
 
 
@@ -107,10 +130,17 @@ def main() -> None:
             render_scenario(scenario, folder)
         truth = load_ground_truth(folder / "truth.json")
         videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
-        model, _ = synchronize(detect_videos(videos))
-        d = diagnose(detect_videos(videos, estimate_readout=False))
         print(f"{name}:")
-        print(f"  sync         {errors(model, truth)}")
+        try:
+            model, _ = synchronize(detect_videos(videos))
+            print(f"  sync         {errors(model, truth)}")
+        except FlashsyncError as error:
+            print(f"  sync         {error}")
+        try:
+            d = diagnose(detect_videos(videos, estimate_readout=False))
+        except FlashsyncError as error:
+            print(f"  diagnose     {error}")
+            continue
         print(f"  diagnose -o  {errors(d.sync_model, truth)}")
         steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
         print(f"  steps        {', '.join(steps)}")

@@ -342,7 +342,7 @@ class _Fitter:
             wander, counts = _significant_wander(residual, keep, self.floor)
         noise = (residual - wander)[keep]
         jitter = float(np.sqrt(np.mean(noise**2))) if noise.size else 0.0
-        white = _white(noise, self.floor) and keep.mean() >= 1.0 - MAX_OUTLIERS
+        white = _white(noise, self.floor, _white_scatter(y)) and keep.mean() >= 1.0 - MAX_OUTLIERS
         x_mean = float(np.mean(x[keep])) if keep.any() else 0.0
         sxx = float(np.sum((x[keep] - x_mean) ** 2))
         line = jitter**2 * (1.0 / max(int(keep.sum()), 1) + ((x - x_mean) ** 2 / sxx if sxx > 0 else 0.0))
@@ -415,8 +415,8 @@ def _merge(fitter: _Fitter, fits: list[_SegmentFit]) -> list[_SegmentFit]:
 def _refine(fitter: _Fitter, fits: list[_SegmentFit]) -> list[_SegmentFit]:
     """Each boundary between segments moved to where the stamps leave one clock for the
     other: within :data:`MIN_SEGMENT_FRAMES` of where the split put it, the frame that
-    minimises the distance of the stamps before it to the earlier clock's ladder and of
-    those from it on to the later one's."""
+    minimises the misfit (:func:`_ladder_misfit`) of the stamps before it to the earlier
+    clock and of those from it on to the later one's."""
     fits = list(fits)
     for k in range(1, len(fits)):
         a, b = fits[k - 1], fits[k]
@@ -424,31 +424,40 @@ def _refine(fitter: _Fitter, fits: list[_SegmentFit]) -> list[_SegmentFit]:
         hi = min(b.start + MIN_SEGMENT_FRAMES, b.stop - MIN_SEGMENT_FRAMES // 2)
         if hi <= lo:
             continue
-        stamps = fitter.stamps[lo:hi]
-        before = np.concatenate([[0.0], np.cumsum(_ladder_distance(stamps, a.intercept, a.slope))])
-        after = np.concatenate([np.cumsum(_ladder_distance(stamps, b.intercept, b.slope)[::-1])[::-1], [0.0]])
+        stamps = fitter.stamps[lo - 1 : hi]
+        before = np.concatenate([[0.0], np.cumsum(_ladder_misfit(stamps, a.intercept, a.slope))])
+        after = np.concatenate([np.cumsum(_ladder_misfit(stamps, b.intercept, b.slope)[::-1])[::-1], [0.0]])
         boundary = lo + int(np.argmin(before + after))
         if boundary != b.start:
             fits[k - 1], fits[k] = fitter.fit(a.start, boundary), fitter.fit(boundary, b.stop)
     return fits
 
 
-def _ladder_distance(stamps: np.ndarray, offset: float, period: float) -> np.ndarray:
-    """Distance (ms) of each stamp to the nearest time ``offset + k * period``."""
-    phase = (stamps - offset) / period
-    return np.abs(phase - np.round(phase)) * period
+def _ladder_misfit(stamps: np.ndarray, offset: float, period: float) -> np.ndarray:
+    """How badly each stamp but the first follows the clock ``offset + k * period``, ms, shape
+    (n - 1,): its distance to the nearest tick, plus half a period where it skips a tick
+    after the stamp before it. A clock at half the rate of the stamps' ticks every one of
+    them too; the skips tell that they follow the slower one (stamps slowing to half their
+    rate)."""
+    phase = (stamps[1:] - offset) / period
+    skips = np.round(np.diff(stamps) / period) >= 2
+    return np.abs(phase - np.round(phase)) * period + 0.5 * period * skips
 
 
 def _joined_slots(stamps: np.ndarray, fits: list[_SegmentFit]) -> np.ndarray:
     """The recording's slots: each segment's own, its first following the last one's by
-    its first step over its period (at least one slot)."""
-    slots, last = [], -1
+    its first step over its period or the last one's, whichever counts fewer slots (at
+    least one): the step into a rate change may be at either rate, and where the stamps
+    slow to half their rate it is two periods of the new one, a slot the sensor never
+    skipped."""
+    slots, last, previous = [], -1, fits[0]
     for fit in fits:
         first = 0
         if fit.start > 0:
-            first = last + max(int(round((stamps[fit.start] - stamps[fit.start - 1]) / fit.slope)), 1)
+            step = stamps[fit.start] - stamps[fit.start - 1]
+            first = last + max(min(int(round(step / fit.slope)), int(round(step / previous.slope))), 1)
         slots.append(first + fit.slots)
-        last = int(slots[-1][-1])
+        last, previous = int(slots[-1][-1]), fit
     return np.concatenate(slots).astype(np.int64)
 
 
@@ -502,7 +511,7 @@ def _rounded_slots(stamps: np.ndarray, offset: float, period: float) -> np.ndarr
                 continue
             late = stamps[i + 1] - (offset + period * slots[i + 1])
             early = stamps[i] - (offset + period * slots[i])
-            if late >= early:
+            if abs(late) >= abs(early):
                 slots[i + 1] = slots[i] + 1
             else:
                 slots[i] = slots[i + 1] - 1
@@ -539,12 +548,18 @@ def _running_sum(values: np.ndarray, window: int) -> np.ndarray:
     return total[high] - total[low]
 
 
-def _white(noise: np.ndarray, floor: float) -> bool:
+def _white(noise: np.ndarray, floor: float, scatter: float) -> bool:
     """Whether ``noise`` (ms) looks white: no slow structure (its running mean over
     :data:`WHITE_FRAMES` has an RMS within :data:`WHITE_RATIO` of its RMS over
     sqrt(WHITE_FRAMES)) and no fast one (its steps vary at most WHITE_RATIO x 3/4 as
     much as white noise's, twice its variance: stamps that alternate between two ladders
-    vary twice as much); always below ``floor`` (its RMS, ms) or for too few values."""
+    vary twice as much) and no sawtooth (its RMS within WHITE_RATIO of ``scatter``, the
+    white scatter of the stamps' second differences, :func:`_white_scatter`, ms: stamps 5 %
+    faster than a 59.94 fps clock with 1.2 ms of jitter stay within half a period of it for
+    20 frames at a time, a sawtooth of 3.8 ms RMS whose running mean and steps look white;
+    stamps 1.5x as fast as a 29.97 fps clock with 3 ms of jitter alternate between its ticks
+    and their middles, 7.4 ms RMS, where the stamps scatter by 3); always below ``floor``
+    (its RMS, ms) or for too few values."""
     if len(noise) < 3 * WHITE_FRAMES:
         return True
     variance = float(np.mean(noise**2))
@@ -553,7 +568,8 @@ def _white(noise: np.ndarray, floor: float) -> bool:
     means = np.convolve(noise, np.full(WHITE_FRAMES, 1.0 / WHITE_FRAMES), mode="valid")
     slow = float(np.mean(means**2)) * WHITE_FRAMES <= WHITE_RATIO**2 * variance
     fast = float(np.mean(np.diff(noise) ** 2)) <= 0.75 * WHITE_RATIO * 2.0 * variance
-    return slow and fast
+    sawtooth = variance > WHITE_RATIO**2 * scatter**2
+    return slow and fast and not sawtooth
 
 
 def _white_scatter(stamps: np.ndarray) -> float:

@@ -28,6 +28,7 @@ import pandas as pd
 from flashsync.detect import SATURATED_EDGE_SIGMA, CameraDetection, DetectorSettings, detect_video
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
+from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
 from flashsync.match import (
@@ -218,7 +219,7 @@ def synchronize(
     else:
         start, search_reference = cameras, reference
     attempt = attempt_on(search_reference)
-    best, rivals = _best_readout(start, undecided, attempt)
+    best, rivals = _first_readout(start, report, undecided, attempt)
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
@@ -309,8 +310,12 @@ def _best_frame_times(
         change = f"{video}: its frame stamps change rate at frame {frame} ({before:.3f} -> {after:.3f} ms per frame)"
         choices = [(STAMPS_OWN_RATES, clock.times_ms), *clock.one_rate_alternatives()]
         # on the wrong frame times too few flashes may match to tie the camera at all
-        tried = [(best.score, choices[0][0], clock.times_ms, best)] if name in best.connected else []
-        for description, times in choices[1:]:
+        tried = []
+        for description, times in choices:
+            if np.array_equal(times, best.cameras[name].frame_times_ms):  # the times it was solved on
+                if name in best.connected:
+                    tried.append((best.score, description, times, best))
+                continue
             trial = dict(best.cameras)
             trial[name] = trial[name].retimed(times)
             try:
@@ -335,6 +340,32 @@ def _best_frame_times(
         else:
             warnings.append(f"{change}; the flashes fit {tried[0][1]}")
     return best, frame_std, warnings
+
+
+def _first_readout(
+    cameras: dict[str, CameraDetection],
+    report: SyncReport,
+    undecided: list[str],
+    attempt: Callable[[dict[str, CameraDetection]], _Attempt],
+) -> tuple[_Attempt, dict[str, _Attempt]]:
+    """:func:`_best_readout` on the stamps' own rates; where nothing solves on them and a
+    camera's stamps change rate, on each of its one-rate frame times in turn, the first that
+    solves (on stamps that slow to half their rate the flashes after the change are too far
+    off to match: none was tied). Raises the own rates' failure where none solves; the frame
+    times are chosen after (:func:`_best_frame_times`)."""
+    try:
+        return _best_readout(cameras, undecided, attempt)
+    except FlashsyncError as error:
+        failure = error
+    for name, clock in report.frame_clocks.items():
+        for _, times in clock.one_rate_alternatives():
+            trial = dict(cameras)
+            trial[name] = trial[name].retimed(times)
+            try:
+                return _best_readout(trial, undecided, attempt)
+            except FlashsyncError:
+                continue
+    raise failure
 
 
 def _best_readout(
@@ -839,30 +870,37 @@ def _contradicted_row_times(
 FLICKER_ROW_TIME_STD = 0.01
 
 
-def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
-    """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's (its
-    period, ``1000 / hz`` ms, over its period in rows; :data:`FLICKER_ROW_TIME_STD` at
-    least) where the camera identified the rig's flicker frequency (the one most cameras
-    identified: one hall, one mains) and sees a whole period, else the weak nominal prior.
-    A flicker the camera could not identify is not trusted: a period longer than the
-    image came out 40 % off."""
+def mains_flicker(cameras: Sequence[CameraDetection]) -> list[Flicker | None]:
+    """Per camera, its rolling flicker where it identified the rig's mains frequency (the
+    one most cameras identified: one hall, one mains) and a whole period fits in the image,
+    else None: a flicker the camera could not identify, or one longer than the image (its
+    period came out 40 % off once), times nothing. What ``sync``'s prior and ``diagnose``'s
+    evidence on the time per row both trust."""
     known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
     hall_hz = max(set(known), key=known.count) if known else None
+    return [
+        c.flicker if c.flicker and hall_hz and c.flicker.hz == hall_hz and c.flicker.period_rows < c.height else None
+        for c in cameras
+    ]
+
+
+def flicker_row_time_ms(flicker: Flicker) -> tuple[float, float]:
+    """The time per row a mains flicker tells, ``(1000 / hz) / period_rows``, and its standard
+    deviation (the period's spread, relative :data:`FLICKER_ROW_TIME_STD` at the least), ms."""
+    row_time = 1000.0 / flicker.hz / flicker.period_rows
+    spread = flicker.period_rows_std / flicker.period_rows
+    return row_time, row_time * max(spread if np.isfinite(spread) else 0.0, FLICKER_ROW_TIME_STD)
+
+
+def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
+    """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's
+    (:func:`mains_flicker`, :func:`flicker_row_time_ms`), else the weak nominal prior."""
     priors = {}
-    for index, camera in enumerate(cameras):
-        flicker = camera.flicker
+    for index, (camera, flicker) in enumerate(zip(cameras, mains_flicker(cameras))):
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
-        elif (
-            hall_hz is not None
-            and flicker is not None
-            and flicker.hz == hall_hz
-            and flicker.period_rows < camera.height
-        ):
-            spread = flicker.period_rows_std / flicker.period_rows
-            relative = max(spread, FLICKER_ROW_TIME_STD) if np.isfinite(spread) else FLICKER_ROW_TIME_STD
-            row_time = 1000.0 / hall_hz / flicker.period_rows
-            priors[index] = (row_time, relative * row_time)
+        elif flicker is not None:
+            priors[index] = flicker_row_time_ms(flicker)
         else:
             nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)

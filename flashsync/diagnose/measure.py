@@ -26,7 +26,7 @@ from flashsync.events import Band, Bands, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
-from flashsync.pipeline import FLICKER_ROW_TIME_STD
+from flashsync.pipeline import flicker_row_time_ms, mains_flicker
 from flashsync.robust import mad_sigma
 from flashsync.timestamps import median_step_ms
 
@@ -117,7 +117,7 @@ class Measurement:
         Cameras left out and why.
     flicker : tuple of (Flicker or None)
         Per camera, the rolling mains flicker whose period in rows times its rows
-        (:func:`_mains_flicker`); None where it saw none to trust.
+        (:func:`~flashsync.pipeline.mains_flicker`); None where it saw none to trust.
     """
 
     cameras: tuple[CameraDetection, ...]
@@ -143,16 +143,11 @@ class Measurement:
         return int(self.edges.flash.max()) + 1
 
     def flicker_row_time_ms(self, camera: int) -> tuple[float, float]:
-        """The time per row the camera's rolling mains flicker tells, ``(1000 / hz) /
-        period_rows``, and its standard deviation (the period's spread, relative
-        :data:`~flashsync.pipeline.FLICKER_ROW_TIME_STD` at the least: through H.264 the
-        period comes out up to 1.7 % off), ms; NaN, NaN where the camera saw no such flicker."""
+        """The time per row the camera's rolling mains flicker tells and its standard
+        deviation (:func:`~flashsync.pipeline.flicker_row_time_ms`, as ``sync``'s prior), ms;
+        NaN, NaN where the camera saw no such flicker."""
         flicker = self.flicker[camera] if self.flicker else None
-        if flicker is None:
-            return float("nan"), float("nan")
-        row_time = 1000.0 / flicker.hz / flicker.period_rows
-        spread = flicker.period_rows_std / flicker.period_rows
-        return row_time, row_time * max(spread if np.isfinite(spread) else 0.0, FLICKER_ROW_TIME_STD)
+        return flicker_row_time_ms(flicker) if flicker is not None else (float("nan"), float("nan"))
 
 
 def measure(detections: Sequence[CameraDetection], reference: str | None = None) -> Measurement:
@@ -226,20 +221,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         pooled,
         np.where(np.isfinite(own), own, pooled),
         warnings,
-        _mains_flicker(cameras),
-    )
-
-
-def _mains_flicker(cameras: tuple[CameraDetection, ...]) -> tuple[Flicker | None, ...]:
-    """Per camera, its rolling flicker where it is the rig's mains (the frequency most
-    cameras identified: one hall, one mains) and a whole period fits in the image, else
-    None: a flicker the camera could not identify, or one longer than the image (40 % off
-    once), times nothing, as in :func:`flashsync.pipeline.synchronize`'s priors."""
-    known = [c.flicker.hz for c in cameras if c.flicker is not None and c.flicker.hz is not None]
-    hall_hz = max(set(known), key=known.count) if known else None
-    return tuple(
-        c.flicker if c.flicker and hall_hz and c.flicker.hz == hall_hz and c.flicker.period_rows < c.height else None
-        for c in cameras
+        tuple(mains_flicker(cameras)),
     )
 
 
