@@ -963,13 +963,15 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
     ones :data:`SATURATED_EDGE_SIGMA` times noisier), then the trailing edges
     (:func:`_trailing_edges`) of their bands, on the same flashes."""
     camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
+    leading_of = [np.full(len(matches), -1, dtype=np.int64)]
     for index, detection in enumerate(cameras):
-        mine = matches.camera_index == index
-        flash_of = dict(zip(matches.event[mine].tolist(), matches.flash[mine].tolist()))
+        mine = np.flatnonzero(matches.camera_index == index)
+        row_of = dict(zip(matches.event[mine].tolist(), mine.tolist()))
         edges = _trailing_edges(detection)
-        edges = edges.take(np.isin(edges.event, list(flash_of)))
+        edges = edges.take(np.isin(edges.event, list(row_of)))
+        leading_of.append(np.array([row_of[e] for e in edges.event.tolist()], dtype=np.int64))
         camera.append(np.full(len(edges), index, dtype=np.int64))
-        flash.append(np.array([flash_of[e] for e in edges.event.tolist()], dtype=np.int64))
+        flash.append(matches.flash[leading_of[-1]])
         t_frame.append(edges.t_frame_ms)
         q.append(_readout_rows(detection, edges))
     n_leading = len(matches)
@@ -984,6 +986,7 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         np.concatenate(q),
         sigma_factor,
         trailing,
+        np.concatenate(leading_of),
     )
 
 

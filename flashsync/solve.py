@@ -15,13 +15,19 @@ ended::
 So both edges of every band measure the flash, and information inside one camera enters
 (docs/architecture.md, "a trap"): a band split across two frames, whose rows skip the hidden
 rows, is as long as the camera's unbroken bands, which ties ``T_row_c`` to the frame period.
+A band whose both edges are observed enters as their mean (its midpoint, the flash plus half
+an exposure) and their difference (its length, the exposure), each with its own noise: its
+two edges' errors are seldom independent (an LED pulse as long as the exposure trades them,
+a frame's time moves both), those of its midpoint and length nearly are where the edges are
+about equally noisy.
 
 All equations form one sparse system. Drift is solved as ``alpha - 1`` about the camera's
 mid time for conditioning. Iteratively reweighted least squares with Cauchy weights keeps a
 bad event from moving a camera; equations beyond ``reject_sigma`` robust sigmas are
-rejected and the final fit uses the rest, each weighed by the noise of its camera's edges
-of its kind (leading, trailing: a pulse's tail blurs the trailing ones). Priors (a datasheet ``T_row``, a weak nominal
-one, clock drift within a few tens of ppm) enter as pseudo-observations.
+rejected and the final fit uses the rest, each weighed by the noise of its camera's
+equations of its kind (leading edges and band midpoints; trailing edges and band lengths).
+Priors (a datasheet ``T_row``, a weak nominal one, clock drift within a few tens of ppm)
+enter as pseudo-observations.
 """
 
 from __future__ import annotations
@@ -46,7 +52,9 @@ class Observations:
     ``q``: readout rows (n,); ``sigma_factor``: each event's noise in units of a clean
     edge's (n,; None: all 1), e.g. :data:`flashsync.detect.SATURATED_EDGE_SIGMA` for a clipped band;
     ``trailing``: bool (n,), the edge is a band's trailing edge, one exposure after the
-    flash (None: all leading).
+    flash (None: all leading); ``leading_of``: int (n,), for a trailing edge the index of its
+    band's leading edge among these observations, -1 for none and for leading edges (None:
+    no pairs). A pair enters the solve as its band's midpoint and length (:class:`_System`).
     """
 
     camera: np.ndarray
@@ -55,6 +63,7 @@ class Observations:
     q: np.ndarray
     sigma_factor: np.ndarray | None = None
     trailing: np.ndarray | None = None
+    leading_of: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -74,9 +83,10 @@ class CameraSolution:
     """One camera's solved clock: ``alpha``, ``beta_ms``, ``row_time_ms``, the warp of a
     clock whose rate changes (values ``warp_ms`` (k,) at the interior of ``knots_ms``
     (k + 2,), both empty for an affine clock), the covariance (3 + k, 3 + k) in that order,
-    ``edge_sigma_ms`` and ``trailing_sigma_ms``, the noise of its leading and trailing edges
-    (ms, a clean edge's; NaN without), and its exposure (ms, reference clock) with its
-    standard deviation (NaN without trailing edges)."""
+    ``edge_sigma_ms`` and ``trailing_sigma_ms``, the noise of its leading edges and band
+    midpoints, and of its trailing edges and band lengths (ms, a clean edge's; NaN without),
+    and its exposure (ms, reference clock) with its standard deviation (NaN without trailing
+    edges)."""
 
     alpha: float
     beta_ms: float
@@ -94,8 +104,10 @@ class CameraSolution:
 class Solution:
     """Result of :func:`solve_clocks`.
 
-    ``residual_ms``, ``inlier`` and ``sigma_factor`` (the equations' noise in units of a
-    clean edge's) have one entry per event; ``flash_ms`` the global
+    ``residual_ms`` (each edge's own, ms), ``inlier`` and ``sigma_factor`` (the equations'
+    noise in units of a clean edge's) have one entry per event; where a band's both edges
+    are observed, its leading edge's ``inlier`` is its midpoint's, its trailing edge's its
+    length's. ``flash_ms`` the global
     time of each flash index (NaN for an index no inlier event names); ``sigma_ms`` is the
     robust scale of the residuals over their sigma factors.
     """
@@ -170,7 +182,8 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
         scale = system.group_scales(x, weights, inlier)
         floor = _edge_floor_ms(system, x, n_cameras)
         scale[leading] = np.maximum(scale[leading], floor[system.camera[leading]])
-        # trailing edges no less noisy than their camera's leading ones: a camera of a few bands fits
+        # trailing edges (band lengths) no less noisy than their camera's leading edges (band midpoints): a
+        # camera of a few bands fits
         # them almost exactly (rig-20: two bands, a scale of 3 microseconds) and its time per row,
         # which its split bands tie to the frame period, would claim 0.02 % while 1.6 % off
         floor = np.fmax(floor, _camera_values(system.camera[leading], scale[leading], n_cameras))
@@ -181,7 +194,7 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     sigma = mad_sigma(residual[inlier], MIN_SCALE_MS)
     covariance = system.covariance(weights, system.event_sigma_ms**2)
     flash_ms = np.full(int(system.flash_ids.max()) + 1 if system.flash_ids.size else 0, np.nan)
-    seen = np.bincount(system.flash_index[inlier], minlength=len(system.flash_ids)) > 0
+    seen = np.bincount(system.flash_index[inlier & system.names_flash], minlength=len(system.flash_ids)) > 0
     flash_ms[system.flash_ids[seen]] = x[system.flash_columns[seen]]
     edge_sigma = _camera_values(system.camera[leading], scale[leading], n_cameras)
     trailing_sigma = _camera_values(system.camera[~leading], scale[~leading], n_cameras)
@@ -195,7 +208,7 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
             for c in range(n_cameras)
         ],
         flash_ms,
-        residual * system.sigma_factor,
+        system.edge_residuals(x),
         inlier,
         sigma,
         system.n_unknowns,
@@ -296,6 +309,8 @@ class _System:
     reference's first two left out; the warp values of cameras with drift knots; one
     exposure per camera that has trailing edges; one global time per flash. Rows: events,
     then priors; each event row divided by its sigma factor (priors carry their own weight).
+    A band whose both edges are observed enters as its midpoint and its length
+    (:func:`_band_transform`), each with its own noise.
     """
 
     def __init__(
@@ -353,8 +368,13 @@ class _System:
             for j, column in enumerate(self.warp_columns[c]):
                 triplets.add(mine, np.full(len(mine), column), hats[:, j])
         rhs = [-t_frame]
+        pairs = self._band_pairs(events, trailing)
+        #: the equations that name their flash (a band's length does not)
+        self.names_flash = np.ones(n_events, dtype=bool)
+        self.names_flash[pairs[:, 1]] = False
         self.n_equations = n_events
-        #: noise group of each equation: camera c's leading edges are c, its trailing ones n_cameras + c
+        #: noise group of each equation: camera c's leading edges and band midpoints are c, its trailing
+        #: edges and band lengths n_cameras + c
         self.group = camera + n_cameras * trailing
         self.event_sigma_ms = event_sigma_ms
 
@@ -372,8 +392,14 @@ class _System:
         factor = np.ones(n_events) if events.sigma_factor is None else np.asarray(events.sigma_factor, np.float64)
         self.sigma_factor = factor
         row_weight = np.concatenate([1.0 / self.sigma_factor, np.ones(self.n_priors)])
-        self.rhs = np.concatenate(rhs) * row_weight
-        matrix = sparse.diags(row_weight) @ triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
+        edges = triplets.matrix((self.n_equations + self.n_priors, self.n_unknowns))
+        #: equations from edge rows: a band's pair becomes its midpoint (the leading edge's row) and
+        #: its length (the trailing edge's row); every other row stays itself
+        self.edges_to_equations = _band_transform(pairs, self.n_equations + self.n_priors)
+        self.edge_rhs = np.concatenate(rhs)
+        self.edge_matrix = edges
+        self.rhs = (self.edges_to_equations @ self.edge_rhs) * row_weight
+        matrix = sparse.diags(row_weight) @ self.edges_to_equations @ edges
         norms = np.sqrt(np.asarray(matrix.multiply(matrix).sum(axis=0))).ravel()
         if np.any(norms == 0):
             raise NotEnoughDataError(
@@ -386,6 +412,20 @@ class _System:
         self._last_reduced = (None, None)
         self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
         self.flashes = self.matrix[:, self.n_camera_columns :].tocsr()
+
+    @staticmethod
+    def _band_pairs(events: Observations, trailing: np.ndarray) -> np.ndarray:
+        """(leading, trailing) row indices of the bands whose both edges are observed, shape (m, 2)."""
+        if events.leading_of is None:
+            return np.zeros((0, 2), dtype=np.int64)
+        leading_of = np.asarray(events.leading_of, dtype=np.int64)
+        mine = np.flatnonzero(trailing & (leading_of >= 0))
+        return np.column_stack([leading_of[mine], mine])
+
+    def edge_residuals(self, x: np.ndarray) -> np.ndarray:
+        """Each edge's own residual (ms, shape (n_equations,)), not its band's midpoint's or
+        length's: ``t`` mapped by the solved clock minus the flash (and the exposure)."""
+        return (self.edge_matrix @ x - self.edge_rhs)[: self.n_equations]
 
     def _reduced(self, weights: np.ndarray):
         """The normal equations with the flash times eliminated.
@@ -443,8 +483,8 @@ class _System:
         """Each equation's noise (ms, a clean edge's; shape (n_equations,)): the RMS of its
         group's inlier residuals over the degrees of freedom they leave (their count less
         their leverages, i.e. the trace of the inverse normal matrix times the group's own),
-        shrunk towards the pooled scale of its kind (leading, trailing edges: a pulse's tail
-        blurs the trailing ones) with :data:`POOLED_EQUATIONS`; at least
+        shrunk towards the pooled scale of its kind (leading edges and band midpoints;
+        trailing edges and band lengths) with :data:`POOLED_EQUATIONS`; at least
         :data:`~flashsync.robust.MIN_SCALE_MS`."""
         residual = self.residuals(x)
         leverages = self._leverages(weights)
@@ -538,6 +578,22 @@ def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
     if info != 0:
         raise linalg.LinAlgError("the Cholesky factor is singular")
     return np.triu(inverse) + np.triu(inverse, 1).T if not factor[1] else np.tril(inverse) + np.tril(inverse, -1).T
+
+
+def _band_transform(pairs: np.ndarray, n_rows: int) -> sparse.csr_matrix:
+    """The map (n_rows, n_rows) from edge equations to the solve's: a band's leading row
+    becomes the mean of its two edges (its midpoint: the flash plus half an exposure), its
+    trailing row their difference (its length: the exposure). The two carry different noise
+    (:meth:`_System.group_scales`): where an LED pulse is about as long as the exposure, the
+    band fit trades the two edges against each other (leading early, trailing late by as
+    much), which moves the length, not the midpoint. The map's determinant is 1."""
+    lead, trail = pairs[:, 0], pairs[:, 1]
+    diagonal = np.ones(n_rows)
+    diagonal[lead] = 0.5
+    rows = np.concatenate([np.arange(n_rows), lead, trail])
+    columns = np.concatenate([np.arange(n_rows), trail, lead])
+    values = np.concatenate([diagonal, np.full(len(pairs), 0.5), np.full(len(pairs), -1.0)])
+    return sparse.csr_matrix((values, (rows, columns)), shape=(n_rows, n_rows))
 
 
 class _Triplets:

@@ -122,8 +122,8 @@ def test_each_tile_shows_the_frame_covering_the_tick(synced_scenario, montage):
             candidates = [f for f in (frame[k] - 1, frame[k], frame[k] + 1) if 0 <= f < len(source)]
             stack = np.stack([source[f][rows].astype(float) for f in candidates])
             moved = np.ptp(stack, axis=0).max(axis=-1) > 24  # where the candidates differ
-            if moved.sum() < 20:
-                continue
+            if moved.sum() < 30:  # a few pixels of a lossy encode decide nothing (s, tick 24: 22 pixels, the
+                continue  # located frame ahead by 6.2 on main and behind by 3.2 with a line drawn 0.3 rows up)
             distance = {f: np.abs(shown[rows][moved] - image_f[moved]).mean() for f, image_f in zip(candidates, stack)}
             nearest = sorted(distance.values())
             if nearest[1] - nearest[0] < 3.0:  # a few moving pixels that the encoding blurs: no decision
