@@ -961,13 +961,7 @@ def _trailing_edges(detection: CameraDetection) -> Events:
 def _observations(cameras: list[CameraDetection], matches: Matches) -> Observations:
     """What the solve fits: the matched leading edges (in the order of ``matches``; saturated
     ones :data:`SATURATED_EDGE_SIGMA` times noisier), then the trailing edges
-    (:func:`_trailing_edges`) of their bands, on the same flashes. A band in one frame is
-    paired (``leading_of``: its midpoint and length enter the solve); a band split across two
-    frames is not. Its two edges lie in frames of their own, and its length, which spans the
-    hidden rows, is the equation that ties the camera's time per row to the frame period:
-    with one edge off, the time per row takes the length up whole and no residual shows it
-    (`hd`'s 59.94 fps camera: a leading edge 0.36 ms early, its time per row 2.0 % off). As
-    two edges, each is checked against the flash's instant the other cameras give."""
+    (:func:`_trailing_edges`) of their bands, on the same flashes."""
     camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
     leading_of = [np.full(len(matches), -1, dtype=np.int64)]
     for index, detection in enumerate(cameras):
@@ -975,10 +969,9 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         row_of = dict(zip(matches.event[mine].tolist(), mine.tolist()))
         edges = _trailing_edges(detection)
         edges = edges.take(np.isin(edges.event, list(row_of)))
-        leading = np.array([row_of[e] for e in edges.event.tolist()], dtype=np.int64)
-        leading_of.append(np.where(matches.frame[leading] == edges.frame, leading, -1))
+        leading_of.append(np.array([row_of[e] for e in edges.event.tolist()], dtype=np.int64))
         camera.append(np.full(len(edges), index, dtype=np.int64))
-        flash.append(matches.flash[leading])
+        flash.append(matches.flash[leading_of[-1]])
         t_frame.append(edges.t_frame_ms)
         q.append(_readout_rows(detection, edges))
     n_leading = len(matches)

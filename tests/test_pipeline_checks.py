@@ -12,7 +12,7 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Band, Edge, Events
-from flashsync.pipeline import _attempt, check_anchors, check_row_times
+from flashsync.pipeline import check_anchors, check_row_times
 
 
 @pytest.mark.parametrize(
@@ -51,21 +51,3 @@ def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
     model, report = synchronize([*detections, lonely])
     assert "cam3" not in model.cameras and any("cam3.mp4: 0 usable flash events" in w for w in report.warnings)
     assert report.flipped_found == []
-
-
-def test_a_band_in_one_frame_is_paired_and_a_band_split_across_two_is_not(synced_scenario):
-    """A band whose both edges the solve fits enters as its midpoint and length where both
-    edges lie in one frame; split across two frames it enters as two edges: its length spans
-    the hidden rows and ties the time per row to the frame period, so one edge off would go
-    whole into the time per row (the `hd` rig's 59.94 fps camera: 2.0 % off, README). The
-    rig's 6-10 ms bands over 144-180 rows split often."""
-    videos = [next(synced_scenario.glob(f"{name}.*")) for name in ("r", "f", "s")]
-    cameras = {d.camera: d for d in detect_videos(videos, flipped=["f"])}
-    seen = _attempt(cameras, "r", None, ()).observations
-    leading = {(c, k): j for j, (c, k, t) in enumerate(zip(seen.camera, seen.flash, seen.trailing)) if not t}
-    split = []
-    for i in np.flatnonzero(seen.trailing):
-        j = leading[seen.camera[i], seen.flash[i]]
-        split.append(seen.t_frame_ms[i] != seen.t_frame_ms[j])
-        assert seen.leading_of[i] == (-1 if split[-1] else j)
-    assert 0 < sum(split) < len(split)
