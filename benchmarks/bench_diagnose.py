@@ -20,7 +20,8 @@ its verdict (a command that fails: its error). Rigs:
                        linear sensors, the default (xenon-like) flash
 ``rolling-flicker``    the same under 5 % 100 Hz mains flicker
 ``jittered-60fps``     320x180, 6 s: 25 fps and 59.94 fps whose stamps are jittered 3 ms (a
-                       sixth of its period)
+                       sixth of its period); also 5 and 6 ms (``jittered-5ms-60fps``,
+                       ``jittered-6ms-60fps``: 0.3 and 0.36 of its period)
 ``fast-stamps-60fps``  the same, its stamps 5 % fast from frame 150 on, jittered 1.2 ms
 ``slowing-stamps``     the same, its stamps half as fast from frame 150 on, not jittered
 =====================  ===================================================================
@@ -106,6 +107,8 @@ RIGS = {
     "short-exposure": short_exposure,
     "rolling-flicker": lambda: short_exposure(0.05),
     "jittered-60fps": lambda: sixty_fps(3.0),
+    "jittered-5ms-60fps": lambda: sixty_fps(5.0),
+    "jittered-6ms-60fps": lambda: sixty_fps(6.0),
     "fast-stamps-60fps": lambda: sixty_fps(1.2, stamp_rate_changes=((150, 1.05),)),
     "slowing-stamps": lambda: sixty_fps(0.0, stamp_rate_changes=((150, 0.5),)),
 }
