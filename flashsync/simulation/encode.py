@@ -93,8 +93,8 @@ def x264_options(
 
 #: x264's code on a CPU with AVX-512: its AVX-512 code encoded the same frames to a
 #: different file on four renders of five in one process; at AVX2 every render of a
-#: scenario is the same file, and the same on every CPU with AVX-512 or AVX2 alone (x264's
-#: plain C gives yet another file: its code paths are not bit-exact with each other).
+#: scenario is the same file (x264's plain C gives yet another file: its code paths are not
+#: bit-exact with each other; a CPU with AVX2 alone was not at hand to compare).
 X264_ASM = "AVX2"
 
 
