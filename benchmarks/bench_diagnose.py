@@ -22,7 +22,8 @@ its verdict (a command that fails: its error). Rigs:
 ``jittered-60fps``     320x180, 6 s: 25 fps and 59.94 fps whose stamps are jittered 3 ms (a
                        sixth of its period); also 5 and 6 ms (``jittered-5ms-60fps``,
                        ``jittered-6ms-60fps``: 0.3 and 0.36 of its period)
-``fast-stamps-60fps``  the same, its stamps 5 % fast from frame 150 on, jittered 1.2 ms
+``fast-stamps-60fps``  the same, its stamps 5 % fast from frame 150 on, jittered 1.2 ms (also
+                       3 ms: ``fast-stamps-3ms-60fps``)
 ``slowing-stamps``     the same, its stamps half as fast from frame 150 on, not jittered
 =====================  ===================================================================
 """
@@ -110,6 +111,7 @@ RIGS = {
     "jittered-5ms-60fps": lambda: sixty_fps(5.0),
     "jittered-6ms-60fps": lambda: sixty_fps(6.0),
     "fast-stamps-60fps": lambda: sixty_fps(1.2, stamp_rate_changes=((150, 1.05),)),
+    "fast-stamps-3ms-60fps": lambda: sixty_fps(3.0, stamp_rate_changes=((150, 1.05),)),
     "slowing-stamps": lambda: sixty_fps(0.0, stamp_rate_changes=((150, 0.5),)),
 }
 
