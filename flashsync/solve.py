@@ -121,16 +121,26 @@ class Solution:
     sigma_factor: np.ndarray
 
 
+#: Noise of an edge against which the priors are weighed, ms.
+EVENT_SIGMA_MS = 0.05
+#: Equations beyond this many robust sigmas are rejected.
+REJECT_SIGMA = 5.0
+#: Cauchy weights at this many robust sigmas (95 % efficiency for Gaussian noise).
+CAUCHY_K = 2.385
+#: Solves of the robust iterations, in all.
+ITERATIONS = 10
+
+
 def solve_clocks(
     events: Observations,
     n_cameras: int,
     reference: int = 0,
     priors: Priors | None = None,
     drift_knots: dict[int, np.ndarray] | None = None,
-    event_sigma_ms: float = 0.05,
-    reject_sigma: float = 5.0,
-    cauchy_k: float = 2.385,
-    iterations: int = 10,
+    event_sigma_ms: float = EVENT_SIGMA_MS,
+    reject_sigma: float = REJECT_SIGMA,
+    cauchy_k: float = CAUCHY_K,
+    iterations: int = ITERATIONS,
 ) -> Solution:
     """Solve all cameras' clocks jointly and robustly.
 
