@@ -31,6 +31,13 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
+from flashsync.likelihood import (
+    SCORE_MIN_SIGMA_MS,
+    HeldClock,
+    ReadingEdges,
+    edge_log_likelihood,
+    held_log_likelihood,
+)
 from flashsync.match import (
     MIN_SHARED_FLASHES,
     NOMINAL_HIDDEN_ROWS,
@@ -380,7 +387,8 @@ def _best_readout(
     the undecided cameras that lose inlier flashes when it alone is flipped (cameras read
     the wrong way up that share flashes fit each other, so neither flip pays alone: rig-14
     of the random rigs). Candidates are tried in name order and a reading is solved once,
-    so the camera order decides nothing; at most two attempts per undecided camera per step.
+    so the camera order decides nothing; at most two attempts per undecided camera per step,
+    none for a single flip that cannot pay (:func:`_worth_flipping`).
 
     A near tie is not decided by the noise of the edges (H.264 output changes slightly with
     what the encoder did before): the reading stays, :func:`_readout_doubts` warns and
@@ -418,7 +426,7 @@ def _best_readout(
             best = top
     while not every:
         start = best.cameras if best is not None else cameras
-        singles = {name: tries(start, {name}) for name in undecided}
+        singles = {name: tries(start, {name}) for name in _worth_flipping(best, undecided)}
         steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
             best = max(steps, key=evidence)
@@ -440,6 +448,56 @@ def _best_readout(
         if other:
             rivals[name] = max(other, key=lambda r: r.score)
     return best, rivals
+
+
+#: A single flip whose held estimate (:func:`_flip_gains`) loses more than this log-likelihood
+#: is not solved whole. Over the 24 random rigs and the 10 recipes of bench_rigs (231 single
+#: flips of rigs with every camera tied) the whole attempt came out at most 58 above the
+#: estimate (the other cameras gain what the flipped camera no longer pulls askew), and no
+#: estimate fell below -157; on 64 cameras x 500 flashes a wrong flip loses about 4000.
+FLIP_SCREEN_SLACK = 200.0
+
+
+def _worth_flipping(best: _Attempt | None, undecided: list[str]) -> list[str]:
+    """The ``undecided`` cameras whose single flip from ``best`` is solved whole: those whose
+    held estimate (:func:`_flip_gains`) loses less than :data:`FLIP_SCREEN_SLACK`; all of
+    them where there is no ``best`` or it leaves an undecided camera out (a flip may tie it:
+    on rig-2 of the random rigs one flip tied five cameras and gained 522, estimated -47)."""
+    if best is None or any(name not in best.connected for name in undecided):
+        return undecided
+    gains = _flip_gains(best, undecided)
+    return [name for name in undecided if gains[name] >= -FLIP_SCREEN_SLACK]
+
+
+def _flip_gains(best: _Attempt, names: list[str]) -> dict[str, float]:
+    """Per camera of ``names`` tied in ``best``: what its edges' log-likelihood gains read the
+    other way up, estimated with the other cameras' flashes held where ``best`` put them
+    (:func:`~flashsync.likelihood.held_log_likelihood`, both readings refitted alike, with
+    the time-per-row priors of the events alone). No estimate for a camera ``best`` left out."""
+    cameras = list(best.cameras.values())
+    priors = _row_time_priors(cameras, {})
+    uniform = _uniform_ms(best.cameras)
+    gains = {}
+    for name in names:
+        if name not in best.connected:
+            continue
+        solved = best.solution.cameras[best.connected.index(name)]
+        detection = best.cameras[name]
+        period = median_step_ms(detection.frame_times_ms)
+        clock = HeldClock(
+            solved.alpha,
+            solved.beta_ms,
+            period,
+            detection.height,
+            priors[list(best.cameras).index(name)],
+            READOUT_SLACK * period / detection.height,
+        )
+        now, other = (
+            held_log_likelihood(_reading_edges(d), best.solution.flash_ms, clock, uniform)
+            for d in (detection, detection.read_flipped(not detection.flipped))
+        )
+        gains[name] = other - now
+    return gains
 
 
 def _mirror(flips: tuple[bool, ...], cameras: dict[str, CameraDetection]) -> bool:
@@ -731,8 +789,7 @@ class _Attempt:
         )
         sigma = (sigma * self.solution.sigma_factor)[inlier]
         n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
-        period = max(median_step_ms(d.frame_times_ms) for d in self.cameras.values())
-        return float(np.sum(-np.log(sigma * np.sqrt(2.0 * np.pi)) - 0.5) - (n_edges - len(sigma)) * np.log(period))
+        return edge_log_likelihood(sigma, n_edges, _uniform_ms(self.cameras))
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}
@@ -827,10 +884,6 @@ def _attempt(
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, observations, solution)
 
-
-#: No edge is located better than this (ms): a residual scale below it is a fit with almost
-#: no equations to spare, not evidence for a reading (:attr:`_Attempt.score`).
-SCORE_MIN_SIGMA_MS = 0.02
 
 #: The visible rows of a frame are read within this many frame periods (a little over one:
 #: the time per row is an estimate).
@@ -940,6 +993,27 @@ ROW_TIME_BIAS = 0.003
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
     """Readout rows of the camera's events."""
     return readout_rows(events.row, detection.height, detection.flipped)
+
+
+def _uniform_ms(cameras: dict[str, CameraDetection]) -> float:
+    """The span over which an edge no fit explains is uniform (ms): the longest frame period."""
+    return max(median_step_ms(d.frame_times_ms) for d in cameras.values())
+
+
+def _reading_edges(detection: CameraDetection) -> ReadingEdges:
+    """The edges a solve fits of the camera in its reading in use: its sync events
+    (saturated ones :data:`SATURATED_EDGE_SIGMA` times noisier), then its trailing edges
+    (:func:`_trailing_edges`)."""
+    leading, trailing = _sync_events(detection), _trailing_edges(detection)
+    events = Events.concat([leading, trailing])
+    first = np.arange(len(events)) < len(leading)
+    return ReadingEdges(
+        events.t_frame_ms,
+        _readout_rows(detection, events),
+        ~first,
+        events.event,
+        np.where(first & events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, 1.0),
+    )
 
 
 def _sync_events(detection: CameraDetection) -> Events:

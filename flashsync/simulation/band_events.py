@@ -1,0 +1,91 @@
+"""Band edges of many cameras without video: what the detector would give ``sync`` for a
+rig too large to render (64 cameras x 500 flashes), with the true clocks to check against.
+
+Every camera (random frame rate 25/30/50 fps, drift within ±50 ppm, shift within ±60 s,
+time per row for ~1000 rows, 1080 rows high) sees each flash with probability 0.8; event
+rows carry 0.05 ms of noise. Used by ``benchmarks/bench_solve.py`` and the tests of the
+readout search at scale.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection
+
+import numpy as np
+
+from flashsync.detect import CameraDetection
+from flashsync.events import Band, Edge, Events, Flag
+from flashsync.solve import Observations
+
+HEIGHT, WIDTH = 1080, 1920
+#: Exposure of every camera, ms (a band's trailing edge is one exposure after its leading edge).
+EXPOSURE_MS = 2.0
+
+
+def synthetic_events(n_cameras: int, n_flashes: int, seed: int = 0) -> tuple[Observations, np.ndarray, list]:
+    """Observations of ``n_flashes`` flashes in 10 minutes seen by ``n_cameras`` cameras
+    (readout rows ``q``), the true (alpha, beta_ms, row_time_ms) per camera (shape
+    (n_cameras, 3); camera 0 is the reference) and each camera's frame times on its own
+    clock (ms, one array per camera)."""
+    rng = np.random.default_rng(seed)
+    tau = np.sort(rng.uniform(0, 600_000.0, n_flashes))
+    truth, camera, flash, t_frame, q, frame_times = [], [], [], [], [], []
+    for c in range(n_cameras):
+        fps = rng.choice([25.0, 30.0, 50.0])
+        alpha = 1.0 if c == 0 else 1 + rng.uniform(-50e-6, 50e-6)
+        beta = 0.0 if c == 0 else rng.uniform(-60_000.0, 60_000.0)
+        row_time = 1000.0 / fps / rng.uniform(1080, 1125)
+        truth.append((alpha, beta, row_time))
+        frames = (np.arange(-2000.0, 700_000.0, 1000.0 / fps) - beta) / alpha
+        frame_times.append(frames)
+        starts = alpha * frames + beta
+        seen = np.flatnonzero(rng.uniform(size=n_flashes) < 0.8)
+        frame = np.searchsorted(starts, tau[seen], side="right") - 1
+        rows = (tau[seen] - starts[frame]) / row_time
+        visible = rows <= HEIGHT - 1
+        camera += [c] * int(visible.sum())
+        flash += list(seen[visible])
+        t_frame += list(frames[frame[visible]])
+        q += list(rows[visible] + rng.normal(0, 0.05 / row_time, visible.sum()))
+    events = Observations(np.array(camera), np.array(flash), np.array(t_frame), np.array(q))
+    return events, np.array(truth), frame_times
+
+
+def synthetic_detections(
+    events: Observations,
+    truth: np.ndarray,
+    frame_times: list[np.ndarray],
+    seed: int = 0,
+    upside_down: Collection[int] = (),
+) -> list[CameraDetection]:
+    """The events of :func:`synthetic_events` as ``detect_videos`` gives them to ``sync``,
+    cameras ``cam0``, ``cam1``, ...: per camera its frame stamps (rounded to 1 ms, from 0)
+    and both readings of its bands, the top-down one in use. A band's trailing edge is one
+    exposure after its leading edge (hidden where that falls past the last row read). The
+    cameras of ``upside_down`` (indices) are mounted upside down: their stored rows run
+    against their readout, so their top-down reading is the wrong one."""
+    rng = np.random.default_rng(seed + 1)
+    detections = []
+    for c, (_, _, row_time) in enumerate(truth):
+        mine = np.flatnonzero(events.camera == c)
+        order = np.argsort(events.t_frame_ms[mine])
+        t_frame, lead = events.t_frame_ms[mine][order], events.q[mine][order]
+        frame = np.searchsorted(frame_times[c], t_frame)
+        stamps = np.round(frame_times[c] - frame_times[c][0])
+        trail = lead + EXPOSURE_MS / row_time + rng.normal(0, 0.05 / row_time, len(lead))
+        readings = []
+        for bottom_up in (False, True):
+            columns = [[] for _ in range(11)]
+            for number, (f, a, b) in enumerate(zip(frame, lead, trail)):
+                edges = [(Edge.LEADING, a), (Edge.TRAILING, b)] if b < HEIGHT - 0.5 else [(Edge.LEADING, a)]
+                flags = frozenset() if len(edges) == 2 else frozenset({Flag.TRAILING_HIDDEN})
+                if bottom_up != (c in upside_down):  # the reading against the readout: the band's edges swap
+                    edges = [(Edge.LEADING, b), (Edge.TRAILING, a)] if len(edges) == 2 else []
+                for edge, row in edges:
+                    stored = HEIGHT - 1 - row if c in upside_down else row
+                    values = (f"cam{c}", number, f, stamps[f], stored, edge, Band.PULSE, 2.0, 0.5, 50.0, flags)
+                    for column, value in zip(columns, values):
+                        column.append(value)
+            readings.append(Events.from_columns(*columns))
+        detections.append(CameraDetection(f"cam{c}", f"cam{c}.mp4", WIDTH, HEIGHT, stamps, *readings))
+    return detections
