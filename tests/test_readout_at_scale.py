@@ -1,7 +1,8 @@
 """The readout search at scale: on a rig of many cameras with many flashes each, a single
-flip that cannot pay is not solved whole (its loss is estimated with the other cameras'
-flashes held, :func:`flashsync.pipeline._flip_gains`), and the cameras mounted upside down
-are still found. Synthetic band edges (:mod:`flashsync.simulation.band_events`), no video."""
+flip that cannot pay is not solved whole and the flips that must pay are tried together
+(each estimated with the other cameras' flashes held, :func:`flashsync.pipeline._flip_gains`),
+and the cameras mounted upside down are still found. Synthetic band edges
+(:mod:`flashsync.simulation.band_events`), no video."""
 
 from __future__ import annotations
 
@@ -28,8 +29,10 @@ def test_upside_down_cameras_are_found_with_few_whole_solves(rig, monkeypatch):
     model, report = pipeline.synchronize(rig)
     assert sorted(report.flipped_found) == sorted(f"cam{c}" for c in UPSIDE_DOWN)
     assert all(model.cameras[f"cam{c}"].flipped == (c in UPSIDE_DOWN) for c in range(12))
-    # with every single flip solved whole it took 39
-    assert len(whole) <= 8, len(whole)
+    # the detected readings on two references, both flips together, the final solve on the
+    # reference given and its check of the flips: 5; one flip at a time took 7, and every
+    # single flip solved whole 39
+    assert len(whole) <= 5, len(whole)
 
 
 def test_a_wrong_flip_is_estimated_to_lose_and_a_right_one_to_gain(rig):
