@@ -166,7 +166,8 @@ def camera_accuracy(
     Columns: ``camera``; ``reference``; ``solved`` (in the model); ``rms_ms``, ``max_ms``
     (sync error over the probes); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
     ``exposure_error_ms`` (model - truth; NaN where the model has none);
-    ``row_time_error_pct`` (relative error of the time per row, %); ``z_rms`` and
+    ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
+    error over its predicted standard deviation); ``z_rms`` and
     ``within_2sigma`` (RMS of error / sigma and the fraction of probes within 2 sigma; NaN
     for the reference); ``pair_z_rms`` and ``pair_within_2sigma`` (the same for the
     differences with every other solved camera, see the module docstring). Cameras the
@@ -199,6 +200,7 @@ def camera_accuracy(
             sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
             exposure_error_ms=exposure - true.exposure_ms,
             row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
+            row_time_z=_over(camera.row_time_ms - true.row_time_ms, float(np.sqrt(camera.covariance[2, 2]))),
             z_rms=z_rms,
             within_2sigma=within,
             pair_z_rms=pair_z_rms,
@@ -206,6 +208,11 @@ def camera_accuracy(
         )
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _over(error: float, std: float) -> float:
+    """``error / std``; NaN where there is no standard deviation."""
+    return error / std if std > 0 else float("nan")
 
 
 def stamp_errors(stamped: pd.DataFrame, model: SyncModel, truth: TrueClock) -> np.ndarray:
