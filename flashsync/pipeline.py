@@ -811,7 +811,7 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                _with_edge_bias(s),
+                _with_edge_bias(s, d.height),
                 float(s.exposure_ms) if s.exposure_ms > 0 else None,
                 str(d.video),
                 s.knots_ms,
@@ -975,26 +975,27 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
 EDGE_BIAS_SIGMAS = 1.5
 
 
-def _with_edge_bias(camera: CameraSolution) -> np.ndarray:
+def _with_edge_bias(camera: CameraSolution, height: int) -> np.ndarray:
     """The camera's covariance with the variance of its edges' shared offset,
     (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
     uncertain by that much against the flashes' instants (the reference camera's too); and
-    the variance of its events' row-dependent bias, (:data:`ROW_TIME_BIAS` x its time per
-    row)**2, added to its time per row's."""
+    the variance of its events' row-dependent bias, (:data:`ROW_BIAS_MS` / its height)**2,
+    added to its time per row's."""
     covariance = camera.covariance.copy()
     if np.isfinite(camera.edge_sigma_ms):
         covariance[1, 1] += (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
-    covariance[2, 2] += (ROW_TIME_BIAS * camera.row_time_ms) ** 2
+    covariance[2, 2] += (ROW_BIAS_MS / height) ** 2
     return covariance
 
 
 #: A camera's sync events share a bias that grows with the row (an edge's offset differs
-#: between the bands near the top and the bottom of a frame, split bands, LED pulses
-#: longer than the exposure): the time per row the events give is off by 0.32 % (median)
-#: over the simulator's random rigs, 1.4 % p90, where the solve claimed less. Its relative
-#: standard deviation, chosen on 23 rigs (README, "Calibration both ways"): error/sigma over
-#: 2 on 7 of 120 cameras instead of 15.
-ROW_TIME_BIAS = 0.003
+#: between the bands near the top and the bottom of a frame: split bands, codec ramps, LED
+#: pulses longer than the exposure), up to about this much (ms) across its frame: its time
+#: per row is off by this over its readout, relatively twice as much at 50 fps as at 25.
+#: Chosen on the 24 kept random rigs (README, "Time per row's sigma"): error/sigma of the
+#: time per row RMS 0.94 and 4 of 168 cameras over 3 (with 0.3 % of the time per row
+#: instead, as before: 1.56 and 12, mostly 50-60 fps cameras 1.4-4.3 % off).
+ROW_BIAS_MS = 0.15
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
