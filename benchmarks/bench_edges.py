@@ -1,7 +1,7 @@
 """Leading-edge precision against simulation truth, in rows (units of T_row).
 
 Run: python benchmarks/bench_edges.py [--clips N] [--sizes 320x180,640x360] [--crf 0,23] [--strengths 0.25,0.45]
-     python benchmarks/bench_edges.py --exposures 0.5,1,2,4,8,16 [--shapes ...] [--size 480x270]
+     python benchmarks/bench_edges.py --exposures 0.5,1,2,4,8,16 [--shapes ...] [--size 480x270] [--tone srgb]
 
 For each frame size and H.264 quality it renders ``--clips`` rink clips (25 fps, 20 + 60
 hidden rows, 8 flashes each at random rows and strengths 0.25-0.45 (``--strengths``; 1-2
@@ -14,7 +14,8 @@ median, 95th percentile and maximum error per setting.
 With ``--exposures 0.5,1,2,4,8,16`` it measures instead, per pulse shape (``--shapes``:
 the exponential, a xenon tube with a 1 ms tail, an LED rectangle of 0.4 ms, a slow cosine
 rise of 0.6 ms with a 0.5 ms decay) and exposure, one clip of ``--size`` (default
-480x270, crf 23, 25 fps, 8 flashes, strengths 0.3-0.7): the exposure the detector's bands
+480x270, crf 23, 25 fps, 8 flashes, strengths 0.3-0.7, the sensor's ``--tone`` curve:
+linear, srgb or gamma): the exposure the detector's bands
 give (median over bands with both edges of the true end-of-exposure time of the trailing
 edge's row minus the leading edge's, so the solve's time per row does not enter) minus
 the true exposure, and the median error of the leading edges against the instant the
@@ -32,6 +33,7 @@ import numpy as np
 from flashsync.detect import detect_video
 from flashsync.events import Edge, Flag
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
+from flashsync.simulation.scenario import TONES
 
 FPS, R0, R1, FLASHES = 25.0, 20, 60, 8
 
@@ -78,7 +80,9 @@ SHAPES = {
 }
 
 
-def exposure_errors(width: int, height: int, shape: str, exposure_ms: float, folder: Path) -> tuple[float, float]:
+def exposure_errors(
+    width: int, height: int, shape: str, exposure_ms: float, folder: Path, tone: str = "linear"
+) -> tuple[float, float]:
     """(exposure error, median leading-edge error), ms, of one rendered clip: the
     detector's band durations against the true exposure, its leading edges against the
     flashes' half-light instants (NaN without a band with both edges)."""
@@ -100,6 +104,7 @@ def exposure_errors(width: int, height: int, shape: str, exposure_ms: float, fol
         n_frames=5 * FLASHES + 6,
         noise_std=1.0,
         crf=23,
+        tone=tone,
     )
     truth = render_scenario(Scenario("exposure", (camera,), flashes=flashes, n_players=2, seed=7), folder)
     events = detect_video(folder / "cam.mp4").events
@@ -115,15 +120,15 @@ def exposure_errors(width: int, height: int, shape: str, exposure_ms: float, fol
     return exposure, float(np.median(edge_error)) if edge_error else float("nan")
 
 
-def exposure_table(width: int, height: int, shapes: list[str], exposures: list[float]) -> None:
+def exposure_table(width: int, height: int, shapes: list[str], exposures: list[float], tone: str) -> None:
     """Print exposure and leading-edge errors by pulse shape and exposure."""
-    print(f"{width}x{height} crf 23: exposure error / median leading-edge error, ms")
+    print(f"{width}x{height} crf 23, {tone} tone: exposure error / median leading-edge error, ms")
     print(f"{'shape':<12}" + "".join(f"{f'{e:g} ms':>16}" for e in exposures))
     for shape in shapes:
         cells = []
         for exposure_ms in exposures:
             with tempfile.TemporaryDirectory() as folder:
-                exposure, edge = exposure_errors(width, height, shape, exposure_ms, Path(folder))
+                exposure, edge = exposure_errors(width, height, shape, exposure_ms, Path(folder), tone)
             cells.append(f"{exposure:+.3f} / {edge:+.3f}")
         print(f"{shape:<12}" + "".join(f"{cell:>16}" for cell in cells), flush=True)
 
@@ -137,10 +142,12 @@ def main() -> None:
     parser.add_argument("--exposures", help="exposures, ms: measure exposure and edge errors by pulse shape instead")
     parser.add_argument("--shapes", default=",".join(SHAPES), help="pulse shapes of --exposures")
     parser.add_argument("--size", default="480x270", help="frame size of --exposures")
+    parser.add_argument("--tone", default="linear", choices=TONES, help="the sensor's tone curve in --exposures")
     args = parser.parse_args()
     if args.exposures:
         width, height = map(int, args.size.split("x"))
-        exposure_table(width, height, args.shapes.split(","), [float(e) for e in args.exposures.split(",")])
+        exposures = [float(e) for e in args.exposures.split(",")]
+        exposure_table(width, height, args.shapes.split(","), exposures, args.tone)
         return
     strengths = tuple(map(float, args.strengths.split(",")))
     print(
