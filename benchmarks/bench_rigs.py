@@ -204,6 +204,8 @@ def camera_block(cameras: pd.DataFrame) -> list[str]:
         f"  sync RMS ms              {distribution(cameras['rms_ms'], 'ms')}",
         f"  sync max ms              {distribution(cameras['max_ms'], 'ms')}",
     ]
+    if "reference_rms_ms" in cameras:  # not in the --json files of runs before 2026-11-26
+        lines.append(f"  RMS against ref, ms      {distribution(others['reference_rms_ms'], 'ms')}")
     for label, part in (
         ("exposure <= 6 ms, err ms", cameras[cameras["exposure_ms"] <= 6.0]),
         ("exposure > 6 ms, err ms", cameras[cameras["exposure_ms"] > 6.0]),

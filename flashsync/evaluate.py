@@ -164,7 +164,9 @@ def camera_accuracy(
     """Per camera of the truth, how far the model is from it.
 
     Columns: ``camera``; ``reference``; ``solved`` (in the model); ``rms_ms``, ``max_ms``
-    (sync error over the probes); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
+    (sync error over the probes); ``reference_rms_ms`` (RMS of the error of its times
+    against the reference's at the same instants: free of the global clock's own error;
+    NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
     ``exposure_error_ms`` (model - truth; NaN where the model has none);
     ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
     error over its predicted standard deviation); ``z_rms`` and
@@ -187,16 +189,18 @@ def camera_accuracy(
         pairs = [pair_errors(model, truth, name, other, row_step, sigma) for other in model.cameras if other != name]
         pair_error = np.concatenate([e for e, _ in pairs]) if pairs else np.empty(0)
         pair_std = np.concatenate([s for _, s in pairs]) if pairs else np.empty(0)
-        z_rms, within = (
-            _z_stats(*pair_errors(model, truth, name, model.reference, row_step, sigma))
+        against_reference, against_std = (
+            pair_errors(model, truth, name, model.reference, row_step, sigma)
             if name != model.reference
-            else (float("nan"), float("nan"))
+            else (np.empty(0), np.empty(0))
         )
+        z_rms, within = _z_stats(against_reference, against_std)
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
         row.update(
             rms_ms=float(np.sqrt(np.mean(error**2))),
             max_ms=float(np.max(np.abs(error))),
+            reference_rms_ms=float(np.sqrt(np.mean(against_reference**2))) if against_reference.size else np.nan,
             sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
             exposure_error_ms=exposure - true.exposure_ms,
             row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
