@@ -1031,7 +1031,7 @@ def _with_edge_bias(camera: CameraSolution, height: int) -> np.ndarray:
 #: per row is off by this over its readout, relatively twice as much at 50 fps as at 25.
 #: Chosen on the 24 kept random rigs (README, "Time per row's sigma"): error/sigma of the
 #: time per row RMS 0.94 and 4 of 168 cameras over 3 (with 0.3 % of the time per row
-#: instead, as before: 1.56 and 12, mostly 50-60 fps cameras 1.4-4.3 % off).
+#: instead, as before: 1.56 and 12, 9 of them 50-60 fps cameras 1.4-4.3 % off).
 ROW_BIAS_MS = 0.15
 
 
