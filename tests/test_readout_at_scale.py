@@ -41,9 +41,8 @@ def test_a_wrong_flip_is_estimated_to_lose_and_a_right_one_to_gain(rig):
     gains = pipeline._flip_gains(best, list(cameras))
     right = [gains[f"cam{c}"] for c in UPSIDE_DOWN]
     wrong = [gains[name] for name in cameras if int(name[3:]) not in UPSIDE_DOWN]
-    # each camera has about 96 edges: read the wrong way up they fit nothing (about -5 each
-    # against the right reading), read the right way they fit (about +3 against the wrong one,
-    # whose loose fit still takes some)
+    # each camera has about 96 edges: from the detected readings a wrong flip loses 238-350
+    # (about 3 an edge: its edges fit nothing), a right one gains 238-303
     assert min(right) > pipeline.DECIDED_LOG_LIKELIHOOD, right
     assert max(wrong) < -pipeline.FLIP_SCREEN_SLACK, wrong
     assert np.all(np.isfinite(right + wrong))
