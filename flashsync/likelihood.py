@@ -5,8 +5,9 @@ the other cameras' flashes held where they are (:func:`held_log_likelihood`).
 
 An edge the solve keeps (an inlier) counts as Gaussian about the fit with its camera's
 noise for edges of its kind; every other edge as uniform over a frame period. The held
-estimate lets the readout search skip the flips that cannot pay: a whole match-and-solve
-of 64 cameras x 500 flashes takes about 2 s, a camera refitted alone about a millisecond.
+estimate lets the readout search skip the flips that cannot pay and try together those
+that must (:func:`flashsync.pipeline._held_gains`): a whole match-and-solve of 64 cameras
+x 500 flashes takes about 2 s, a camera refitted alone about a millisecond.
 """
 
 from __future__ import annotations
