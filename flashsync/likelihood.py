@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.robust import MIN_SCALE_MS, cauchy_irls, mad_sigma
 from flashsync.solve import CAUCHY_K, EDGE_FLOOR_ROWS, EVENT_SIGMA_MS, ITERATIONS, REJECT_SIGMA
 
@@ -35,13 +34,15 @@ def edge_log_likelihood(sigma_ms: np.ndarray, n_edges: int, period_ms: float) ->
 @dataclass(frozen=True)
 class ReadingEdges:
     """One camera's band edges in one reading, arrays of shape (n,): ``t_frame_ms`` frame
-    times (ms, the camera's clock), ``q`` readout rows, ``trailing`` (bool: a band's trailing
-    edge, one exposure after its flash), ``band`` the event number a band's edges share, and
-    ``sigma_factor`` each edge's noise in units of a clean edge's. A trailing edge's band has
-    its leading edge among them."""
+    times (ms, the camera's clock), ``q`` readout rows, ``approximate_ms`` their times on the
+    camera's clock with a nominal time per row (:func:`flashsync.match.approximate_times_ms`),
+    ``trailing`` (bool: a band's trailing edge, one exposure after its flash), ``band`` the
+    event number a band's edges share, and ``sigma_factor`` each edge's noise in units of a
+    clean edge's. A trailing edge's band has its leading edge among them."""
 
     t_frame_ms: np.ndarray
     q: np.ndarray
+    approximate_ms: np.ndarray
     trailing: np.ndarray
     band: np.ndarray
     sigma_factor: np.ndarray
@@ -51,19 +52,18 @@ class ReadingEdges:
 class HeldClock:
     """What :func:`held_log_likelihood` knows of the camera: its clock on the held flashes'
     clock, coarsely (``alpha``, ``beta_ms``: global = alpha x own + beta), its frame period
-    and height (ms, rows), the prior on its time per row (``row_time_ms``: mean and std, ms),
-    and the largest time per row a sensor of its frame period can have (ms)."""
+    (ms), the prior on its time per row (``row_time_ms``: mean and std, ms), and the largest
+    time per row a sensor of its frame period can have (ms)."""
 
     alpha: float
     beta_ms: float
     period_ms: float
-    height: int
     row_time_ms: tuple[float, float]
     max_row_time_ms: float
 
 
 #: An edge takes the held flash within this many frame periods of its coarse time (its
-#: readout row at a nominal time per row: off by up to a readout, less than a period) and
+#: approximate time mapped by the coarse clock: off by up to a readout, less than a period) and
 #: none where two flashes lie that close.
 ASSIGN_PERIODS = 1.2
 #: Prior std of the refit's drift about the coarse clock's: a camera's rate does not depend
@@ -130,9 +130,8 @@ def _nearest_flash(edges: ReadingEdges, flashes: np.ndarray, clock: HeldClock) -
     edge the held flash (``flashes`` sorted) within :data:`ASSIGN_PERIODS` frame periods of
     its coarse time, where exactly one lies there; for a trailing edge its band's leading edge's."""
     flash = np.full(len(edges.t_frame_ms), np.nan)
-    row_time = clock.period_ms / (NOMINAL_HIDDEN_ROWS * clock.height)
     leading = np.flatnonzero(~edges.trailing)
-    coarse = clock.alpha * (edges.t_frame_ms[leading] + edges.q[leading] * row_time) + clock.beta_ms
+    coarse = clock.alpha * edges.approximate_ms[leading] + clock.beta_ms
     window = ASSIGN_PERIODS * clock.period_ms
     first = np.searchsorted(flashes, coarse - window)
     one = np.searchsorted(flashes, coarse + window, side="right") - first == 1

@@ -501,7 +501,6 @@ def _flip_gains(best: _Attempt, names: list[str]) -> dict[str, float]:
             solved.alpha,
             solved.beta_ms,
             period,
-            detection.height,
             priors[list(best.cameras).index(name)],
             READOUT_SLACK * period / detection.height,
         )
@@ -1055,6 +1054,7 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
     return ReadingEdges(
         events.t_frame_ms,
         _readout_rows(detection, events),
+        approximate_times_ms(detection, events),
         ~first,
         events.event,
         np.where(first & events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, 1.0),
