@@ -660,7 +660,9 @@ def _readout_doubts(
 ) -> tuple[dict[str, np.ndarray], list[str]]:
     """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
     flashes about as well as the chosen one (log-likelihood less than
-    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides):
+    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides;
+    :data:`UPSIDE_DOWN_PRIOR` more for each camera the chosen one reads upside down that the
+    rival does not, as :func:`_best_readout` asks):
     per camera, how far the two readings' times of each frame are apart (ms, the largest
     over its rows; into its sigma), and a warning line each."""
     spreads, warnings = {}, []
@@ -668,7 +670,8 @@ def _readout_doubts(
         if name not in best.connected or name not in other.connected or name in other.implausible:
             continue
         margin = best.score - other.score
-        if margin >= DECIDED_LOG_LIKELIHOOD:
+        turned = sum(c.flipped for c in best.cameras.values()) - sum(c.flipped for c in other.cameras.values())
+        if margin >= DECIDED_LOG_LIKELIHOOD + UPSIDE_DOWN_PRIOR * turned:
             continue
         chosen, alternative = best.model(reference).cameras[name], other.model(reference).cameras[name]
         frames = np.arange(chosen.n_frames)
