@@ -661,8 +661,8 @@ def _readout_doubts(
     """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
     flashes about as well as the chosen one (log-likelihood less than
     :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides;
-    :data:`UPSIDE_DOWN_PRIOR` more for each camera the chosen one reads upside down that the
-    rival does not, as :func:`_best_readout` asks):
+    :data:`UPSIDE_DOWN_PRIOR` more for each camera more that the chosen one reads upside down
+    than the rival, less for each fewer, as :func:`_best_readout` weighs them):
     per camera, how far the two readings' times of each frame are apart (ms, the largest
     over its rows; into its sigma), and a warning line each."""
     spreads, warnings = {}, []

@@ -4,6 +4,7 @@ of unknown cameras or no number, anchors naming two events of one camera, camera
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Band, Edge, Events
-from flashsync.pipeline import check_anchors, check_row_times
+from flashsync.pipeline import _readout_doubts, check_anchors, check_row_times
 
 
 @pytest.mark.parametrize(
@@ -51,3 +52,31 @@ def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
     model, report = synchronize([*detections, lonely])
     assert "cam3" not in model.cameras and any("cam3.mp4: 0 usable flash events" in w for w in report.warnings)
     assert report.flipped_found == []
+
+
+def _reading(score: float, upside_down: bool) -> SimpleNamespace:
+    """What :func:`~flashsync.pipeline._readout_doubts` reads of an attempt: cam2 read one way
+    or the other (cam1 upright in both), its score, and a model whose cam2 is 1 ms later
+    upside down."""
+    flipped = {"cam1": False, "cam2": upside_down}
+    clock = SimpleNamespace(
+        n_frames=3, height=10, flipped=upside_down, t_global_ms=lambda frame, row: frame * 40.0 + row + upside_down
+    )
+    return SimpleNamespace(
+        score=score,
+        connected=["cam1", "cam2"],
+        implausible=[],
+        cameras={name: SimpleNamespace(flipped=f, video=f"{name}.mp4") for name, f in flipped.items()},
+        model=lambda reference: SimpleNamespace(cameras={"cam2": clock}),
+    )
+
+
+@pytest.mark.parametrize("lead, warned", [(6.0, True), (8.0, False)])
+def test_a_flip_needs_the_upside_down_prior_in_its_lead_on_the_reference_given(lead, warned):
+    """A camera read upside down leads its upright reading by ``lead``: the search takes a flip
+    at DECIDED_LOG_LIKELIHOOD (5) plus UPSIDE_DOWN_PRIOR (2), so a lead of 6 is a near tie,
+    warned with the two readings' spread in sigma (it went unwarned when the check asked 5)."""
+    spreads, warnings = _readout_doubts(_reading(lead, True), {"cam2": _reading(0.0, False)}, "cam1")
+    assert (list(spreads), len(warnings)) == ((["cam2"], 1) if warned else ([], 0))
+    if warned:
+        assert spreads["cam2"] == pytest.approx([1.0, 1.0, 1.0]) and "cam2.mp4: read bottom-up" in warnings[0]
