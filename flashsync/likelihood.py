@@ -110,7 +110,8 @@ def held_log_likelihood(edges: ReadingEdges, flash_ms: np.ndarray, clock: HeldCl
         lambda residual, _: CAUCHY_K * mad_sigma(residual, MIN_SCALE_MS),
         ITERATIONS - 1,
     )
-    inlier = np.abs(residual) <= REJECT_SIGMA * mad_sigma(residual, MIN_SCALE_MS)
+    edge_floor = EDGE_FLOOR_ROWS * abs(float(x[2] / norms[2]))  # as the solve rejects
+    inlier = np.abs(residual) <= REJECT_SIGMA * max(mad_sigma(residual, MIN_SCALE_MS), edge_floor)
     x = solve(inlier.astype(np.float64))
     residual = observed - design @ x
     row_time = float(x[2] / norms[2])

@@ -123,7 +123,9 @@ class Solution:
 
 #: Noise of an edge against which the priors are weighed, ms.
 EVENT_SIGMA_MS = 0.05
-#: Equations beyond this many robust sigmas are rejected.
+#: Equations beyond this many robust sigmas are rejected, the sigma no less than the camera's
+#: edge floor (:data:`EDGE_FLOOR_ROWS` of its time per row): with few flashes the residuals'
+#: MAD is a few microseconds and edges half a row off, as located as edges are, were rejected.
 REJECT_SIGMA = 5.0
 #: Cauchy weights at this many robust sigmas (95 % efficiency for Gaussian noise).
 CAUCHY_K = 2.385
@@ -174,7 +176,7 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     """The robust iterations of :func:`solve_clocks` on a built system: Cauchy weights at
     ``cauchy_k`` robust sigmas, ``iterations`` solves in all; then the inliers weighed by
     their groups' own noise (:meth:`_System.group_scales`), which the covariance states."""
-    _, residual, _ = cauchy_irls(
+    x, residual, _ = cauchy_irls(
         system.solve,
         system.residuals,
         system.n_equations,
@@ -182,7 +184,8 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
         iterations - 1,
     )
     sigma = mad_sigma(residual, MIN_SCALE_MS)
-    inlier = np.abs(residual) <= reject_sigma * sigma
+    floor = _edge_floor_ms(system, x, n_cameras)[system.camera]
+    inlier = np.abs(residual) <= reject_sigma * np.maximum(sigma, floor)
     idle = IDLE_WEIGHT * (system.trailing & _all_rejected(system.group, inlier))
     weights = inlier + idle
     x = system.solve(weights)
