@@ -37,7 +37,7 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker, FlickerRemover
 from flashsync.model import readout_rows
 from flashsync.profiles import VideoInfo, read_profiles
-from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge
+from flashsync.ramp import BandFit, common_width, fit_pulse_band, fit_pulse_edge, fit_split_band
 from flashsync.recurrence import ECHO_FRACTION, RecurrenceFilter, Stripe
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.timestamps import check_timestamps
@@ -312,7 +312,8 @@ class EventDetector:
         """Locate the edges of a finished band (:func:`_local_edge`; a band in one frame is
         then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
         exposure apart and at the flash's half-light instant even where the exposure is
-        shorter than the pulse) and hold them for the recurrence filter; a band that darkens
+        shorter than the pulse; a band split across two frames too,
+        :func:`~flashsync.ramp.fit_split_band`) and hold them for the recurrence filter; a band that darkens
         rows without staying dark (a passing shadow) is not an event, and a degenerate one
         (no positive plateau to fit an edge on) is dropped and counted in
         :attr:`n_degenerate`."""
@@ -332,6 +333,9 @@ class EventDetector:
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
             whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
             leading, trailing = (whole.leading, whole.trailing) if whole is not None else (leading, trailing)
+        elif kind is Band.PULSE and len(event.segments) == 2 and leading is not None and trailing is not None:
+            split = fit_split_band(first.change, leading, last.change, trailing, trailing_rise, plateau)
+            leading, trailing = split if split is not None else (leading, trailing)
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()

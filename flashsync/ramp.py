@@ -50,11 +50,13 @@ HOLD_EVIDENCE = 10.0
 #: Exposures tried between the 10th and 90th percentile of a camera's band widths
 #: (:func:`common_width`).
 WIDTH_GRID = 9
-#: What the fitted model is: a whole band, or its rising or falling edge alone.
-BAND, RISING, FALLING = 0, 1, 2
+#: What the fitted model is: a whole band, its rising or falling edge alone, or a band split
+#: across two frames (:func:`fit_split_band`).
+BAND, RISING, FALLING, SPLIT = 0, 1, 2, 3
 #: Parameters of the model: (start, hold, decay, blur, width, level); ``start`` is the row
 #: whose exposure ended when the flash fired, ``width`` the exposure in rows, ``level`` the
-#: band's level for a row that saw the whole flash.
+#: band's level for a row that saw the whole flash. A split band has three more: the rows
+#: hidden between frames, the frame's height (not fitted) and the level in the next frame.
 N_PARAMETERS = 6
 
 
@@ -186,6 +188,65 @@ def fit_pulse_band(values: np.ndarray, leading: float, trailing: float, rise: fl
     return fit
 
 
+def fit_split_band(
+    before: np.ndarray, leading: float, after: np.ndarray, trailing: float, rise: float, level: float
+) -> tuple[float, float] | None:
+    """A band split across two frames, fitted whole: its leading edge in the first frame and
+    its trailing edge in the next.
+
+    The two parts are one band seen through the gap between frames (the rows hidden in the
+    blanking), so they share the pulse and the blur; alone, an edge cut by the frame's first
+    or last row shows only part of its ramp and its level is a guess (a pulse still rising
+    at the frame's last row). The model is the band of :func:`fit_pulse_band` with the next
+    frame's rows ``height + hidden`` rows on, ``hidden`` fitted (at least 0), and a level of
+    their own (a tone curve makes the relative change depend on the scene's brightness,
+    which differs between the bottom and the top of a frame).
+
+    Parameters
+    ----------
+    before, after : float arrays of shape (rows,)
+        Relative change per readout row of the two frames, the band positive; NaN where blind.
+    leading, trailing : float
+        The edges as located one by one, rows of ``before`` and of ``after``.
+    rise : float
+        Rows from 25 % to 75 % of the band's level at an edge (sets the window and the first
+        guess of the pulse's decay).
+    level : float
+        The band's plateau.
+
+    Returns
+    -------
+    (leading, trailing) rows, or None where the fit has too few rows or does not converge,
+    or it would move an edge further than the band's ramp could explain.
+    """
+    if not all(np.isfinite(v) for v in (leading, trailing, rise, level)) or level <= 0:
+        return None
+    decay, height = _decay_guess(rise), len(before)
+    first = _window(height, [leading], decay)
+    first = np.arange(first[0], height) if first.size else first
+    last = _window(len(after), [trailing], decay)
+    last = np.arange(0, last[-1] + 1) if last.size else last
+    keep_first = np.isfinite(before[first]) & (first != _censored_foot(before, leading, True))
+    keep_last = np.isfinite(after[last]) & ~_censored_tail(after, last, trailing)
+    if keep_first.sum() < 4 or keep_last.sum() < 4:
+        return None
+    x = np.concatenate([first[keep_first], -1 - last[keep_last]]).astype(np.float64)  # the next frame's rows < 0
+    y = np.concatenate([before[first[keep_first]], after[last[keep_last]]]).astype(np.float64)
+    hidden = 0.05 * height
+    width = trailing + height + hidden - leading  # one exposure from edge to edge
+    free = np.array([True, True, True, True, True, True, True, False, True])
+    fit = _best_fit(x, y, leading, width, rise, level, free, SPLIT, (hidden, float(height), level))
+    if fit is None:
+        return None
+    start, hold, decay_fit, _, width, _, hidden, _, _ = fit.p
+    half = _half_light(hold, decay_fit)
+    fitted = (start + half, start + half + width - height - hidden)
+    reach = 2.0 + 2.0 * decay
+    if abs(fitted[0] - leading) > reach or abs(fitted[1] - trailing) > reach:
+        return None
+    return float(fitted[0]), float(fitted[1])
+
+
 def common_width(fits: list[BandFit]) -> float | None:
     """The exposure, rows, that explains all of a camera's whole bands best: the minimum
     of the sum of their costs (each in units of its own noise) refitted with the exposure
@@ -219,9 +280,18 @@ def common_width(fits: list[BandFit]) -> float | None:
 
 
 def _best_fit(
-    x: np.ndarray, y: np.ndarray, edge: float, width: float, rise: float, level: float, free: np.ndarray, mode: int
+    x: np.ndarray,
+    y: np.ndarray,
+    edge: float,
+    width: float,
+    rise: float,
+    level: float,
+    free: np.ndarray,
+    mode: int,
+    more: tuple[float, ...] = (),
 ) -> BandFit | None:
-    """Fit of the model (:func:`_fit`) to rows ``x``, values ``y`` (float64): an exponential
+    """Fit of the model (:func:`_fit`; ``more``: the parameters past the sixth, a split
+    band's) to rows ``x``, values ``y`` (float64): an exponential
     pulse (no hold), or where it explains the rows clearly better (its cost on the rows
     lower by :data:`HOLD_EVIDENCE` times the residual variance), a pulse with a hold,
     fitted from a rectangle. Both start with their half-light point at ``edge`` and a
@@ -233,12 +303,10 @@ def _best_fit(
     f_scale = 0.05 * level
     no_hold = free.copy()
     no_hold[1] = False
-    exponential, converged = _fit(
-        x, y, np.array([edge - decay * np.log(2.0), 0.0, decay, START_BLUR, width, level]), no_hold, f_scale, mode
-    )
-    held, held_converged = _fit(
-        x, y, np.array([edge - 0.5 * hold, hold, MIN_DECAY, START_BLUR, width, level]), free, f_scale, mode
-    )
+    exponential_start = np.array([edge - decay * np.log(2.0), 0.0, decay, START_BLUR, width, level, *more])
+    exponential, converged = _fit(x, y, exponential_start, no_hold, f_scale, mode)
+    held_start = np.array([edge - 0.5 * hold, hold, MIN_DECAY, START_BLUR, width, level, *more])
+    held, held_converged = _fit(x, y, held_start, free, f_scale, mode)
     if held_converged:
         cost = _data_cost(x, y, held, f_scale, mode)
         if not converged or _data_cost(x, y, exponential, f_scale, mode) - cost > HOLD_EVIDENCE * cost / max(
@@ -377,10 +445,12 @@ def _clamp(p, mode):  # pragma: no cover - compiled
     """``p`` within bounds; in a band no longer a hold than the exposure (a band is the
     exposure convolved with the pulse: a rectangular pulse and an exposure trade places,
     and the longer of them is taken to be the exposure)."""
-    p[1] = min(max(p[1], 0.0), MAX_LENGTH if mode != BAND else max(p[4], 0.0))
+    p[1] = min(max(p[1], 0.0), MAX_LENGTH if mode == RISING or mode == FALLING else max(p[4], 0.0))
     p[2] = min(max(p[2], MIN_DECAY), MAX_LENGTH)
     p[3] = min(max(p[3], 0.0), MAX_BLUR)
     p[4] = max(p[4], 0.0)
+    if mode == SPLIT:
+        p[6] = max(p[6], 0.0)
     return p
 
 
@@ -398,13 +468,17 @@ def _cost(x, y, p, f_scale, mode):  # pragma: no cover - compiled
 def _model(x, p, mode):  # pragma: no cover - compiled
     """The band's relative change at row ``x`` for ``p`` = (start, hold, decay, blur,
     width, level): the whole band, its rising edge (the light from 0 to ``level``) or its
-    falling edge."""
+    falling edge; split across frames, ``p`` also has (hidden, height, level in the next
+    frame) and a row ``x < 0`` is row ``-1 - x`` of the next frame."""
+    level = p[5]
+    if mode == SPLIT and x < 0.0:  # row -1 - x of the next frame, height + hidden rows on
+        x, level = -1.0 - x + p[7] + p[6], p[8]
     share = _share(x - p[0], p[1], p[2], p[3])
     if mode == RISING:
-        return p[5] * share
+        return level * share
     if mode == FALLING:
-        return p[5] * (1.0 - share)
-    return p[5] * (share - _share(x - p[0] - p[4], p[1], p[2], p[3]))
+        return level * (1.0 - share)
+    return level * (share - _share(x - p[0] - p[4], p[1], p[2], p[3]))
 
 
 @njit
