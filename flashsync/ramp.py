@@ -21,8 +21,9 @@ An edge is the half-light point of the pulse before the blur: the row whose expo
 (leading) or started (trailing) when the flash had given half its light, the same instant
 in every camera whatever its exposure. A band whose two edges lie in one frame is fitted
 whole (:func:`fit_pulse_band`): its two edges are then exactly ``width`` rows apart, the
-exposure. An edge alone (a band split across frames) is fitted as a ramp
-(:func:`fit_pulse_edge`).
+exposure; a band split across two frames too, its parts one band across the rows hidden
+between frames (:func:`fit_split_band`). An edge alone (its partner hidden) is fitted as a
+ramp (:func:`fit_pulse_edge`).
 """
 
 from __future__ import annotations

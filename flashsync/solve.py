@@ -23,9 +23,10 @@ about equally noisy.
 
 All equations form one sparse system. Drift is solved as ``alpha - 1`` about the camera's
 mid time for conditioning. Iteratively reweighted least squares with Cauchy weights keeps a
-bad event from moving a camera; equations beyond ``reject_sigma`` robust sigmas are
-rejected and the final fit uses the rest, each weighed by the noise of its camera's
-equations of its kind (leading edges and band midpoints; trailing edges and band lengths).
+bad event from moving a camera; equations beyond ``reject_sigma`` robust sigmas (a sigma
+no smaller than the camera's edge floor, :data:`EDGE_FLOOR_ROWS` of a row) are rejected
+and the final fit uses the rest, each weighed by the noise of its camera's equations of
+its kind (leading edges and band midpoints; trailing edges and band lengths).
 Priors (a datasheet ``T_row``, a weak nominal one, clock drift within a few tens of ppm)
 enter as pseudo-observations.
 """
