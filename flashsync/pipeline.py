@@ -838,7 +838,7 @@ class _Attempt:
         return edge_log_likelihood(sigma, n_edges, _uniform_ms(self.cameras))
 
     def model(self, reference: str) -> SyncModel:
-        clocks = {}
+        clocks, counts = {}, _inlier_counts(self)
         for index, name in enumerate(self.connected):
             d, s = self.cameras[name], self.solution.cameras[index]
             clocks[name] = CameraClock(
@@ -850,7 +850,7 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                _with_edge_bias(s, d.height),
+                _with_edge_bias(s, d.height, counts.get(name, 0)),
                 float(s.exposure_ms) if s.exposure_ms > 0 else None,
                 str(d.video),
                 s.knots_ms,
@@ -1010,31 +1010,42 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
 #: residuals): the half-rise of a flash's band is not the same instant of the flash in every
 #: camera where the pulse is not the ramp the detector fits (a rectangle, a xenon tail, a
 #: slow rise) or the exposure is shorter than the pulse. Over the simulator's random rigs
-#: it is about this many times the camera's own edge noise (README, "Calibrated sigma").
+#: it is about this many times the camera's own edge noise (README, "Calibrated sigma"),
+#: for a camera of :data:`BIAS_EVENTS` sync events.
 EDGE_BIAS_SIGMAS = 1.5
 
 
-def _with_edge_bias(camera: CameraSolution, height: int) -> np.ndarray:
+def _with_edge_bias(camera: CameraSolution, height: int, n_events: int) -> np.ndarray:
     """The camera's covariance with the variance of its edges' shared offset,
     (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
     uncertain by that much against the flashes' instants (the reference camera's too); and
     the variance of its events' row-dependent bias, (:data:`ROW_BIAS_MS` / its height)**2,
-    added to its time per row's."""
+    added to its time per row's. Both for a camera of :data:`BIAS_EVENTS` inlier sync
+    events, and in proportion to one over its count: the biases differ from flash to flash
+    and average out over many."""
     covariance = camera.covariance.copy()
+    share = BIAS_EVENTS / max(n_events, 1)
     if np.isfinite(camera.edge_sigma_ms):
-        covariance[1, 1] += (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
-    covariance[2, 2] += (ROW_BIAS_MS / height) ** 2
+        covariance[1, 1] += share * (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
+    covariance[2, 2] += share * (ROW_BIAS_MS / height) ** 2
     return covariance
 
 
 #: A camera's sync events share a bias that grows with the row (an edge's offset differs
 #: between the bands near the top and the bottom of a frame: split bands, codec ramps, LED
-#: pulses longer than the exposure), up to about this much (ms) across its frame: its time
-#: per row is off by this over its readout, relatively twice as much at 50 fps as at 25.
-#: Chosen on the 24 kept random rigs (README, "Time per row's sigma"): error/sigma of the
-#: time per row RMS 0.94 and 4 of 168 cameras over 3 (with 0.3 % of the time per row
-#: instead, as before: 1.56 and 12, 9 of them 50-60 fps cameras 1.4-4.3 % off).
+#: pulses longer than the exposure), up to about this much (ms) across its frame for a
+#: camera of :data:`BIAS_EVENTS` sync events: its time per row is off by this over its
+#: readout, relatively twice as much at 50 fps as at 25. Chosen on the 24 kept random rigs
+#: (README, "Time per row's sigma"): error/sigma of the time per row RMS 0.94 and 4 of 168
+#: cameras over 3 (with 0.3 % of the time per row instead, as before: 1.56 and 12, 9 of
+#: them 50-60 fps cameras 1.4-4.3 % off).
 ROW_BIAS_MS = 0.15
+#: The inlier sync events of a camera whose biases are :data:`EDGE_BIAS_SIGMAS` and
+#: :data:`ROW_BIAS_MS`; a camera of n events has them times sqrt(BIAS_EVENTS / n). With
+#: the same terms for every camera, error/sigma on the 24 kept random rigs fell with the
+#: events (time per row RMS 1.42 for cameras of 5 events or fewer, 0.63 for 12-15; sync
+#: 0.84 and 0.53); with 7, 1.19 and 0.76, 0.75 and 0.63 (README, "Time per row's sigma").
+BIAS_EVENTS = 7
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:
