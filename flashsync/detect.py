@@ -51,6 +51,12 @@ SATURATED = 0.98
 #: --strengths 1.0,2.5``: 1.2-2.1 rows RMS, mean -1.2 to -2.0 rows, against 0.10-0.13 rows
 #: for unsaturated edges at crf 23); the solve weighs such edges down by its square.
 SATURATED_EDGE_SIGMA = 12.0
+#: The same for an edge flagged ``long_pulse``: in a camera whose flashes outlast its
+#: exposure (:func:`~flashsync.ramp.common_width`), an edge not fitted whole with that
+#: exposure (alone, or of a band split across frames) is read as if the exposure were the
+#: longer, up to half the difference off (``python -m pytest tests/test_exposure.py -k led``:
+#: 4-14 rows at 0.7-1.0 ms against pulses of 1.2-2 ms).
+LONG_PULSE_EDGE_SIGMA = 50.0
 #: Fewest profiles in the baseline before a frame is searched for bands (the first frames of
 #: a video, or after a light switch, compare with one or two frames only: codec and flicker
 #: differences between two frames are not averaged out).
@@ -167,7 +173,8 @@ class EventDetector:
         self._global_frames = 0
         self._n_events = 0
         self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
-        self._whole: list[BandFit] = []  # the bands fitted whole that passed the recurrence filter
+        self._whole: list[tuple[BandFit, int]] = []  # bands fitted whole that passed the recurrence
+        # filter, with where their two edges start in ``_edges``
         self.exposure_rows: float | None = None
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
@@ -247,12 +254,25 @@ class EventDetector:
         """Close a band still open at the end of the video; return all the events' edges.
         Sets :attr:`exposure_rows`: the exposure, readout rows, that the bands fitted whole
         share (:func:`~flashsync.ramp.common_width`; one band alone tells a short exposure
-        from the pulse's decay only to a row or two), or None with fewer than three."""
+        from the pulse's decay only to a row or two, and a rectangular pulse from the
+        exposure not at all where the pulse is the longer), or None with fewer than three;
+        where some of the pulses are longer than it, those bands' edges are the ones fitted
+        with that exposure, and every other flash edge is flagged ``long_pulse``."""
         if self._open is not None:
             self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
         self._number(self._recurrence.release())
-        self.exposure_rows = common_width(self._whole)
+        common = common_width([fit for fit, _ in self._whole])
+        self.exposure_rows, pulses_longer = common if common is not None else (None, False)
+        if pulses_longer:
+            settled = set()
+            for fit, at in self._whole:
+                if self._refit(fit, at, self.exposure_rows):
+                    settled |= {at, at + 1}
+            self._edges = [
+                edge if k in settled or edge[6] is not Band.PULSE else (*edge[:-1], edge[-1] | {Flag.LONG_PULSE})
+                for k, edge in enumerate(self._edges)
+            ]
         return Events.from_columns(*zip(*self._edges)) if self._edges else Events.concat([])
 
     @property
@@ -269,9 +289,30 @@ class EventDetector:
                 continue
             edges, whole = payload
             if whole is not None:
-                self._whole.append(whole)
+                self._whole.append((whole, len(self._edges)))
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
             self._n_events += 1
+
+    def _refit(self, fit: BandFit, at: int, width: float) -> bool:
+        """Settle the two edges of a band fitted whole, ``_edges[at]`` and ``_edges[at + 1]``,
+        in a camera whose exposure, ``width`` rows, some pulses outlast: where its fit with
+        that exposure finds the pulse the longer (alone the band was read the other way
+        round), they move to that fit; where it finds it the shorter, they stay. Unsettled
+        (False) where that fit does not converge or would move the band's middle (the same
+        whichever rectangle is the exposure) further than its ramp could explain."""
+        refit = fit.with_width(width, longer=True)
+        if refit is None:
+            return False
+        band = refit[0]
+        if band.p[1] <= width:
+            return True
+        reach = 2.0 + 2.0 * float(fit.p[2])
+        if abs(band.leading + band.trailing - fit.leading - fit.trailing) > 2.0 * reach:
+            return False
+        for k, row in ((at, band.leading), (at + 1, band.trailing)):
+            edge = self._edges[k]
+            self._edges[k] = (*edge[:4], readout_rows(row, self.height, self.settings.flipped), *edge[5:])
+        return True
 
     def _consume(self, segments: list[_Segment], readout: np.ndarray) -> None:
         """Follow bands across frames. A band reaching the first (last) lit row of the frame

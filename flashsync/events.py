@@ -42,6 +42,7 @@ class Flag(StrEnum):
     LEADING_HIDDEN = "leading_hidden"  # its leading edge fell into the blanking or dark rows
     TRAILING_HIDDEN = "trailing_hidden"  # its trailing edge did (or the video ended)
     SATURATED = "saturated"  # some of its rows clipped at white
+    LONG_PULSE = "long_pulse"  # its pulse may outlast the exposure, its edges not fitted with it
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flashsync.detect import SATURATED_EDGE_SIGMA, CameraDetection, DetectorSettings, detect_video
+from flashsync.detect import (
+    LONG_PULSE_EDGE_SIGMA,
+    SATURATED_EDGE_SIGMA,
+    CameraDetection,
+    DetectorSettings,
+    detect_video,
+)
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker
@@ -750,8 +756,8 @@ class Matches:
         Stored-image row and readout row of the edge.
     t_frame_ms : float array
         The frame's time (frame clock), ms.
-    saturated : bool array
-        The band clipped at white (its edge is noisier: :data:`~flashsync.detect.SATURATED_EDGE_SIGMA`).
+    edge_sigma : float array
+        The edge's noise in units of a clean one's (:func:`_edge_sigma`).
     """
 
     flash: np.ndarray
@@ -762,7 +768,7 @@ class Matches:
     row: np.ndarray
     q: np.ndarray
     t_frame_ms: np.ndarray
-    saturated: np.ndarray
+    edge_sigma: np.ndarray
 
     def __len__(self) -> int:
         return len(self.flash)
@@ -1059,9 +1065,8 @@ def _uniform_ms(cameras: dict[str, CameraDetection]) -> float:
 
 
 def _reading_edges(detection: CameraDetection) -> ReadingEdges:
-    """The edges a solve fits of the camera in its reading in use: its sync events
-    (saturated ones :data:`SATURATED_EDGE_SIGMA` times noisier), then its trailing edges
-    (:func:`_trailing_edges`)."""
+    """The edges a solve fits of the camera in its reading in use: its sync events (with
+    their noise, :func:`_edge_sigma`), then its trailing edges (:func:`_trailing_edges`)."""
     leading, trailing = _sync_events(detection), _trailing_edges(detection)
     events = Events.concat([leading, trailing])
     first = np.arange(len(events)) < len(leading)
@@ -1071,8 +1076,16 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
         approximate_times_ms(detection, events),
         ~first,
         events.event,
-        np.where(first & events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, 1.0),
+        np.where(first, _edge_sigma(events), 1.0),
     )
+
+
+def _edge_sigma(events: Events) -> np.ndarray:
+    """Each edge's noise in units of a clean one's: a clipped band's
+    (:data:`~flashsync.detect.SATURATED_EDGE_SIGMA`) and one that the flash may have
+    outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`) noisier."""
+    long_pulse = np.where(events.has_flag(Flag.LONG_PULSE), LONG_PULSE_EDGE_SIGMA, 1.0)
+    return np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, long_pulse)
 
 
 def _sync_events(detection: CameraDetection) -> Events:
@@ -1082,19 +1095,21 @@ def _sync_events(detection: CameraDetection) -> Events:
 
 
 def _trailing_edges(detection: CameraDetection) -> Events:
-    """The trailing edges that are timing evidence: of pulse bands with both edges visible
-    and unclipped (a band clipped at white is wider than the exposure)."""
+    """The trailing edges that are timing evidence: of pulse bands with both edges visible,
+    unclipped (a band clipped at white is wider than the exposure) and not flagged
+    ``long_pulse`` (a pulse longer than the exposure may have made it as wide)."""
     events = detection.events
     bands = events.bands()
     first = bands.first_edges()
-    bands = bands.take(bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.SATURATED)[first])
+    clean = ~events.has_flag(Flag.SATURATED)[first] & ~events.has_flag(Flag.LONG_PULSE)[first]
+    bands = bands.take(bands.complete & (events.band[first] == Band.PULSE) & clean)
     return events.take(bands.trailing)
 
 
 def _observations(cameras: list[CameraDetection], matches: Matches) -> Observations:
-    """What the solve fits: the matched leading edges (in the order of ``matches``; saturated
-    ones :data:`SATURATED_EDGE_SIGMA` times noisier), then the trailing edges
-    (:func:`_trailing_edges`) of their bands, on the same flashes."""
+    """What the solve fits: the matched leading edges (in the order of ``matches``, with
+    their noise), then the trailing edges (:func:`_trailing_edges`) of their bands, on the
+    same flashes."""
     camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
     leading_of = [np.full(len(matches), -1, dtype=np.int64)]
     for index, detection in enumerate(cameras):
@@ -1109,9 +1124,7 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         q.append(_readout_rows(detection, edges))
     n_leading = len(matches)
     trailing = np.arange(sum(len(c) for c in camera)) >= n_leading
-    sigma_factor = np.where(
-        np.concatenate([matches.saturated, np.zeros(int(trailing.sum()), dtype=bool)]), SATURATED_EDGE_SIGMA, 1.0
-    )
+    sigma_factor = np.concatenate([matches.edge_sigma, np.ones(int(trailing.sum()))])
     return Observations(
         np.concatenate(camera),
         np.concatenate(flash),
@@ -1146,5 +1159,5 @@ def _matches(
         events.row[keep],
         q[keep],
         events.t_frame_ms[keep],
-        events.has_flag(Flag.SATURATED)[keep],
+        _edge_sigma(events)[keep],
     )

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import exponnorm
 
-from flashsync.ramp import _ramp, fit_pulse_edge
+from flashsync.ramp import BAND, MIN_DECAY, _model, _ramp, common_width, fit_pulse_band, fit_pulse_edge
 
 SCALE, PLATEAU = 2.9, 0.35  # decay length (rows) and band level of the test clips
 
@@ -54,3 +54,47 @@ def test_a_zeroed_foot_row_does_not_pull_the_edge_late():
     values[:60] = 0.0  # row 59 saw 20 % of the light, reads 0
     crossing = half_crossing(values, True)
     assert abs(fit_pulse_edge(values, crossing, SCALE * np.log(3.0), PLATEAU, True) - edge) < 0.05
+
+
+def led_band(start: float, pulse: float, exposure: float, seed: int) -> np.ndarray:
+    """Relative change per row of a band of a rectangular pulse of ``pulse`` rows seen with
+    an exposure of ``exposure`` rows: the two rectangles convolved, blurred by 0.7 rows."""
+    x = np.arange(160.0)
+    p = np.array([start, pulse, MIN_DECAY, 0.7, exposure, PLATEAU])
+    values = np.array([_model(v, p, BAND) for v in x])
+    return values + np.random.default_rng(seed).normal(0.0, 0.002, x.size)
+
+
+def led_fits(pulses: list[float], exposure: float) -> list:
+    """Each band fitted whole from its half-level crossings, as the detector does."""
+    fits = []
+    for seed, pulse in enumerate(pulses):
+        values = led_band(40.0, pulse, exposure, seed)
+        level = float(np.max(values))
+        above = np.flatnonzero(values >= 0.5 * level)
+        fits.append(fit_pulse_band(values, float(above[0]), float(above[-1]), 0.5 * min(pulse, exposure), level))
+    return fits
+
+
+def test_the_bands_of_pulses_that_outlast_the_exposure_tell_the_exposure():
+    """A band alone reads the longer rectangle as the exposure: a 30-row pulse seen with a
+    12-row exposure fits as a 30-row exposure. The pulses differ from flash to flash, the
+    exposure does not: the camera's bands find 12 rows, and each band's refit with it puts
+    its leading edge at the pulse's half-light row (start + pulse / 2)."""
+    pulses = [20.0, 30.0, 42.0, 26.0, 36.0]
+    fits = led_fits(pulses, 12.0)
+    assert all(abs(fit.width - pulse) < 1.5 for fit, pulse in zip(fits, pulses))  # each alone: swapped
+    width, longer = common_width(fits)
+    assert longer and abs(width - 12.0) < 0.5
+    for fit, pulse in zip(fits, pulses):
+        band, _ = fit.with_width(width, longer=True)
+        assert abs(band.leading - (40.0 + 0.5 * pulse)) < 0.5
+
+
+def test_one_pulse_length_or_a_longer_exposure_keeps_the_exposure_the_longer():
+    """Pulses all of one length tell the two readings apart no better than one band: the
+    longer stays the exposure; so it does where the exposure outlasts every pulse."""
+    width, longer = common_width(led_fits([30.0] * 5, 12.0))
+    assert not longer and abs(width - 30.0) < 1.0
+    width, longer = common_width(led_fits([4.0, 9.0, 6.0, 12.0, 7.0], 25.0))
+    assert not longer and abs(width - 25.0) < 0.5
