@@ -216,7 +216,8 @@ class FlickerRemover:
         dense = [(t, p) for t, p, _ in self._queue]
         frames = [item for item in self._reservoir if item[0] < dense[0][0]] + dense
         profiles = np.stack([p for _, p in frames])
-        logs = np.stack([_row_log_ratio(p, np.median(profiles, axis=0), self.settings.min_level) for p in profiles])
+        middle = np.median(profiles, axis=0)
+        logs = np.stack([_row_log_ratio(p, middle, self.settings.min_level) for p in profiles])
         found = _learn_frequency(logs, self.settings)
         if found is None:
             return
