@@ -489,7 +489,8 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     periodogram of each frame's rows (mean removed, Hann taper, zero-padded), combined over
     frames by the median (a flashed frame does not count), gives the peak; Gauss-Newton steps
     of the robust fit of every frame (harmonics included) refine it, and the fitted
-    amplitudes over their noise decide."""
+    amplitudes over their noise decide; a frequency the steps move out of the band searched
+    (``settings.min_periods`` to ``max_periods`` per frame height) is no flicker."""
     if logs.shape[1] < MIN_ROWS:
         return None
     valid = np.isfinite(logs)
@@ -514,6 +515,8 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
         if not den > 0:
             return None
         nu += float(np.clip(num / den, -1.0 / pad, 1.0 / pad))
+    if not settings.min_periods <= nu * height <= settings.max_periods:
+        return None  # the steps walked out of the band searched: a slow gradient, not flicker
     amplitude = [math.hypot(f[0][1], f[0][2]) for f in fits if f[4]]
     noise = [f[1] * math.sqrt(2.0 / np.isfinite(row).sum()) for f, row in zip(fits, logs) if f[4]]
     if (

@@ -75,6 +75,23 @@ def test_no_flicker_no_estimate_and_profiles_untouched():
     assert np.array_equal(out, profiles)
 
 
+def test_a_slow_gradient_across_the_rows_is_not_flicker():
+    """A light whose slope across the rows drifts from frame to frame (a cloud, a lamp
+    warming up) has most of its power below the flicker band searched (0.75 periods per
+    frame height and up): the Gauss-Newton steps used to walk down to it, lock and divide a
+    false pattern out of every frame (and name it 100 Hz flicker)."""
+    frames, height, blocks = 200, 180, 8
+    rng = np.random.default_rng(0)
+    scene = rng.uniform(0.2, 0.7, (height, blocks))
+    slope = np.cumsum(rng.normal(0.0, 0.004, frames))  # log brightness, top row to bottom
+    light = np.exp(slope[:, None] * (np.arange(height) / height - 0.5))[:, :, None]
+    profiles = (scene * light * (1 + 0.002 * rng.standard_normal((frames, height, blocks)))).astype(np.float32)
+    remover = FlickerRemover(height)
+    out = np.array([p for _, p in remover(zip(np.arange(frames) * 40.0, profiles))])
+    assert remover.estimate() is None
+    assert np.array_equal(out, profiles)
+
+
 FPS, HEIGHT, R0, R1 = 30.0, 240, 8, 12
 ROW_MS = 1000.0 / FPS / (R0 + HEIGHT + R1)
 
