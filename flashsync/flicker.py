@@ -140,6 +140,10 @@ COPY_REFERENCES = 4
 MIN_ROWS = 16
 #: Gauss-Newton steps on the learning frames.
 LEARNING_STEPS = 4
+#: Share of the flicker thresholds (depth, signal to noise) that the fits at the periodogram's
+#: peak must reach for the Gauss-Newton steps to be taken (most videos have no flicker: one
+#: round of fits tells, at a quarter of the cost).
+PRETEST_MARGIN = 0.5
 
 
 class FlickerRemover:
@@ -168,9 +172,10 @@ class FlickerRemover:
         self._fits: list[tuple[int, float, complex]] = []  # (frame, t_ms, fundamental)
         self._evidence = _Evidence()
         self._mean_phasor = 0j
-        self._key: tuple[np.ndarray, np.ndarray] | None = None  # last key frame: (profile, log correction)
-        self._pending: deque[tuple[float, np.ndarray, str, np.ndarray]] = deque()  # corrections not yet applied
-        self._before: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
+        # log corrections: None before a flicker is locked (nothing to divide out)
+        self._key: tuple[np.ndarray, np.ndarray | None] | None = None  # last key frame: (profile, log correction)
+        self._pending: deque[tuple[float, np.ndarray, str, np.ndarray | None]] = deque()  # corrections not yet applied
+        self._before: deque[tuple[np.ndarray, np.ndarray | None]] = deque(maxlen=COPY_REFERENCES)  # (profile, applied)
 
     def __call__(self, frames: Iterable[tuple[float, np.ndarray]]) -> Iterator[tuple[float, np.ndarray]]:
         for t_ms, profile, *picture in frames:
@@ -248,10 +253,12 @@ class FlickerRemover:
             )
         self._lock = lock
 
-    def _correct(self, t_ms: float, profile: np.ndarray, picture: str) -> tuple[float, np.ndarray, str, np.ndarray]:
+    def _correct(
+        self, t_ms: float, profile: np.ndarray, picture: str
+    ) -> tuple[float, np.ndarray, str, np.ndarray | None]:
         """Fit the frame's pattern against the running mean, learn from it; the frame with its
-        log correction (per row, repeated over the blocks: shape (height, blocks), float32),
-        divided out by :meth:`_apply`.
+        log correction (per row, repeated over the blocks: shape (height, blocks), float32;
+        None before a flicker is locked), divided out by :meth:`_apply`.
 
         What the codec keeps from frame to frame (a row whose blocks it skips) holds the
         pattern of the last key frame, where it refreshes everything: each row removes its
@@ -260,7 +267,7 @@ class FlickerRemover:
         self._n_out += 1
         lock = self._lock
         if lock is None:
-            return t_ms, profile, picture, np.zeros(profile.shape, np.float32)
+            return t_ms, profile, picture, None
         y = _row_log_ratio(profile, lock.mean, self.settings.min_level)
         init = lock.predict(t_ms)
         coef, scale, num, den, ok = _fit_frame(y, lock.basis, init, STRIPS, lock.scale if lock.last else 0.0)
@@ -309,20 +316,23 @@ class FlickerRemover:
         frame's blocks, and one just after an auto-exposure step copies the rows that the
         next P-frame codes again at its own phase."""
         t_ms, profile, picture, applied = self._pending.popleft()
+        sources = []
         if picture != "I":
             sources = ([self._key] if self._key is not None else []) + list(reversed(self._before))
             if picture == "B":
                 sources += [(p, c) for _, p, kind, c in self._pending if kind != "B"][:1]
+        if applied is not None or any(correction is not None for _, correction in sources):
+            applied = np.zeros(profile.shape, np.float32) if applied is None else applied
             free = np.ones(profile.shape, dtype=bool)
             for source, correction in sources:
                 if source.shape == profile.shape:
                     copied = free & (profile == source)
-                    applied[copied] = correction[copied]
+                    applied[copied] = 0.0 if correction is None else correction[copied]
                     free &= ~copied
         if picture == "I":
             self._key = (profile, applied)
         self._before.append((profile, applied))
-        return t_ms, profile / np.exp(applied)
+        return t_ms, profile if applied is None else profile / np.exp(applied)
 
     def estimate(self) -> Flicker | None:
         """The flicker found (None: no rolling flicker), once the frames are all through.
@@ -489,8 +499,9 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     periodogram of each frame's rows (mean removed, Hann taper, zero-padded), combined over
     frames by the median (a flashed frame does not count), gives the peak; Gauss-Newton steps
     of the robust fit of every frame (harmonics included) refine it, and the fitted
-    amplitudes over their noise decide; a frequency the steps move out of the band searched
-    (``settings.min_periods`` to ``max_periods`` per frame height) is no flicker."""
+    amplitudes over their noise decide. The steps are taken only where the fits at the peak
+    reach :data:`PRETEST_MARGIN` of the thresholds, and a frequency they move out of the band
+    searched (``settings.min_periods`` to ``max_periods`` per frame height) is no flicker."""
     if logs.shape[1] < MIN_ROWS:
         return None
     valid = np.isfinite(logs)
@@ -507,9 +518,11 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     if not search.size:
         return None
     nu = float(grid[search[np.argmax(power[search])]])
-    for _ in range(LEARNING_STEPS):
+    for step in range(LEARNING_STEPS):
         basis = _basis(height, nu, settings.harmonics)
         fits = [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0) for row in logs]
+        if step == 0 and _median_amplitude(fits, logs, settings, PRETEST_MARGIN) is None:
+            return None
         num = sum(f[2][0] / f[1] ** 2 for f in fits if f[4])
         den = sum(f[3][0] / f[1] ** 2 for f in fits if f[4])
         if not den > 0:
@@ -517,15 +530,23 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
         nu += float(np.clip(num / den, -1.0 / pad, 1.0 / pad))
     if not settings.min_periods <= nu * height <= settings.max_periods:
         return None  # the steps walked out of the band searched: a slow gradient, not flicker
+    amplitude = _median_amplitude(fits, logs, settings, 1.0)
+    return None if amplitude is None else (nu, amplitude)
+
+
+def _median_amplitude(fits: list, logs: np.ndarray, settings: FlickerSettings, margin: float) -> float | None:
+    """The median amplitude of the fundamental over the frames ``fits`` (:func:`_fit_frame`
+    of each row of ``logs``) could fit, or None where it, or its median ratio to its noise,
+    is below ``margin`` times what counts as flicker (``settings.min_depth``, ``min_snr``)."""
     amplitude = [math.hypot(f[0][1], f[0][2]) for f in fits if f[4]]
     noise = [f[1] * math.sqrt(2.0 / np.isfinite(row).sum()) for f, row in zip(fits, logs) if f[4]]
     if (
         not amplitude
-        or np.median(amplitude) < settings.min_depth
-        or np.median(np.divide(amplitude, noise)) < settings.min_snr
+        or np.median(amplitude) < margin * settings.min_depth
+        or np.median(np.divide(amplitude, noise)) < margin * settings.min_snr
     ):
         return None
-    return nu, float(np.median(amplitude))
+    return float(np.median(amplitude))
 
 
 def _rotation_per_ms(fundamentals: np.ndarray, times: np.ndarray) -> float:
