@@ -256,7 +256,9 @@ class _Pulses:
         Approximate time of each band on the camera's own clock, ms: the mean of its visible
         edges' :func:`~flashsync.match.approximate_times_ms`.
     clean : bool array of shape (n_bands,)
-        Both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image.
+        Both edges visible and at least :data:`EDGE_MARGIN_ROWS` inside the image, and not
+        flagged ``long_pulse`` (its edges may be half the pulse's excess over the exposure
+        off: ``sync`` leaves its length out and weighs its leading edge down).
     """
 
     events: Events
@@ -278,7 +280,8 @@ def _pulses(detection: CameraDetection) -> _Pulses:
         np.where(lead, times[bands.leading], times[bands.trailing]),
     )
     inside = (events.row >= EDGE_MARGIN_ROWS) & (events.row <= detection.height - 1 - EDGE_MARGIN_ROWS)
-    clean = lead & trail & inside[bands.leading] & inside[bands.trailing]
+    outlasted = events.has_flag(Flag.LONG_PULSE)[bands.first_edges()]
+    clean = lead & trail & inside[bands.leading] & inside[bands.trailing] & ~outlasted
     return _Pulses(events, bands, time_ms, clean)
 
 
@@ -331,15 +334,18 @@ def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
     same number of frames and are clipped at white or not as it is (with at least three of
     them), ms, shape (n_bands,); NaN for a band that is not clean or has no such kind. Every
     clean band counts here, one whose edge a codec artefact moved too (:func:`_edge_noise_ms`
-    leaves out the outliers)."""
+    leaves out the outliers), but one whose length is the camera's exposure to a millionth
+    of a row: fitted at it (the exposure was read with pulses longer than it,
+    :func:`~flashsync.ramp.common_width`), its length was not measured."""
     excess = np.full(len(mine.clean), np.nan)
     clean = np.flatnonzero(mine.clean)
     bands = mine.bands.take(mine.clean)
     frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
     lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
     clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
+    fixed = np.abs(lengths - camera.exposure_rows) < 1e-6 if camera.exposure_rows is not None else False
     for span, saturated in sorted({(int(f), bool(c)) for f, c in zip(frames, clipped)}):
-        kind = (frames == span) & (clipped == saturated)
+        kind = (frames == span) & (clipped == saturated) & ~fixed
         if np.count_nonzero(kind) >= 3:
             rows = lengths[kind]
             scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
