@@ -424,40 +424,35 @@ def _best_readout(
                 tried[key] = None
         return tried[key]
 
-    def evidence(result: _Attempt) -> float:
-        """The score less :data:`UPSIDE_DOWN_PRIOR` per camera read the other way than detected."""
-        turned = sum(result.cameras[n].flipped != cameras[n].flipped for n in undecided)
-        return result.score - UPSIDE_DOWN_PRIOR * turned
-
     best = tries(cameras, set())
     every = 2 ** len(undecided) <= EVERY_READING
     if every:
         readings = [flips for flips in product((False, True), repeat=len(undecided)) if not _mirror(flips, cameras)]
         results = [r for flips in readings if (r := tries(cameras, set(compress(undecided, flips)))) is not None]
-        top = max(results, key=evidence, default=None)
-        if best is None or (top is not None and evidence(top) >= evidence(best) + DECIDED_LOG_LIKELIHOOD):
+        top = max(results, key=lambda r: r.evidence, default=None)
+        if best is None or (top is not None and top.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD):
             best = top
     while not every:
         start = best.cameras if best is not None else cameras
         gains = _held_gains(best, undecided)
         certain = {name for name, gain in gains.items() if gain > FLIP_SCREEN_SLACK}
         if certain and (together := tries(start, certain)) is not None:
-            if evidence(together) >= evidence(best) + DECIDED_LOG_LIKELIHOOD:
+            if together.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD:
                 best = together
                 continue
         singles = {name: tries(start, {name}) for name in undecided if gains.get(name, 0.0) >= -FLIP_SCREEN_SLACK}
         steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
-            best = max(steps, key=evidence)
+            best = max(steps, key=lambda r: r.evidence)
             continue
-        better = [r for r in steps if best is not None and evidence(r) >= evidence(best) + DECIDED_LOG_LIKELIHOOD]
+        better = [r for r in steps if best is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
         if not better and best is not None:
             groups = [{name, *_losing(best, r, undecided)} for name, r in singles.items() if r is not None]
             steps = [tries(start, group) for group in groups if len(group) > 1]
-            better = [r for r in steps if r is not None and evidence(r) >= evidence(best) + DECIDED_LOG_LIKELIHOOD]
+            better = [r for r in steps if r is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
         if not better:
             break
-        best = max(better, key=evidence)
+        best = max(better, key=lambda r: r.evidence)
     if best is None:
         raise failure
     rivals = {}
@@ -665,20 +660,17 @@ def _readout_doubts(
     best: _Attempt, rivals: dict[str, _Attempt], reference: str
 ) -> tuple[dict[str, np.ndarray], list[str]]:
     """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
-    flashes about as well as the chosen one (log-likelihood less than
-    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides;
-    :data:`UPSIDE_DOWN_PRIOR` more for each camera more that the chosen one reads upside down
-    than the rival, less for each fewer, as :func:`_best_readout` weighs them):
+    flashes about as well as the chosen one (its :attr:`_Attempt.evidence` less than
+    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides):
     per camera, how far the two readings' times of each frame are apart (ms, the largest
     over its rows; into its sigma), and a warning line each."""
     spreads, warnings = {}, []
     for name, other in rivals.items():
         if name not in best.connected or name not in other.connected or name in other.implausible:
             continue
-        margin = best.score - other.score
-        turned = sum(c.flipped for c in best.cameras.values()) - sum(c.flipped for c in other.cameras.values())
-        if margin >= DECIDED_LOG_LIKELIHOOD + UPSIDE_DOWN_PRIOR * turned:
+        if best.evidence >= other.evidence + DECIDED_LOG_LIKELIHOOD:
             continue
+        margin = best.score - other.score
         chosen, alternative = best.model(reference).cameras[name], other.model(reference).cameras[name]
         frames = np.arange(chosen.n_frames)
         rows = np.array([0.0, chosen.height - 1.0])
@@ -842,6 +834,12 @@ class _Attempt:
         sigma = (sigma * self.solution.sigma_factor)[inlier]
         n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
         return edge_log_likelihood(sigma, n_edges, _uniform_ms(self.cameras))
+
+    @property
+    def evidence(self) -> float:
+        """The :attr:`score` less :data:`UPSIDE_DOWN_PRIOR` per camera read upside down: what
+        readings are compared by (:func:`_best_readout`, :func:`_readout_doubts`)."""
+        return self.score - UPSIDE_DOWN_PRIOR * sum(d.flipped for d in self.cameras.values())
 
     def model(self, reference: str) -> SyncModel:
         clocks, counts = {}, _inlier_counts(self)

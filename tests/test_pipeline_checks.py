@@ -13,7 +13,7 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Band, Edge, Events
-from flashsync.pipeline import _readout_doubts, check_anchors, check_row_times
+from flashsync.pipeline import _Attempt, _readout_doubts, check_anchors, check_row_times
 
 
 @pytest.mark.parametrize(
@@ -62,13 +62,15 @@ def _reading(score: float, upside_down: bool) -> SimpleNamespace:
     clock = SimpleNamespace(
         n_frames=3, height=10, flipped=upside_down, t_global_ms=lambda frame, row: frame * 40.0 + row + upside_down
     )
-    return SimpleNamespace(
+    reading = SimpleNamespace(
         score=score,
         connected=["cam1", "cam2"],
         implausible=[],
         cameras={name: SimpleNamespace(flipped=f, video=f"{name}.mp4") for name, f in flipped.items()},
         model=lambda reference: SimpleNamespace(cameras={"cam2": clock}),
     )
+    reading.evidence = _Attempt.evidence.fget(reading)  # the score less the upside-down prior
+    return reading
 
 
 @pytest.mark.parametrize("lead, warned", [(6.0, True), (8.0, False)])
