@@ -9,7 +9,10 @@ tolerance of a readout direction that may be wrong (one frame period): loose eno
 every effect of the catalogue (an upside-down camera misplaces a band by less than a frame,
 a dropped frame or a clock drift does not move a stamp). Nothing here depends on the model
 under test. A camera whose stamps change rate is paired both ways (its stamps as they
-are, and at one rate throughout), and the pairing that ties the most bands is kept.
+are, and at one rate throughout), and every pairing also at ``sync``'s tolerance (a
+quarter of a frame period, every readout direction as told): flashes at nearly regular
+intervals can leave the loose one a rival shift, and a pair with one is not paired. The
+pairing that ties the most bands is kept (the loose one on a tie).
 """
 
 from __future__ import annotations
@@ -182,12 +185,14 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
             f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
             parameter="reference",
         )
-    tolerance = match_tolerance_ms([median_step_ms(d.frame_times_ms) for d in detections], readout_known=False)
+    periods = [median_step_ms(d.frame_times_ms) for d in detections]
     matchings = []
-    for times in product(*map(_frame_times_ms, detections)):
-        pulses = {d.camera: _pulses(d.retimed(t)) for d, t in zip(detections, times)}
-        matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
-        matchings.append((len(matching.flashes), len(matchings), matching, pulses))
+    for readout_known in (True, False):
+        tolerance = match_tolerance_ms(periods, readout_known)
+        for times in product(*map(_frame_times_ms, detections)):
+            pulses = {d.camera: _pulses(d.retimed(t)) for d, t in zip(detections, times)}
+            matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
+            matchings.append((len(matching.flashes), len(matchings), matching, pulses))
     _, _, matching, pulses = max(matchings)
     tied = matching.tied_to(reference)
     kept = [d for d in detections if d.camera in tied]
