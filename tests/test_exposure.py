@@ -12,12 +12,14 @@ for the xenon pulse at 0.5-8 ms, +0.3 to +0.6 ms for the slow rise at 0.5-4 ms, 
 for the LED at 0.5 ms).
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from flashsync import detect_videos, synchronize
 from flashsync.diagnose import diagnose, format_diagnosis
-from flashsync.diagnose.measure import _pulses
+from flashsync.diagnose.measure import _length_excess_ms, _pulses
 from flashsync.evaluate import camera_accuracy, sync_errors
 from flashsync.events import Edge, Flag
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
@@ -170,3 +172,16 @@ def test_diagnose_leaves_out_bands_flagged_long_pulse_as_sync_does(led):
     assert (flagged & complete).any()
     assert not (pulses.clean & flagged).any()
     assert pulses.clean[complete & ~flagged].sum() >= 4
+
+
+def test_diagnose_measures_the_lengths_of_a_camera_without_a_common_exposure(led):
+    """A camera with fewer than three bands fitted whole has no common exposure
+    (``exposure_rows`` None): its band lengths are all measured, as where it has one that
+    none of them was fitted at (the test of lengths fitted at the exposure once indexed
+    them by position there: a random rig's cameras had edge noise 0 and chi-squared inf)."""
+    _, detections = led
+    ref = next(d for d in detections if d.camera == "ref")
+    excess = _length_excess_ms(ref, _pulses(ref))
+    assert np.isfinite(excess).sum() >= 6
+    unknown = replace(ref, exposure_rows=None)
+    np.testing.assert_array_equal(_length_excess_ms(unknown, _pulses(unknown)), excess)

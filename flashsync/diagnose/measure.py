@@ -348,7 +348,7 @@ def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
     frames = mine.events.frame[bands.trailing] - mine.events.frame[bands.leading]
     lengths = mine.events.row[bands.trailing] - mine.events.row[bands.leading]
     clipped = mine.events.has_flag(Flag.SATURATED)[bands.leading]
-    fixed = np.abs(lengths - camera.exposure_rows) < 1e-6 if camera.exposure_rows is not None else False
+    fixed = np.abs(lengths - (np.nan if camera.exposure_rows is None else camera.exposure_rows)) < 1e-6
     for span, saturated in sorted({(int(f), bool(c)) for f, c in zip(frames, clipped)}):
         kind = (frames == span) & (clipped == saturated) & ~fixed
         if np.count_nonzero(kind) >= 3:
