@@ -9,7 +9,9 @@ is longer than the pulse: xenon bands came out up to 0.9 ms long at every exposu
 trailing plateau read in the leading ramp) and 0.5 ms exposures 0.4-0.7 ms long for
 every shape, their leading edges 1-4 rows early (before: exposure errors +0.8 to +1.3 ms
 for the xenon pulse at 0.5-8 ms, +0.3 to +0.6 ms for the slow rise at 0.5-4 ms, +0.16 ms
-for the LED at 0.5 ms).
+for the LED at 0.5 ms). An LED rig whose pulses outlast two cameras' exposures is
+synchronised and diagnosed (``flashsync diagnose`` must not take the band lengths fitted at
+an exposure for noise, nor measure the bands flagged ``long_pulse``).
 """
 
 from dataclasses import replace
