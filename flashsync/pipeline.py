@@ -245,7 +245,8 @@ def synchronize(
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
-    for name, spread in spreads.items():
+    outlasted, outlasted_warnings = _outlasted_exposures(best)
+    for name, spread in (spreads | outlasted).items():
         frame_std[name] = np.hypot(frame_std[name], spread)
     report.alignments = best.alignments
     report.warnings = (
@@ -254,6 +255,7 @@ def synchronize(
         + readout_warnings
         + _few_flashes(best, reference)
         + _row_time_doubts(best)
+        + outlasted_warnings
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
@@ -654,6 +656,44 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
                 "across frames, or the same frame rate as the others); give it (--row-time CAMERA=MS) if known"
             )
     return warnings
+
+
+#: A camera's whole pulse bands (in one frame, not ``long_pulse``) whose median length is
+#: this many times its common exposure: its LED pulses outlast an exposure too short to be
+#: read with them (:data:`~flashsync.ramp.MIN_SWAPPED_ROWS`), and its bands' edges are half
+#: the difference apart from where they belong. On the 24 kept random rigs' cameras no
+#: camera without a pulse longer than its exposure reaches 1.08; six LED cameras of 3.7-7.5
+#: rows reach 1.25-1.59.
+OUTLASTED_SHARE = 1.2
+
+
+def _outlasted_exposures(best: _Attempt) -> tuple[dict[str, float], list[str]]:
+    """Per camera whose bands are far longer than its exposure (:data:`OUTLASTED_SHARE`),
+    how late its times may be (ms, half the difference, taken as one standard deviation
+    into its sigma: a band's midpoint is right, its edges are not), and a warning line each."""
+    spreads, warnings = {}, []
+    for name, solution in zip(best.connected, best.solution.cameras):
+        detection = best.cameras[name]
+        if detection.exposure_rows is None:
+            continue
+        events = detection.events
+        bands = events.bands()
+        first = bands.first_edges()
+        clean = bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.LONG_PULSE)[first]
+        bands = bands.take(clean)
+        whole = events.frame[bands.leading] == events.frame[bands.trailing]
+        lengths = np.abs(events.row[bands.trailing] - events.row[bands.leading])[whole]
+        if len(lengths) < 3 or np.median(lengths) < OUTLASTED_SHARE * detection.exposure_rows:
+            continue
+        excess_ms = (float(np.median(lengths)) - detection.exposure_rows) * abs(solution.row_time_ms)
+        spreads[name] = excess_ms / 2.0
+        warnings.append(
+            f"{detection.video}: its bands are {np.median(lengths) / detection.exposure_rows:.1f} times as long as "
+            f"the exposure they share ({detection.exposure_rows:.1f} rows): flash pulses longer than an exposure "
+            f"too short to tell them apart; its exposure may be up to {excess_ms:.2f} ms long and its times "
+            f"{excess_ms / 2.0:.2f} ms late (in its sigma)"
+        )
+    return spreads, warnings
 
 
 def _readout_doubts(

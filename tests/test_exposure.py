@@ -116,6 +116,35 @@ def led_rig() -> Scenario:
     return Scenario("led-longer-than-exposure", cameras, duration_ms=4000.0, flashes=flashes, n_players=2, seed=4)
 
 
+def test_pulses_outlasting_an_exposure_too_short_to_read_widen_its_sigma(tmp_path):
+    """A 0.7 ms exposure is 5 rows at 25 fps and 270 lines: too short to be read with the
+    LED pulses (0.2-2 ms) that outlast it, so its bands keep the pulses' length and their
+    edges are half the difference off (exposure 0.67 ms long, times 0.37 ms RMS off). Its
+    bands, twice as long as the exposure they share, say so: a warning, and half the
+    difference in its sigma (error/sigma 3.7 before, 0.96 now; the times themselves are
+    unchanged)."""
+    rng = np.random.default_rng(5)
+    cameras = (
+        CameraSpec("ref", 480, 270, 25.0, r0=6, r1=8, exposure_ms=8.0, noise_std=1.0, crf=23, start_ms=120.0),
+        CameraSpec("short", 480, 270, 25.0, r0=6, r1=8, exposure_ms=0.7, noise_std=1.0, crf=23, start_ms=45.0),
+        CameraSpec("fast", 480, 270, 50.0, r0=6, r1=8, exposure_ms=4.0, noise_std=1.0, crf=23, start_ms=310.0),
+    )
+    instants = 300.0 + np.sort(rng.uniform(0, 300, 8)) + 420.0 * np.arange(8)
+    holds = rng.permutation([0.2, 0.4, 1.2, 1.4, 1.6, 1.8, 2.0, 1.5])
+    flashes = tuple(
+        FlashSpec(float(t), float(rng.uniform(0.4, 0.6)), decay_ms=0.0, hold_ms=float(hold))
+        for t, hold in zip(instants, holds)
+    )
+    scenario = Scenario("short-led", cameras, duration_ms=4000.0, flashes=flashes, n_players=2, seed=4)
+    truth = render_scenario(scenario, tmp_path)
+    model, report = synchronize(detect_videos([tmp_path / f"{c.name}.mp4" for c in cameras]))
+    warned = [w for w in report.warnings if "times as long as the exposure they share" in w]
+    assert len(warned) == 1 and warned[0].startswith(str(tmp_path / "short.mp4")), report.warnings
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    assert accuracy.rms_ms["short"] > 0.2, accuracy  # the bias it warns of
+    assert accuracy.z_rms["short"] < 2.0 and accuracy.pair_z_rms.max() < 2.0, accuracy
+
+
 @pytest.fixture(scope="module")
 def led(tmp_path_factory):
     """The LED rig rendered and detected once: (truth, detections)."""
