@@ -617,9 +617,11 @@ class CameraDetection:
     n_recurring, n_degenerate : int
         Bands dropped as recurring at the same rows (:mod:`flashsync.recurrence`) and as
         degenerate (no plateau to fit an edge on), in the first reading.
-    exposure_rows : float or None
-        The exposure in readout rows that the camera's bands within one frame share
-        (:attr:`EventDetector.exposure_rows`); None where fewer than three were fitted.
+    top_down_exposure_rows, bottom_up_exposure_rows : float or None
+        The exposure in readout rows that the camera's bands within one frame share, as
+        each reading fitted them (:attr:`EventDetector.exposure_rows`); None where fewer
+        than three were fitted or not read that way (:attr:`exposure_rows`: the reading
+        in use).
     """
 
     camera: str
@@ -633,12 +635,18 @@ class CameraDetection:
     flicker: Flicker | None = None
     n_recurring: int = 0
     n_degenerate: int = 0
-    exposure_rows: float | None = None
+    top_down_exposure_rows: float | None = None
+    bottom_up_exposure_rows: float | None = None
 
     @property
     def events(self) -> Events:
         """The events of the reading in use."""
         return self.bottom_up if self.flipped else self.top_down
+
+    @property
+    def exposure_rows(self) -> float | None:
+        """The exposure, readout rows, that the bands of the reading in use share."""
+        return self.bottom_up_exposure_rows if self.flipped else self.top_down_exposure_rows
 
     @property
     def undecided(self) -> bool:
@@ -733,6 +741,7 @@ class VideoDetection:
         if len(frame_times) < 2:
             raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
         readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
+        exposures = {direction: detector.exposure_rows for direction, detector in zip(self.directions, self._detectors)}
         return CameraDetection(
             self.info.camera,
             self.info.path,
@@ -745,7 +754,8 @@ class VideoDetection:
             flicker=self._remove_flicker.estimate(),
             n_recurring=self._detectors[0].n_recurring,
             n_degenerate=self._detectors[0].n_degenerate,
-            exposure_rows=self._detectors[0].exposure_rows,
+            top_down_exposure_rows=exposures.get(False),
+            bottom_up_exposure_rows=exposures.get(True),
         )
 
     def _detect(self, frames: list[tuple[float, np.ndarray]]) -> None:

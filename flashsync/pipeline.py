@@ -246,7 +246,7 @@ def synchronize(
         spreads.update(more_spreads)
         readout_warnings += more_warnings
     outlasted, outlasted_warnings = _outlasted_exposures(best)
-    for name, spread in (spreads | outlasted).items():
+    for name, spread in [*spreads.items(), *outlasted.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     report.alignments = best.alignments
     report.warnings = (
@@ -661,9 +661,9 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
 #: A camera's whole pulse bands (in one frame, not ``long_pulse``) whose median length is
 #: this many times its common exposure: its LED pulses outlast an exposure too short to be
 #: read with them (:data:`~flashsync.ramp.MIN_SWAPPED_ROWS`), and its bands' edges are half
-#: the difference apart from where they belong. On the 24 kept random rigs' cameras no
-#: camera without a pulse longer than its exposure reaches 1.08; six LED cameras of 3.7-7.5
-#: rows reach 1.25-1.59.
+#: the difference apart from where they belong. On the 24 kept random rigs no camera
+#: without a pulse longer than its exposure reaches 1.10; six LED cameras of 3.6-7.5 rows
+#: reach 1.30-1.56.
 OUTLASTED_SHARE = 1.2
 
 

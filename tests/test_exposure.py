@@ -214,5 +214,5 @@ def test_diagnose_measures_the_lengths_of_a_camera_without_a_common_exposure(led
     ref = next(d for d in detections if d.camera == "ref")
     excess = _length_excess_ms(ref, _pulses(ref))
     assert np.isfinite(excess).sum() >= 6
-    unknown = replace(ref, exposure_rows=None)
+    unknown = replace(ref, top_down_exposure_rows=None)
     np.testing.assert_array_equal(_length_excess_ms(unknown, _pulses(unknown)), excess)
