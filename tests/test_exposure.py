@@ -99,21 +99,32 @@ def test_leading_edges_mark_the_half_light_instant_whatever_the_exposure(synced)
         assert abs(np.median(error)) < 0.07, (detection.camera, error)  # a row is 0.12 ms
 
 
-def led_rig() -> Scenario:
-    """An LED strobe whose pulse (1.2-2 ms, a rectangle) is longer than two cameras'
-    exposures (0.7 ms, 15.7 rows; 1.0 ms, 14.2 rows) and shorter than the third's (8 ms)."""
+LED_CAMERAS = (
+    CameraSpec("ref", 480, 270, 25.0, r0=6, r1=8, exposure_ms=8.0, noise_std=1.0, crf=23, start_ms=120.0),
+    CameraSpec("fast", 640, 360, 59.94, r0=6, r1=8, exposure_ms=0.7, noise_std=1.0, crf=23, start_ms=310.0),
+    CameraSpec("short", 480, 270, 50.0, r0=6, r1=8, exposure_ms=1.0, noise_std=1.0, crf=23, start_ms=45.0),
+)
+
+
+def led_rig(
+    name: str = "led-longer-than-exposure", cameras: tuple = LED_CAMERAS, holds_ms: list | None = None
+) -> Scenario:
+    """Eight LED flashes (rectangles) about 420 ms apart; by default their pulses (1.2-2 ms)
+    are longer than two cameras' exposures (0.7 ms, 15.7 rows; 1.0 ms, 14.2 rows) and
+    shorter than the third's (8 ms); ``holds_ms``: the pulses, ms, in a random order."""
     rng = np.random.default_rng(5)
-    cameras = (
-        CameraSpec("ref", 480, 270, 25.0, r0=6, r1=8, exposure_ms=8.0, noise_std=1.0, crf=23, start_ms=120.0),
-        CameraSpec("fast", 640, 360, 59.94, r0=6, r1=8, exposure_ms=0.7, noise_std=1.0, crf=23, start_ms=310.0),
-        CameraSpec("short", 480, 270, 50.0, r0=6, r1=8, exposure_ms=1.0, noise_std=1.0, crf=23, start_ms=45.0),
-    )
     instants = 300.0 + np.sort(rng.uniform(0, 300, 8)) + 420.0 * np.arange(8)
+    holds = iter(rng.permutation(holds_ms)) if holds_ms is not None else None
     flashes = tuple(
-        FlashSpec(float(t), float(rng.uniform(0.4, 0.6)), decay_ms=0.0, hold_ms=float(rng.uniform(1.2, 2.0)))
+        FlashSpec(
+            float(t),
+            float(rng.uniform(0.4, 0.6)),
+            decay_ms=0.0,
+            hold_ms=float(next(holds) if holds is not None else rng.uniform(1.2, 2.0)),
+        )
         for t in instants
     )
-    return Scenario("led-longer-than-exposure", cameras, duration_ms=4000.0, flashes=flashes, n_players=2, seed=4)
+    return Scenario(name, cameras, duration_ms=4000.0, flashes=flashes, n_players=2, seed=4)
 
 
 def test_pulses_outlasting_an_exposure_too_short_to_read_widen_its_sigma(tmp_path):
@@ -123,19 +134,12 @@ def test_pulses_outlasting_an_exposure_too_short_to_read_widen_its_sigma(tmp_pat
     bands, twice as long as the exposure they share, say so: a warning, and half the
     difference in its sigma (error/sigma 3.7 before, 0.96 now; the times themselves are
     unchanged)."""
-    rng = np.random.default_rng(5)
     cameras = (
-        CameraSpec("ref", 480, 270, 25.0, r0=6, r1=8, exposure_ms=8.0, noise_std=1.0, crf=23, start_ms=120.0),
+        LED_CAMERAS[0],
         CameraSpec("short", 480, 270, 25.0, r0=6, r1=8, exposure_ms=0.7, noise_std=1.0, crf=23, start_ms=45.0),
         CameraSpec("fast", 480, 270, 50.0, r0=6, r1=8, exposure_ms=4.0, noise_std=1.0, crf=23, start_ms=310.0),
     )
-    instants = 300.0 + np.sort(rng.uniform(0, 300, 8)) + 420.0 * np.arange(8)
-    holds = rng.permutation([0.2, 0.4, 1.2, 1.4, 1.6, 1.8, 2.0, 1.5])
-    flashes = tuple(
-        FlashSpec(float(t), float(rng.uniform(0.4, 0.6)), decay_ms=0.0, hold_ms=float(hold))
-        for t, hold in zip(instants, holds)
-    )
-    scenario = Scenario("short-led", cameras, duration_ms=4000.0, flashes=flashes, n_players=2, seed=4)
+    scenario = led_rig("short-led", cameras, [0.2, 0.4, 1.2, 1.4, 1.6, 1.8, 2.0, 1.5])
     truth = render_scenario(scenario, tmp_path)
     model, report = synchronize(detect_videos([tmp_path / f"{c.name}.mp4" for c in cameras]))
     warned = [w for w in report.warnings if "times as long as the exposure they share" in w]
