@@ -33,7 +33,7 @@ from flashsync.detect import (
     detect_video,
 )
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
-from flashsync.events import Band, Edge, Events, Flag
+from flashsync.events import Band, Bands, Edge, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
@@ -658,7 +658,7 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
     return warnings
 
 
-#: A camera's whole pulse bands (in one frame, not ``long_pulse``) whose median length is
+#: A camera's whole timing bands (:func:`_timing_bands`, in one frame) whose median length is
 #: this many times its common exposure: its LED pulses outlast an exposure too short to be
 #: read with them (:data:`~flashsync.ramp.MIN_SWAPPED_ROWS`), and its bands' edges are half
 #: the difference apart from where they belong. On the 24 kept random rigs no camera
@@ -677,18 +677,16 @@ def _outlasted_exposures(best: _Attempt) -> tuple[dict[str, float], list[str]]:
         if detection.exposure_rows is None:
             continue
         events = detection.events
-        bands = events.bands()
-        first = bands.first_edges()
-        clean = bands.complete & (events.band[first] == Band.PULSE) & ~events.has_flag(Flag.LONG_PULSE)[first]
-        bands = bands.take(clean)
+        bands = _timing_bands(events)
         whole = events.frame[bands.leading] == events.frame[bands.trailing]
         lengths = np.abs(events.row[bands.trailing] - events.row[bands.leading])[whole]
-        if len(lengths) < 3 or np.median(lengths) < OUTLASTED_SHARE * detection.exposure_rows:
+        length = float(np.median(lengths)) if len(lengths) >= 3 else 0.0
+        if length < OUTLASTED_SHARE * detection.exposure_rows:
             continue
-        excess_ms = (float(np.median(lengths)) - detection.exposure_rows) * abs(solution.row_time_ms)
+        excess_ms = (length - detection.exposure_rows) * abs(solution.row_time_ms)
         spreads[name] = excess_ms / 2.0
         warnings.append(
-            f"{detection.video}: its bands are {np.median(lengths) / detection.exposure_rows:.1f} times as long as "
+            f"{detection.video}: its bands are {length / detection.exposure_rows:.1f} times as long as "
             f"the exposure they share ({detection.exposure_rows:.1f} rows): flash pulses longer than an exposure "
             f"too short to tell them apart; its exposure may be up to {excess_ms:.2f} ms long and its times "
             f"{excess_ms / 2.0:.2f} ms late (in its sigma)"
@@ -1133,15 +1131,19 @@ def _sync_events(detection: CameraDetection) -> Events:
 
 
 def _trailing_edges(detection: CameraDetection) -> Events:
-    """The trailing edges that are timing evidence: of pulse bands with both edges visible,
-    unclipped (a band clipped at white is wider than the exposure) and not flagged
-    ``long_pulse`` (a pulse longer than the exposure may have made it as wide)."""
+    """The trailing edges that are timing evidence: of :func:`_timing_bands`."""
     events = detection.events
+    return events.take(_timing_bands(events).trailing)
+
+
+def _timing_bands(events: Events) -> Bands:
+    """The pulse bands whose length is the exposure's: both edges visible, unclipped (a
+    band clipped at white is wider than the exposure) and not flagged ``long_pulse`` (a
+    pulse longer than the exposure may have made it as wide)."""
     bands = events.bands()
     first = bands.first_edges()
     clean = ~events.has_flag(Flag.SATURATED)[first] & ~events.has_flag(Flag.LONG_PULSE)[first]
-    bands = bands.take(bands.complete & (events.band[first] == Band.PULSE) & clean)
-    return events.take(bands.trailing)
+    return bands.take(bands.complete & (events.band[first] == Band.PULSE) & clean)
 
 
 def _observations(cameras: list[CameraDetection], matches: Matches) -> Observations:
