@@ -60,8 +60,14 @@ def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarr
     time + readout row x median frame step / (:data:`NOMINAL_HIDDEN_ROWS` x height) (a few per
     cent off: good to a few ms; the closer, the tighter true matches sit and the stronger
     their evidence)."""
-    row_time = median_step_ms(detection.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * detection.height)
+    row_time = nominal_row_time_ms(detection)
     return events.t_frame_ms + readout_rows(events.row, detection.height, detection.flipped) * row_time
+
+
+def nominal_row_time_ms(detection: CameraDetection) -> float:
+    """The camera's time per row were its rows read evenly over a frame period with
+    :data:`NOMINAL_HIDDEN_ROWS` of hidden rows, ms: median frame step / (1.05 x height)."""
+    return median_step_ms(detection.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * detection.height)
 
 
 @dataclass(frozen=True)

@@ -46,11 +46,11 @@ from flashsync.likelihood import (
 )
 from flashsync.match import (
     MIN_SHARED_FLASHES,
-    NOMINAL_HIDDEN_ROWS,
     PairAlignment,
     approximate_times_ms,
     match_events,
     match_tolerance_ms,
+    nominal_row_time_ms,
     parse_anchors,
     shared_flashes,
 )
@@ -59,8 +59,9 @@ from flashsync.segments import SEGMENT_MS
 from flashsync.solve import CameraSolution, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
-#: Weak prior on T_row where no datasheet value is given: frame period / (NOMINAL_HIDDEN_ROWS x
-#: height), std 8 %; only decisive where the events cannot tell T_row (few flashes).
+#: Weak prior on T_row where no datasheet value is given: the nominal one
+#: (:func:`~flashsync.match.nominal_row_time_ms`), std 8 %; only decisive where the events
+#: cannot tell T_row (few flashes).
 NOMINAL_ROW_TIME_STD = 0.08
 
 
@@ -1043,7 +1044,7 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
         elif flicker is not None:
             priors[index] = flicker_row_time_ms(flicker)
         else:
-            nominal = median_step_ms(camera.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * camera.height)
+            nominal = nominal_row_time_ms(camera)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
 
