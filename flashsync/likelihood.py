@@ -38,7 +38,8 @@ class ReadingEdges:
     camera's clock with a nominal time per row (:func:`flashsync.match.approximate_times_ms`),
     ``trailing`` (bool: a band's trailing edge, one exposure after its flash), ``band`` the
     event number a band's edges share, and ``sigma_factor`` each edge's noise in units of a
-    clean edge's. A trailing edge's band has its leading edge among them."""
+    clean edge's. A trailing edge's band has its leading edge among them, or none visible:
+    then the edge's approximate time is its band's start's (one exposure earlier)."""
 
     t_frame_ms: np.ndarray
     q: np.ndarray
@@ -128,16 +129,18 @@ def held_log_likelihood(edges: ReadingEdges, flash_ms: np.ndarray, clock: HeldCl
 
 def _nearest_flash(edges: ReadingEdges, flashes: np.ndarray, clock: HeldClock) -> np.ndarray:
     """Per edge (shape (n,)), the global time of its flash (ms; NaN for none): for a leading
-    edge the held flash (``flashes`` sorted) within :data:`ASSIGN_PERIODS` frame periods of
-    its coarse time, where exactly one lies there; for a trailing edge its band's leading edge's."""
+    edge, or a trailing edge whose leading edge is hidden, the held flash (``flashes``
+    sorted) within :data:`ASSIGN_PERIODS` frame periods of its coarse time, where exactly one
+    lies there; for any other trailing edge its band's leading edge's."""
     flash = np.full(len(edges.t_frame_ms), np.nan)
-    leading = np.flatnonzero(~edges.trailing)
-    coarse = clock.alpha * edges.approximate_ms[leading] + clock.beta_ms
+    lone = edges.trailing & ~np.isin(edges.band, edges.band[~edges.trailing])
+    placed = np.flatnonzero(~edges.trailing | lone)
+    coarse = clock.alpha * edges.approximate_ms[placed] + clock.beta_ms
     window = ASSIGN_PERIODS * clock.period_ms
     first = np.searchsorted(flashes, coarse - window)
     one = np.searchsorted(flashes, coarse + window, side="right") - first == 1
-    flash[leading[one]] = flashes[first[one]]
-    of_band = dict(zip(edges.band[leading].tolist(), flash[leading].tolist()))
-    for index in np.flatnonzero(edges.trailing):
+    flash[placed[one]] = flashes[first[one]]
+    of_band = dict(zip(edges.band[placed].tolist(), flash[placed].tolist()))
+    for index in np.flatnonzero(edges.trailing & ~lone):
         flash[index] = of_band.get(int(edges.band[index]), np.nan)
     return flash

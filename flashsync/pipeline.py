@@ -770,8 +770,9 @@ def solve_pairs(detections: Sequence[CameraDetection], **options) -> list[tuple[
 
 @dataclass(frozen=True)
 class Matches:
-    """The sync events (leading edges) that belong to a flash seen by two or more cameras,
-    arrays of shape (n,).
+    """The sync events (:func:`_sync_events`: a leading edge, or a trailing edge whose
+    leading edge is hidden) that belong to a flash seen by two or more cameras, arrays of
+    shape (n,).
 
     Attributes
     ----------
@@ -782,13 +783,15 @@ class Matches:
     camera_index : int array
         Index of the camera among the cameras solved.
     event, frame : int arrays
-        The detector's event number and the decoded frame of its leading edge.
+        The detector's event number and the decoded frame of the edge.
     row, q : float arrays
         Stored-image row and readout row of the edge.
     t_frame_ms : float array
         The frame's time (frame clock), ms.
     edge_sigma : float array
         The edge's noise in units of a clean one's (:func:`_edge_sigma`).
+    trailing : bool array
+        The edge is a trailing edge (one exposure after its flash).
     """
 
     flash: np.ndarray
@@ -800,6 +803,7 @@ class Matches:
     q: np.ndarray
     t_frame_ms: np.ndarray
     edge_sigma: np.ndarray
+    trailing: np.ndarray
 
     def __len__(self) -> int:
         return len(self.flash)
@@ -929,7 +933,7 @@ def _attempt(
     anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
     matching = match_events(
-        {n: approximate_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events, memo
+        {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events, memo
     )
     tied = matching.tied_to(reference)
     connected = [name for name in usable if name in tied]
@@ -1110,25 +1114,62 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
     return ReadingEdges(
         events.t_frame_ms,
         _readout_rows(detection, events),
-        approximate_times_ms(detection, events),
-        ~first,
+        _start_times_ms(detection, events),
+        events.edge == Edge.TRAILING,
         events.event,
         np.where(first, _edge_sigma(events), 1.0),
     )
 
 
+#: Noise of a trailing edge whose leading edge is hidden, in units of a clean one's: fitted
+#: without its band's other half, it scatters about twice as much (MAD 0.53 rows against 0.33
+#: over the kept rigs).
+LONE_EDGE_SIGMA = 2.0
+
+
 def _edge_sigma(events: Events) -> np.ndarray:
     """Each edge's noise in units of a clean one's: a clipped band's
-    (:data:`~flashsync.detect.SATURATED_EDGE_SIGMA`) and one that the flash may have
-    outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`) noisier."""
+    (:data:`~flashsync.detect.SATURATED_EDGE_SIGMA`), one that the flash may have
+    outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`) and a trailing edge whose
+    leading edge is hidden (:data:`LONE_EDGE_SIGMA`) noisier."""
     long_pulse = np.where(events.has_flag(Flag.LONG_PULSE), LONG_PULSE_EDGE_SIGMA, 1.0)
-    return np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, long_pulse)
+    lone = np.where((events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN), LONE_EDGE_SIGMA, long_pulse)
+    return np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, lone)
+
+
+#: A trailing edge whose leading edge is hidden is a sync event within this many exposures of
+#: the first readout row: its band began before it. Further down, where a leading edge one
+#: exposure earlier would have been seen, the band is not one exposure long (a pulse that
+#: outlasts the exposure, a leading edge lost in dark rows): over the kept rigs such edges
+#: were up to 5 rows late (README, "Bands whose leading edge is hidden").
+LONE_REACH = 1.1
 
 
 def _sync_events(detection: CameraDetection) -> Events:
-    """Leading edges: the synchronisation events."""
+    """The synchronisation events, one edge per band: its leading edge, or where that is
+    hidden (a flash during the vertical blanking or just before it) the trailing edge of a
+    clean pulse band (unclipped, not ``long_pulse``; within :data:`LONE_REACH` exposures of the
+    first readout row), one exposure after its flash: of a camera whose exposure is known
+    (:attr:`~flashsync.detect.CameraDetection.exposure_rows`), which places the flash
+    (:func:`_start_times_ms`)."""
     events = detection.events
-    return events.take(events.edge == Edge.LEADING)
+    leading = events.edge == Edge.LEADING
+    if detection.exposure_rows is None:
+        return events.take(leading)
+    clean = ~events.has_flag(Flag.SATURATED) & ~events.has_flag(Flag.LONG_PULSE)
+    near_top = _readout_rows(detection, events) <= LONE_REACH * detection.exposure_rows
+    lone = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN) & (events.band == Band.PULSE)
+    return events.take(leading | (lone & clean & near_top))
+
+
+def _start_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Approximate times (ms, the camera's own clock) of the starts of the bands of the
+    camera's ``events``: :func:`~flashsync.match.approximate_times_ms`, a trailing edge's
+    one exposure (:attr:`~flashsync.detect.CameraDetection.exposure_rows` at the nominal time
+    per row) earlier."""
+    trailing = events.edge == Edge.TRAILING
+    exposure_ms = (detection.exposure_rows or 0.0) * nominal_row_time_ms(detection)
+    return approximate_times_ms(detection, events) - np.where(trailing, exposure_ms, 0.0)
 
 
 def _trailing_edges(detection: CameraDetection) -> Events:
@@ -1148,9 +1189,9 @@ def _timing_bands(events: Events) -> Bands:
 
 
 def _observations(cameras: list[CameraDetection], matches: Matches) -> Observations:
-    """What the solve fits: the matched leading edges (in the order of ``matches``, with
-    their noise), then the trailing edges (:func:`_trailing_edges`) of their bands, on the
-    same flashes."""
+    """What the solve fits: the matched sync events (in the order of ``matches``, with their
+    noise; a trailing one stands alone, its band's leading edge hidden), then the trailing
+    edges (:func:`_trailing_edges`) of their bands, on the same flashes."""
     camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
     leading_of = [np.full(len(matches), -1, dtype=np.int64)]
     for index, detection in enumerate(cameras):
@@ -1163,9 +1204,8 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         flash.append(matches.flash[leading_of[-1]])
         t_frame.append(edges.t_frame_ms)
         q.append(_readout_rows(detection, edges))
-    n_leading = len(matches)
-    trailing = np.arange(sum(len(c) for c in camera)) >= n_leading
-    sigma_factor = np.concatenate([matches.edge_sigma, np.ones(int(trailing.sum()))])
+    trailing = np.concatenate([matches.trailing, np.ones(sum(len(c) for c in camera[1:]), dtype=bool)])
+    sigma_factor = np.concatenate([matches.edge_sigma, np.ones(len(trailing) - len(matches))])
     return Observations(
         np.concatenate(camera),
         np.concatenate(flash),
@@ -1201,4 +1241,5 @@ def _matches(
         q[keep],
         events.t_frame_ms[keep],
         _edge_sigma(events)[keep],
+        (events.edge == Edge.TRAILING)[keep],
     )
