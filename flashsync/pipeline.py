@@ -1117,7 +1117,7 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
         _start_times_ms(detection, events),
         events.edge == Edge.TRAILING,
         events.event,
-        np.where(first, _edge_sigma(events), 1.0),
+        np.where(first, _edge_sigma(detection, events), 1.0),
     )
 
 
@@ -1127,39 +1127,54 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
 LONE_EDGE_SIGMA = 2.0
 
 
-def _edge_sigma(events: Events) -> np.ndarray:
-    """Each edge's noise in units of a clean one's: a clipped band's
+def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Each of the camera's edges' noise in units of a clean one's: a clipped band's
     (:data:`~flashsync.detect.SATURATED_EDGE_SIGMA`), one that the flash may have
-    outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`) and a trailing edge whose
-    leading edge is hidden (:data:`LONE_EDGE_SIGMA`) noisier."""
-    long_pulse = np.where(events.has_flag(Flag.LONG_PULSE), LONG_PULSE_EDGE_SIGMA, 1.0)
-    lone = np.where((events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN), LONE_EDGE_SIGMA, long_pulse)
-    return np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, lone)
+    outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`: flagged ``long_pulse``, or
+    :func:`_outreaching`) and a trailing edge whose leading edge is hidden
+    (:data:`LONE_EDGE_SIGMA`) noisier."""
+    outlasted = events.has_flag(Flag.LONG_PULSE) | _outreaching(detection, events)
+    lone = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
+    sigma = np.where(outlasted, LONG_PULSE_EDGE_SIGMA, np.where(lone, LONE_EDGE_SIGMA, 1.0))
+    return np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, sigma)
 
 
-#: A trailing edge whose leading edge is hidden is a sync event within this many exposures of
-#: the first readout row: its band began before it. Further down, where a leading edge one
-#: exposure earlier would have been seen, the band is not one exposure long (a pulse that
-#: outlasts the exposure, a leading edge lost in dark rows): over the kept rigs such edges
-#: were up to 5 rows late (README, "Bands whose leading edge is hidden").
+#: A band one exposure long whose edge is hidden runs past the end of the readout: its
+#: visible edge lies within this many exposures of it. Further in, where the other edge would
+#: have been seen, the band is not one exposure long (a pulse that outlasts the exposure, an
+#: edge lost in dark rows): over the kept rigs such edges were up to 5 rows late (a trailing
+#: edge, leading hidden) or 2.7 rows early (a leading edge; README, "Bands whose leading edge
+#: is hidden").
 LONE_REACH = 1.1
+
+
+def _outreaching(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Boolean mask of the camera's edges whose band's other edge is hidden though it would
+    lie more than :data:`LONE_REACH` exposures inside the readout: the band is not one
+    exposure long. None where the camera's exposure is unknown."""
+    if detection.exposure_rows is None:
+        return np.zeros(len(events), dtype=bool)
+    q = _readout_rows(detection, events)
+    reach = LONE_REACH * detection.exposure_rows
+    leading_cut = events.has_flag(Flag.LEADING_HIDDEN) & (events.edge == Edge.TRAILING) & (q > reach)
+    trailing_cut = events.has_flag(Flag.TRAILING_HIDDEN) & (events.edge == Edge.LEADING)
+    return leading_cut | (trailing_cut & (detection.height - 1 - q > reach))
 
 
 def _sync_events(detection: CameraDetection) -> Events:
     """The synchronisation events, one edge per band: its leading edge, or where that is
     hidden (a flash during the vertical blanking or just before it) the trailing edge of a
-    clean pulse band (unclipped, not ``long_pulse``; within :data:`LONE_REACH` exposures of the
-    first readout row), one exposure after its flash: of a camera whose exposure is known
+    clean pulse band (unclipped, not ``long_pulse``, not :func:`_outreaching`), one exposure
+    after its flash: of a camera whose exposure is known
     (:attr:`~flashsync.detect.CameraDetection.exposure_rows`), which places the flash
     (:func:`_start_times_ms`)."""
     events = detection.events
     leading = events.edge == Edge.LEADING
     if detection.exposure_rows is None:
         return events.take(leading)
-    clean = ~events.has_flag(Flag.SATURATED) & ~events.has_flag(Flag.LONG_PULSE)
-    near_top = _readout_rows(detection, events) <= LONE_REACH * detection.exposure_rows
+    clean = ~events.has_flag(Flag.SATURATED) & ~events.has_flag(Flag.LONG_PULSE) & ~_outreaching(detection, events)
     lone = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN) & (events.band == Band.PULSE)
-    return events.take(leading | (lone & clean & near_top))
+    return events.take(leading | (lone & clean))
 
 
 def _start_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
@@ -1229,6 +1244,7 @@ def _matches(
         camera_index += [index] * len(mine)
     events = Events.concat(chosen)
     q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
+    sigma = np.concatenate([_edge_sigma(detection, mine) for detection, mine in zip(cameras, chosen)])
     camera_index = np.asarray(camera_index, dtype=np.int64)
     keep, flash = shared_flashes(camera_index, flash)
     return Matches(
@@ -1240,6 +1256,6 @@ def _matches(
         events.row[keep],
         q[keep],
         events.t_frame_ms[keep],
-        _edge_sigma(events)[keep],
+        sigma[keep],
         (events.edge == Edge.TRAILING)[keep],
     )

@@ -4,16 +4,26 @@ of unknown cameras or no number, anchors naming two events of one camera, camera
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from flashsync import detect_videos, synchronize
-from flashsync.detect import CameraDetection
+from flashsync.detect import LONG_PULSE_EDGE_SIGMA, CameraDetection
 from flashsync.errors import InputError
-from flashsync.events import Band, Edge, Events
-from flashsync.pipeline import _Attempt, _readout_doubts, check_anchors, check_row_times
+from flashsync.events import Band, Edge, Events, Flag
+from flashsync.pipeline import (
+    LONE_EDGE_SIGMA,
+    _Attempt,
+    _edge_sigma,
+    _readout_doubts,
+    _sync_events,
+    check_anchors,
+    check_row_times,
+)
 
 
 @pytest.mark.parametrize(
@@ -98,3 +108,35 @@ def test_the_biases_sigma_shares_average_out_over_a_cameras_events():
         share = BIAS_EVENTS / events
         assert covariance[1, 1] == pytest.approx(share * (EDGE_BIAS_SIGMAS * 0.02) ** 2)
         assert covariance[2, 2] == pytest.approx(share * (ROW_BIAS_MS / 360) ** 2)
+
+
+@pytest.mark.parametrize("flipped", [False, True])
+def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it(flipped):
+    """180 rows, a 20-row exposure: a band whose leading edge is hidden is matched by its
+    trailing edge within 1.1 exposures of the first readout row (weighed 2x down), not
+    further in (its leading edge would have been seen: the band is not one exposure long);
+    a leading edge whose trailing one is hidden that far from the last row is weighed down
+    as a pulse outlasting the exposure, one nearer counts as any other."""
+    hidden = {"leading": frozenset({Flag.LEADING_HIDDEN}), "trailing": frozenset({Flag.TRAILING_HIDDEN})}
+    edges = [  # (event, readout row, edge, flags)
+        (0, 50.0, Edge.LEADING, frozenset()), (0, 70.0, Edge.TRAILING, frozenset()),
+        (1, 15.0, Edge.TRAILING, hidden["leading"]), (2, 40.0, Edge.TRAILING, hidden["leading"]),
+        (3, 165.0, Edge.LEADING, hidden["trailing"]), (4, 100.0, Edge.LEADING, hidden["trailing"]),
+    ]  # fmt: skip
+    n = len(edges)
+    rows = [179.0 - q if flipped else q for _, q, _, _ in edges]
+    events = Events.from_columns(
+        ["cam"] * n, [e[0] for e in edges], [3] * n, [120.0] * n, rows, [e[2] for e in edges], [Band.PULSE] * n,
+        [1.0] * n, [0.5] * n, [50.0] * n, [e[3] for e in edges],
+    )  # fmt: skip
+    reading = (
+        dict(bottom_up=events, bottom_up_exposure_rows=20.0, flipped=True)
+        if flipped
+        else dict(top_down_exposure_rows=20.0)
+    )
+    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, **reading)
+    sync = _sync_events(detection)
+    assert sync.event.tolist() == [0, 1, 3, 4]
+    assert _edge_sigma(detection, sync).tolist() == [1.0, LONE_EDGE_SIGMA, 1.0, LONG_PULSE_EDGE_SIGMA]
+    without_exposure = replace(detection, top_down_exposure_rows=None, bottom_up_exposure_rows=None)
+    assert _sync_events(without_exposure).event.tolist() == [0, 3, 4]
