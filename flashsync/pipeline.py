@@ -17,7 +17,7 @@ import os
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from itertools import combinations, compress, product
 from pathlib import Path
@@ -46,6 +46,7 @@ from flashsync.likelihood import (
 )
 from flashsync.match import (
     MIN_SHARED_FLASHES,
+    Matching,
     PairAlignment,
     approximate_times_ms,
     match_events,
@@ -935,6 +936,7 @@ def _attempt(
     matching = match_events(
         {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events, memo
     )
+    matching = _with_a_leading_edge(matching, sync_events)
     tied = matching.tied_to(reference)
     connected = [name for name in usable if name in tied]
     warnings += [
@@ -1230,6 +1232,14 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         trailing,
         np.concatenate(leading_of),
     )
+
+
+def _with_a_leading_edge(matching: Matching, sync_events: dict[str, Events]) -> Matching:
+    """``matching`` without the cameras none of whose matched sync events is a leading edge:
+    tied by trailing edges alone (one exposure after their flashes), a camera's shift and
+    exposure are one unknown."""
+    leading = {camera for camera, i in matching.flashes if sync_events[camera].edge[i] == Edge.LEADING}
+    return replace(matching, flashes={key: f for key, f in matching.flashes.items() if key[0] in leading})
 
 
 def _matches(

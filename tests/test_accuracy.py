@@ -226,14 +226,20 @@ def twins_with_flashes_in_the_blanking() -> tuple[Scenario, list[int]]:
     return scenario, in_blanking
 
 
-def test_a_flash_in_a_cameras_vertical_blanking_ties_it_by_its_trailing_edge(tmp_path):
+@pytest.fixture(scope="module")
+def twins(tmp_path_factory):
+    scenario, in_blanking = twins_with_flashes_in_the_blanking()
+    folder = tmp_path_factory.mktemp(scenario.name)
+    truth = render_scenario(scenario, folder)
+    return scenario, in_blanking, truth, detect_videos([folder / "early.mp4", folder / "late.mp4"])
+
+
+def test_a_flash_in_a_cameras_vertical_blanking_ties_it_by_its_trailing_edge(twins):
     """The five flashes that fell in ``late``'s blanking are matched by the trailing edges of
     its bands (one exposure after the flash) and tie the twins to a few hundredths of a ms.
     Leading edges alone matched 4 of the 10 flashes, and the twins were 1.1 and 1.9 ms RMS
     off with a time per row 5 % off."""
-    scenario, in_blanking = twins_with_flashes_in_the_blanking()
-    truth = render_scenario(scenario, tmp_path)
-    detections = detect_videos([tmp_path / "early.mp4", tmp_path / "late.mp4"])
+    scenario, in_blanking, truth, detections = twins
     late = detections[1].events
     lone = late.has_flag(Flag.LEADING_HIDDEN) & (late.edge == Edge.TRAILING)
     assert len(np.unique(late.frame[lone])) == len(in_blanking)  # the scenario's premise
@@ -244,3 +250,15 @@ def test_a_flash_in_a_cameras_vertical_blanking_ties_it_by_its_trailing_edge(tmp
     accuracy = camera_accuracy(model, truth).set_index("camera")
     assert accuracy.rms_ms.max() < 0.1 and accuracy.reference_rms_ms["late"] < 0.1, accuracy
     assert accuracy.pair_z_rms.max() < 2.0 and not report.warnings, (accuracy, report.warnings)
+
+
+def test_a_camera_tied_by_trailing_edges_alone_is_left_out(twins):
+    """``late`` with only its bands cut at the top (their trailing edges) beside two copies of
+    ``early``: its shift and exposure are one unknown, so it is left out, with a warning;
+    the others are solved (taken in, it made the solve singular: no model at all)."""
+    _, _, _, (early, late) = twins
+    cut_bands = late.events.take(late.events.has_flag(Flag.LEADING_HIDDEN))
+    cut = dataclasses.replace(late, top_down=cut_bands, bottom_up=None)
+    model, report = synchronize([early, dataclasses.replace(early, camera="copy"), cut])
+    assert list(model.cameras) == ["early", "copy"]
+    assert any(w.startswith(f"{late.video}: shares too few flashes") for w in report.warnings), report.warnings
