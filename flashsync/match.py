@@ -488,7 +488,8 @@ def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> d
     anchors : list of str
         ``CAMERA:EVENT``, EVENT the detector's event number (the events table's ``event``).
     event_numbers : dict of str to int array
-        Per camera, the event number of each of its sync events (leading edges).
+        Per camera, the event number of each of its sync events (a leading edge, or a
+        trailing edge whose leading edge is hidden).
 
     Returns
     -------
@@ -507,7 +508,8 @@ def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> d
         where = np.flatnonzero(np.asarray(event_numbers[camera]) == int(number))
         if not where.size:
             raise InputError(
-                f"{text}: {camera} has no event {number} with a visible leading edge; anchor one "
+                f"{text}: {camera} has no event {number} among its sync events (bands with a visible "
+                "leading edge, or cut at the frame's start); anchor one "
                 "of its events " + ", ".join(map(str, event_numbers[camera])),
                 parameter="anchors",
             )

@@ -164,8 +164,9 @@ def hat_basis(knots_ms: np.ndarray, t_ms: np.ndarray) -> np.ndarray:
 
 #: The columns of :attr:`SyncModel.events`, one row per sync event matched into a flash: the
 #: flash's number, the camera, the detector's event number, the frame and stored row of its
-#: leading edge, the frame's time (ms), the flash's global time (ms), the event's residual in
-#: the solve (ms) and whether the robust solve kept it.
+#: sync edge (the leading edge, or the trailing one where that is hidden), the frame's time
+#: (ms), the flash's global time (ms), the edge's residual in the solve (ms, a trailing edge's
+#: less the camera's exposure) and whether the robust solve kept it.
 MATCHED_EVENT_COLUMNS = {
     "flash": "int64",
     "camera": "str",
