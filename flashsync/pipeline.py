@@ -1153,7 +1153,7 @@ LONE_REACH = 1.1
 def _outreaching(detection: CameraDetection, events: Events) -> np.ndarray:
     """Boolean mask of the camera's edges whose band's other edge is hidden though it would
     lie more than :data:`LONE_REACH` exposures inside the readout: the band is not one
-    exposure long. None where the camera's exposure is unknown."""
+    exposure long. All False where the camera's exposure is unknown."""
     if detection.exposure_rows is None:
         return np.zeros(len(events), dtype=bool)
     q = _readout_rows(detection, events)
@@ -1183,7 +1183,7 @@ def _start_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
     """Approximate times (ms, the camera's own clock) of the starts of the bands of the
     camera's ``events``: :func:`~flashsync.match.approximate_times_ms`, a trailing edge's
     one exposure (:attr:`~flashsync.detect.CameraDetection.exposure_rows` at the nominal time
-    per row) earlier."""
+    per row; none where that is unknown) earlier."""
     trailing = events.edge == Edge.TRAILING
     exposure_ms = (detection.exposure_rows or 0.0) * nominal_row_time_ms(detection)
     return approximate_times_ms(detection, events) - np.where(trailing, exposure_ms, 0.0)

@@ -201,7 +201,7 @@ def test_exposure_and_stamp_grid_are_found(solved):
 
 def twins_with_flashes_in_the_blanking() -> tuple[Scenario, list[int]]:
     """Two identical 25 fps cameras 17 ms apart (320x180 plus 20 hidden rows: 0.2 ms a row,
-    4 ms exposures = 20 rows), ten flashes 0.6-0.7 s apart, five of them 1.2-2.8 ms before
+    4 ms exposures = 20 rows), ten flashes about 0.6 s apart, five of them 1.2-2.8 ms before
     one of ``late``'s frames starts its visible rows: ``late`` sees their bands at the top of
     a frame, their leading edges hidden (the flash fell in its vertical blanking), their
     trailing edges 6-14 rows down; ``early`` sees them whole. Equal rates are the hard case

@@ -1,5 +1,6 @@
 """synchronize's checks of its arguments and of what it announces: datasheet times per row
-of unknown cameras or no number, anchors naming two events of one camera, cameras left out."""
+of unknown cameras or no number, anchors naming two events of one camera, cameras left out;
+and which edges it synchronises on, with what weight."""
 
 from __future__ import annotations
 
