@@ -678,10 +678,7 @@ def _outlasted_exposures(best: _Attempt) -> tuple[dict[str, float], list[str]]:
         detection = best.cameras[name]
         if detection.exposure_rows is None:
             continue
-        events = detection.events
-        bands = _timing_bands(events)
-        whole = events.frame[bands.leading] == events.frame[bands.trailing]
-        lengths = np.abs(events.row[bands.trailing] - events.row[bands.leading])[whole]
+        lengths = _whole_band_lengths(detection.events)
         length = float(np.median(lengths)) if len(lengths) >= 3 else 0.0
         if length < OUTLASTED_SHARE * detection.exposure_rows:
             continue
@@ -1150,14 +1147,32 @@ def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
 LONE_REACH = 1.1
 
 
+def _exposure_rows(detection: CameraDetection) -> float | None:
+    """The camera's exposure, readout rows: the one its bands share
+    (:attr:`~flashsync.detect.CameraDetection.exposure_rows`), else the median length of its
+    timing bands within one frame (fewer than three were fitted); None without either."""
+    if detection.exposure_rows is not None:
+        return detection.exposure_rows
+    lengths = _whole_band_lengths(detection.events)
+    return float(np.median(lengths)) if len(lengths) else None
+
+
+def _whole_band_lengths(events: Events) -> np.ndarray:
+    """Lengths (rows) of the :func:`_timing_bands` that lie within one frame."""
+    bands = _timing_bands(events)
+    whole = events.frame[bands.leading] == events.frame[bands.trailing]
+    return np.abs(events.row[bands.trailing] - events.row[bands.leading])[whole]
+
+
 def _outreaching(detection: CameraDetection, events: Events) -> np.ndarray:
     """Boolean mask of the camera's edges whose band's other edge is hidden though it would
-    lie more than :data:`LONE_REACH` exposures inside the readout: the band is not one
-    exposure long. All False where the camera's exposure is unknown."""
-    if detection.exposure_rows is None:
+    lie more than :data:`LONE_REACH` exposures (:func:`_exposure_rows`) inside the readout:
+    the band is not one exposure long. All False where the camera's exposure is unknown."""
+    exposure = _exposure_rows(detection)
+    if exposure is None:
         return np.zeros(len(events), dtype=bool)
     q = _readout_rows(detection, events)
-    reach = LONE_REACH * detection.exposure_rows
+    reach = LONE_REACH * exposure
     leading_cut = events.has_flag(Flag.LEADING_HIDDEN) & (events.edge == Edge.TRAILING) & (q > reach)
     trailing_cut = events.has_flag(Flag.TRAILING_HIDDEN) & (events.edge == Edge.LEADING)
     return leading_cut | (trailing_cut & (detection.height - 1 - q > reach))
@@ -1167,12 +1182,11 @@ def _sync_events(detection: CameraDetection) -> Events:
     """The synchronisation events, one edge per band: its leading edge, or where that is
     hidden (a flash during the vertical blanking or just before it) the trailing edge of a
     clean pulse band (unclipped, not ``long_pulse``, not :func:`_outreaching`), one exposure
-    after its flash: of a camera whose exposure is known
-    (:attr:`~flashsync.detect.CameraDetection.exposure_rows`), which places the flash
-    (:func:`_start_times_ms`)."""
+    after its flash: of a camera whose exposure is known (:func:`_exposure_rows`), which
+    places the flash (:func:`_start_times_ms`)."""
     events = detection.events
     leading = events.edge == Edge.LEADING
-    if detection.exposure_rows is None:
+    if _exposure_rows(detection) is None:
         return events.take(leading)
     clean = ~events.has_flag(Flag.SATURATED) & ~events.has_flag(Flag.LONG_PULSE) & ~_outreaching(detection, events)
     lone = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN) & (events.band == Band.PULSE)
@@ -1182,10 +1196,10 @@ def _sync_events(detection: CameraDetection) -> Events:
 def _start_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
     """Approximate times (ms, the camera's own clock) of the starts of the bands of the
     camera's ``events``: :func:`~flashsync.match.approximate_times_ms`, a trailing edge's
-    one exposure (:attr:`~flashsync.detect.CameraDetection.exposure_rows` at the nominal time
-    per row; none where that is unknown) earlier."""
+    one exposure (:func:`_exposure_rows` at the nominal time per row; none where that is
+    unknown) earlier."""
     trailing = events.edge == Edge.TRAILING
-    exposure_ms = (detection.exposure_rows or 0.0) * nominal_row_time_ms(detection)
+    exposure_ms = (_exposure_rows(detection) or 0.0) * nominal_row_time_ms(detection)
     return approximate_times_ms(detection, events) - np.where(trailing, exposure_ms, 0.0)
 
 

@@ -117,7 +117,9 @@ def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it
     trailing edge within 1.1 exposures of the first readout row (weighed 2x down), not
     further in (its leading edge would have been seen: the band is not one exposure long);
     a leading edge whose trailing one is hidden that far from the last row is weighed down
-    as a pulse outlasting the exposure, one nearer counts as any other."""
+    as a pulse outlasting the exposure, one nearer counts as any other. Where the detector
+    fitted no common exposure, the camera's whole bands' median length stands in; without
+    those, neither rule applies."""
     hidden = {"leading": frozenset({Flag.LEADING_HIDDEN}), "trailing": frozenset({Flag.TRAILING_HIDDEN})}
     edges = [  # (event, readout row, edge, flags)
         (0, 50.0, Edge.LEADING, frozenset()), (0, 70.0, Edge.TRAILING, frozenset()),
@@ -139,5 +141,9 @@ def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it
     sync = _sync_events(detection)
     assert sync.event.tolist() == [0, 1, 3, 4]
     assert _edge_sigma(detection, sync).tolist() == [1.0, LONE_EDGE_SIGMA, 1.0, LONG_PULSE_EDGE_SIGMA]
-    without_exposure = replace(detection, top_down_exposure_rows=None, bottom_up_exposure_rows=None)
-    assert _sync_events(without_exposure).event.tolist() == [0, 3, 4]
+    unfitted = replace(detection, top_down_exposure_rows=None, bottom_up_exposure_rows=None)
+    assert _sync_events(unfitted).event.tolist() == [0, 1, 3, 4]  # its whole band's 20 rows stand in
+    partial = events.take(np.arange(n) != 1)  # no whole band: the exposure is unknown
+    unknown = replace(unfitted, top_down=partial, bottom_up=partial if flipped else None)
+    assert _sync_events(unknown).event.tolist() == [0, 3, 4]
+    assert _edge_sigma(unknown, _sync_events(unknown)).tolist() == [1.0, 1.0, 1.0]
