@@ -20,6 +20,7 @@ from flashsync.pipeline import (
     LONE_EDGE_SIGMA,
     _Attempt,
     _edge_sigma,
+    _pulse_lengths,
     _readout_doubts,
     _sync_events,
     check_anchors,
@@ -147,3 +148,24 @@ def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it
     unknown = replace(unfitted, top_down=partial, bottom_up=partial if flipped else None)
     assert _sync_events(unknown).event.tolist() == [0, 3, 4]
     assert _edge_sigma(unknown, _sync_events(unknown)).tolist() == [1.0, 1.0, 1.0]
+
+
+def test_only_bands_longer_than_the_exposure_others_share_are_taken_for_their_pulses():
+    """A 10-row exposure: the bands 12 and 30 rows long are as long as their pulses (their
+    lengths left out of the solve), those of 10 and 11.5 rows measure the exposure; where
+    every band is that much longer, none is left out (the exposure would rest on nothing),
+    nor where the detector fitted no common exposure."""
+    lengths = [10.0, 12.0, 11.5, 30.0]
+    n = 2 * len(lengths)
+    rows = np.ravel([(40.0, 40.0 + length) for length in lengths])
+    events = Events.from_columns(
+        ["cam"] * n, np.repeat(np.arange(len(lengths)), 2), [3] * n, [120.0] * n, rows,
+        [Edge.LEADING, Edge.TRAILING] * len(lengths), [Band.PULSE] * n, [1.0] * n, [0.5] * n, [50.0] * n,
+        [frozenset()] * n,
+    )  # fmt: skip
+    detection = CameraDetection(
+        "cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, top_down_exposure_rows=10.0
+    )
+    assert _pulse_lengths(detection).tolist() == [1, 3]
+    assert _pulse_lengths(replace(detection, top_down_exposure_rows=8.0)).tolist() == []
+    assert _pulse_lengths(replace(detection, top_down_exposure_rows=None)).tolist() == []
