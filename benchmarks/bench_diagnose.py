@@ -7,7 +7,7 @@ Renders each rig once (kept in --folder for the next run, each in its own sub-fo
 ``flashsync sync`` writes) and ``diagnose`` (whose final model ``flashsync diagnose -o``
 writes), and prints per rig and model the error against truth over every frame and every
 8th row (RMS over all cameras, then each camera's RMS, ms), the effects diagnose named and
-its verdict (a command that fails: its error). Rigs:
+its verdict and how its model compares with sync's (a command that fails: its error). Rigs:
 
 =====================  ===================================================================
 ``jittered-stamps``    the second world's recipe, its 25 fps camera and the 30 fps one whose
@@ -142,7 +142,7 @@ def main() -> None:
         except FlashsyncError as error:
             print(f"  sync         {error}")
         try:
-            d = diagnose(detect_videos(videos, estimate_readout=False))
+            d = diagnose(detect_videos(videos))
         except FlashsyncError as error:
             print(f"  diagnose     {error}")
             continue
@@ -150,6 +150,7 @@ def main() -> None:
         steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
         print(f"  steps        {', '.join(steps)}")
         print(f"  verdict      {d.verdict}")
+        print(f"  vs sync      {d.agreement}")
 
 
 if __name__ == "__main__":

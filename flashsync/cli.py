@@ -882,7 +882,7 @@ def _run_diagnose(args) -> None:
         detect_videos(
             args.videos,
             args.flipped,
-            estimate_readout=False,
+            estimate_readout=True,  # both ways up: the model sync would write, compared with
             progress=_progress,
             timestamps=timestamps,
             **_cluster_options(args),
@@ -893,7 +893,8 @@ def _run_diagnose(args) -> None:
     if args.output:
         save_model(diagnosis.sync_model, args.output)
         _PLAN.did(args.output)
-        print(f"model -> {args.output}", file=sys.stderr)
+        apart = f" (it and sync's disagree on {', '.join(diagnosis.disagrees)})" if diagnosis.disagrees else ""
+        print(f"model -> {args.output}{apart}", file=sys.stderr)
     if args.json:
         write_text(args.json, json.dumps(diagnosis.to_dict(), indent=1))
         _PLAN.did(args.json)

@@ -33,7 +33,7 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
             "      no effect of the catalogue, alone or paired on one camera, lowers the BIC by "
             "more than the threshold and shrinks the RMS of the edges or the stamps or the flicker's gap"
         )
-    lines.append(d.verdict)
+    lines += [d.verdict, d.agreement]
     lines.append(
         f"{'camera':<11} {'readout':<9} {'period ms':>10} {'missing':>7} {'drift ppm':>9} "
         f"{'ppm/s':>7} {'T_row ms':>9} {'exposure ms':>11} {'RMS ms':>7}"

@@ -27,12 +27,14 @@ from itertools import combinations
 import numpy as np
 
 from flashsync.detect import CameraDetection
+from flashsync.diagnose.agreement import Gap, agreement, model_gaps
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
 from flashsync.diagnose.effects import CATALOGUE, FLICKER, OTHER_CAMERAS
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
-from flashsync.errors import NotEnoughDataError
+from flashsync.errors import FlashsyncError, NotEnoughDataError
 from flashsync.model import SyncModel
+from flashsync.pipeline import synchronize
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -118,6 +120,10 @@ class Diagnosis:
         Per edge (lists of n_edges): ``camera``, ``flash``, ``trailing``; ``residual_ms`` one
         list per model: the plain one, then after each step.
     warnings : list of str
+    sync_gaps : list of Gap
+        Per camera, how far the final model's times lie from ``sync``'s on the same
+        detections (:func:`~flashsync.diagnose.agreement.model_gaps`); empty where ``sync``
+        cannot solve them.
     sync_model : SyncModel or None
         The final model as the pipeline's model (:meth:`Candidate.sync_model`): what
         ``flashsync diagnose -o`` writes and ``restamp`` uses. Not in :meth:`to_dict`.
@@ -136,6 +142,7 @@ class Diagnosis:
     residuals: dict[str, list[dict]]
     edge_residuals: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    sync_gaps: list[Gap] = field(default_factory=list)
     sync_model: SyncModel | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -156,6 +163,16 @@ class Diagnosis:
             "cannot separate the ones it has"
         )
 
+    @property
+    def agreement(self) -> str:
+        """One line on the final model against ``sync``'s (:attr:`sync_gaps`)."""
+        return agreement(self.sync_gaps)
+
+    @property
+    def disagrees(self) -> list[str]:
+        """The cameras on which the final model and ``sync``'s disagree."""
+        return [gap.camera for gap in self.sync_gaps if gap.apart]
+
     def to_dict(self) -> dict:
         """Plain dict (JSON-able) with every field, each step's evidence, the verdict and the
         catalogue the effects were chosen from."""
@@ -174,7 +191,13 @@ class Diagnosis:
             }
             for e in CATALOGUE.values()
         ]
-        data.update(verdict=self.verdict, threshold_delta_bic=THRESHOLD, significance=SIGNIFICANCE, catalogue=catalogue)
+        data.update(
+            verdict=self.verdict,
+            agreement=self.agreement,
+            threshold_delta_bic=THRESHOLD,
+            significance=SIGNIFICANCE,
+            catalogue=catalogue,
+        )
         return _finite(data)
 
 
@@ -219,7 +242,18 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
             removed.add(term)
             current = without
             fits.append(current)
-    return _diagnosis(measurement, fits, steps)
+    diagnosis = _diagnosis(measurement, fits, steps)
+    return replace(diagnosis, sync_gaps=_gaps_from_sync(detections, reference, diagnosis.sync_model))
+
+
+def _gaps_from_sync(detections: Sequence[CameraDetection], reference: str | None, model: SyncModel) -> list[Gap]:
+    """:func:`~flashsync.diagnose.agreement.model_gaps` of ``model`` against the model
+    :func:`~flashsync.pipeline.synchronize` fits to the same detections; none where it cannot."""
+    try:
+        synced, _ = synchronize(detections, reference)
+    except FlashsyncError:
+        return []
+    return model_gaps(model, synced)
 
 
 def _best_addition(
