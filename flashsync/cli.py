@@ -882,7 +882,7 @@ def _run_diagnose(args) -> None:
         detect_videos(
             args.videos,
             args.flipped,
-            estimate_readout=True,  # both ways up: the model sync would write, compared with
+            estimate_readout=True,  # both ways up, as sync reads them: its model is compared with this one
             progress=_progress,
             timestamps=timestamps,
             **_cluster_options(args),
