@@ -145,6 +145,11 @@ class Candidate:
         """The camera's exposure (shared one plus its own offset), ms."""
         return self.coefficient(EXPOSURE, -1) + self.coefficient(EXPOSURE, camera)
 
+    def physical(self, cameras: set[int]) -> bool:
+        """Each of ``cameras`` has a positive time per row and exposure under this model (a
+        fit may reach either sign: a time per row below zero reads the rows the other way)."""
+        return all(self.row_time_ms(c) > 0 and self.exposure_ms(c) > 0 for c in cameras)
+
     def estimates(self) -> list[CameraEstimate]:
         """Every camera under this model, in plain numbers."""
         stamp_rms = self.stamp_rms_ms

@@ -262,7 +262,8 @@ def _best_addition(
     """The effect, else the pair of effects (on one camera or two), whose model has the
     lowest BIC among those that lower it by more than :data:`THRESHOLD` and shrink the gap:
     the RMS of the edges, or of the stamps about their clocks, or the flicker's time per row
-    off the model's."""
+    off the model's; a model that gives a camera it changes a time per row or an exposure
+    below zero (:meth:`Candidate.physical`) is not one."""
     singles = _candidates(measurement, current.terms | removed)
     pairs = [(a, b) for a, b in combinations(singles, 2) if b not in _with_implied(a) and a not in _with_implied(b)]
     for groups in ([(term,) for term in singles], pairs):
@@ -271,6 +272,7 @@ def _best_addition(
             trial = fit_candidate(measurement, current.terms.union(*map(_with_implied, group)))
             if (
                 trial is not None
+                and trial.physical({term.camera for term in group})
                 and current.bic - trial.bic > THRESHOLD
                 and (
                     trial.rms_ms < current.rms_ms
@@ -314,13 +316,16 @@ def _step(terms: tuple[Term, ...], without: Candidate, with_terms: Candidate, re
 
 def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, ...]) -> tuple[Term, Candidate] | None:
     """The earlier effect with the least evidence left, and the model without it, if that
-    evidence is :data:`THRESHOLD` or less; effects another one implies stay."""
+    evidence is :data:`THRESHOLD` or less and the model keeps the effect's camera physical
+    (random rig 38: without its flip, an upside-down camera's time per row or exposure fell
+    below zero and fit as well); effects another one implies stay."""
     implied = {t for term in current.terms for t in _with_implied(term) if t != term}
     weakest = None
     for term in sorted(current.terms - implied - frozenset().union(*map(_with_implied, newest))):
         without = fit_candidate(measurement, current.terms - {term})
         if (
             without is not None
+            and without.physical({term.camera})
             and without.bic - current.bic <= THRESHOLD
             and (weakest is None or without.bic < weakest[1].bic)
         ):
