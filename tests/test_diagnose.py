@@ -265,7 +265,7 @@ def test_models_apart_by_more_than_syncs_sigma_disagree():
 
 def test_diagnose_says_where_its_model_and_syncs_part(tmp_path):
     """Random rig 15 of the second world (25 and 50 fps, 360 rows, 8 s): ``diagnose`` pairs
-    3 of the 8 flashes ``sync`` uses (complete, clean bands away from the image's edges) and
+    3 of the 4 flashes its reference saw (complete, clean bands away from the image's edges) and
     fits a drift-rate change of 190 ppm/s to them; its model is 0.57 and 0.77 ms RMS off the
     truth (``sync``'s 0.031 and 0.042) and its verdict passes. The report says that the two
     models disagree, on which cameras and by how much (not which is right)."""
