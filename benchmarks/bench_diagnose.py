@@ -1,6 +1,7 @@
 """``flashsync sync`` against ``flashsync diagnose -o``: both models scored against the truth.
 
 Run: python benchmarks/bench_diagnose.py [--folder DIR] [--cases all|NAME,...]
+     python benchmarks/bench_diagnose.py --seeds 0:40 [--max-height 360] [--duration-s 8] [--folder DIR]
 
 Renders each rig once (kept in --folder for the next run, each in its own sub-folder, with
 ``truth.json``), detects its events as each command does, runs ``synchronize`` (what
@@ -26,6 +27,13 @@ its verdict and how its model compares with sync's (a command that fails: its er
                        3 ms: ``fast-stamps-3ms-60fps``)
 ``slowing-stamps``     the same, its stamps half as fast from frame 150 on, not jittered
 =====================  ===================================================================
+
+With ``--seeds``, the second world's random rigs instead (``random_rig(seed)``, kept in
+``DIR/rig-<seed>`` as ``bench_rigs.py --keep DIR`` keeps them, so one rendering serves
+both), and after them a summary: the median RMS of each model over the rigs, and the rigs
+with a camera ``diagnose -o`` puts more than twice as far off as ``sync``'s worst camera
+(plus 0.05 ms): how many pass the verdict, and how many of those cameras the line on
+``sync``'s model names.
 """
 
 from __future__ import annotations
@@ -35,14 +43,14 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+from bench_rigs import parse_seeds, rendered  # the sibling script: one keep layout, one seed syntax
 
 from flashsync import detect_videos, synchronize
 from flashsync.diagnose import diagnose
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import sync_errors
-from flashsync.io import load_ground_truth
-from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
-from flashsync.simulation.rigs import NTSC_30, NTSC_60, recipe
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, random_rig, recipe
 
 
 def drifting() -> Scenario:
@@ -116,41 +124,82 @@ RIGS = {
 }
 
 
-def errors(model, truth) -> str:
-    table = sync_errors(model, truth)
-    pooled = float(np.sqrt(np.mean(table["rms_ms"] ** 2)))
+def pooled_ms(table) -> float:
+    """RMS over cameras of the per-camera RMS errors of a :func:`sync_errors` table, ms."""
+    return float(np.sqrt(np.mean(table["rms_ms"] ** 2)))
+
+
+def errors(table) -> str:
     cameras = "  ".join(f"{row.camera} {row.rms_ms:.4f}" for row in table.itertuples())
-    return f"{pooled:.4f} ms RMS ({cameras})"
+    return f"{pooled_ms(table):.4f} ms RMS ({cameras})"
+
+
+def run(scenario: Scenario, folder: Path) -> dict | None:
+    """Print one rig's block; returns both models' error tables, the verdict and the cameras
+    the line on sync's model names (None where a command failed)."""
+    truth = rendered(scenario, folder)
+    videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
+    print(f"{folder.name}:")
+    try:
+        model, _ = synchronize(detect_videos(videos))
+        synced = sync_errors(model, truth)
+        print(f"  sync         {errors(synced)}")
+    except FlashsyncError as error:
+        print(f"  sync         {error}")
+        return None
+    try:
+        d = diagnose(detect_videos(videos))
+    except FlashsyncError as error:
+        print(f"  diagnose     {error}")
+        return None
+    diagnosed = sync_errors(d.sync_model, truth)
+    print(f"  diagnose -o  {errors(diagnosed)}")
+    steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
+    print(f"  steps        {', '.join(steps)}")
+    print(f"  verdict      {d.verdict}")
+    print(f"  vs sync      {d.agreement}")
+    return {"sync": synced, "diagnose": diagnosed, "consistent": d.consistent, "named": set(d.disagrees)}
+
+
+def summary(results: list[dict | None]) -> str:
+    """The random rigs' summary (module docstring)."""
+    done = [r for r in results if r is not None]
+    far = []
+    for r in done:
+        line = r["sync"]["rms_ms"].max() * 2.0 + 0.05
+        far.append(set(r["diagnose"].loc[r["diagnose"]["rms_ms"] > line, "camera"]))
+    off = [(r, cameras) for r, cameras in zip(done, far) if cameras]
+    cameras = sum(len(c) for _, c in off)
+    named = sum(len(c & r["named"]) for r, c in off)
+    return "\n".join(
+        [
+            f"{len(done)} of {len(results)} rigs run by both; median RMS: sync "
+            f"{np.median([pooled_ms(r['sync']) for r in done]):.3f} ms, diagnose -o "
+            f"{np.median([pooled_ms(r['diagnose']) for r in done]):.3f} ms",
+            f"rigs with a camera diagnose -o puts over twice sync's worst + 0.05 ms: {len(off)}, "
+            f"{sum(r['consistent'] for r, _ in off)} of them passing the verdict; such cameras {cameras}, "
+            f"{named} named by the line on sync's model",
+        ]
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--folder", type=Path, default=Path("bench_diagnose"), help="rendered rigs (kept)")
     parser.add_argument("--cases", default="all", help=f"all, or some of {','.join(RIGS)}")
+    parser.add_argument("--seeds", help="random rigs A:B (seeds A..B-1) or one seed, instead of the cases")
+    parser.add_argument("--max-height", type=int, default=360, help="largest image height of random rigs")
+    parser.add_argument("--duration-s", type=float, default=8.0, help="length of random rigs, s")
     args = parser.parse_args()
-    names = list(RIGS) if args.cases == "all" else args.cases.split(",")
-    for name in names:
-        scenario, folder = RIGS[name](), args.folder / name
-        if not (folder / "truth.json").is_file():
-            render_scenario(scenario, folder)
-        truth = load_ground_truth(folder / "truth.json")
-        videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
-        print(f"{name}:")
-        try:
-            model, _ = synchronize(detect_videos(videos))
-            print(f"  sync         {errors(model, truth)}")
-        except FlashsyncError as error:
-            print(f"  sync         {error}")
-        try:
-            d = diagnose(detect_videos(videos))
-        except FlashsyncError as error:
-            print(f"  diagnose     {error}")
-            continue
-        print(f"  diagnose -o  {errors(d.sync_model, truth)}")
-        steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
-        print(f"  steps        {', '.join(steps)}")
-        print(f"  verdict      {d.verdict}")
-        print(f"  vs sync      {d.agreement}")
+    if args.seeds:
+        results = [
+            run(random_rig(seed, args.max_height, 1000.0 * args.duration_s), args.folder / f"rig-{seed}")
+            for seed in parse_seeds(args.seeds)
+        ]
+        print(summary(results))
+        return
+    for name in list(RIGS) if args.cases == "all" else args.cases.split(","):
+        run(RIGS[name](), args.folder / name)
 
 
 if __name__ == "__main__":
