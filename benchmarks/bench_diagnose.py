@@ -140,13 +140,13 @@ def run(scenario: Scenario, folder: Path) -> dict | None:
     truth = rendered(scenario, folder)
     videos = [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
     print(f"{folder.name}:")
+    synced = None
     try:
         model, _ = synchronize(detect_videos(videos))
         synced = sync_errors(model, truth)
         print(f"  sync         {errors(synced)}")
     except FlashsyncError as error:
         print(f"  sync         {error}")
-        return None
     try:
         d = diagnose(detect_videos(videos))
     except FlashsyncError as error:
@@ -158,6 +158,8 @@ def run(scenario: Scenario, folder: Path) -> dict | None:
     print(f"  steps        {', '.join(steps)}")
     print(f"  verdict      {d.verdict}")
     print(f"  vs sync      {d.agreement}")
+    if synced is None:
+        return None
     return {"sync": synced, "diagnose": diagnosed, "consistent": d.consistent, "named": set(d.disagrees)}
 
 
