@@ -263,18 +263,41 @@ def test_models_apart_by_more_than_syncs_sigma_disagree():
     assert "none (sync cannot solve" in agreement([])
 
 
-def test_diagnose_says_where_its_model_and_syncs_part(tmp_path):
+@pytest.fixture(scope="module")
+def rig15(tmp_path_factory) -> tuple[GroundTruth, list[Path]]:
+    """Random rig 15 of the second world rendered once: its truth and videos."""
+    scenario = random_rig(15, max_height=360, duration_ms=8000.0)
+    folder = tmp_path_factory.mktemp("rig15")
+    return render_scenario(scenario, folder), [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
+
+
+def test_diagnose_says_where_its_model_and_syncs_part(rig15):
     """Random rig 15 of the second world (25 and 50 fps, 360 rows, 8 s): ``diagnose`` pairs
     3 of the 4 flashes its reference saw (complete, clean bands away from the image's edges) and
     fits a drift-rate change of 190 ppm/s to them; its model is 0.57 and 0.77 ms RMS off the
     truth (``sync``'s 0.031 and 0.042) and its verdict passes. The report says that the two
     models disagree, on which cameras and by how much (not which is right)."""
-    scenario = random_rig(15, max_height=360, duration_ms=8000.0)
-    truth = render_scenario(scenario, tmp_path)
-    d = diagnose(detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras]))
+    truth, videos = rig15
+    d = diagnose(detect_videos(videos))
     assert (sync_errors(d.sync_model, truth).rms_ms > 0.3).all(), format_diagnosis(d)  # the defect it names
     assert d.disagrees == ["cam1", "cam2"] and "disagree beyond 3 sigma on cam1" in d.agreement, d.agreement
     assert d.agreement in format_diagnosis(d) and d.to_dict()["agreement"] == d.agreement
+
+
+def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(rig15, tmp_path, capsys):
+    """``flashsync diagnose -o`` on the same rig still writes its model (asked for), and its
+    ``model ->`` line names the cameras on which it and ``sync``'s disagree; the JSON holds
+    the gaps."""
+    from flashsync.cli import main
+
+    _, videos = rig15
+    out = ["-o", str(tmp_path / "sync.json"), "--json", str(tmp_path / "d.json")]
+    assert main(["diagnose", *map(str, videos), *out]) == 0
+    shown = capsys.readouterr()
+    assert f"model -> {tmp_path / 'sync.json'} (it and sync's disagree on cam1, cam2)" in shown.err, shown.err
+    assert "they disagree beyond 3 sigma" in shown.out
+    gaps = json.loads((tmp_path / "d.json").read_text())["sync_gaps"]
+    assert [g["camera"] for g in gaps] == ["cam1", "cam2"] and all(g["rms_ms"] > 3 * g["sigma_ms"] for g in gaps)
 
 
 def test_a_model_with_a_time_per_row_or_exposure_below_zero_is_neither_added_nor_kept(tmp_path):
