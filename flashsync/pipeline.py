@@ -1146,9 +1146,9 @@ def _pulse_lengths(detection: CameraDetection) -> np.ndarray:
     the difference off, the other way), so the solve keeps the band's midpoint and leaves
     its length out (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`): the bands of the
     exposure's length measure the exposure, which places every midpoint."""
-    bands, lengths = _whole_bands(detection.events)
     if detection.exposure_rows is None:
-        return bands.event[:0]
+        return detection.events.event[:0]
+    bands, lengths = _whole_bands(detection.events)
     longer = lengths >= OUTLASTED_SHARE * detection.exposure_rows
     return bands.event[longer] if not longer.all() else bands.event[:0]
 

@@ -48,9 +48,9 @@ def model_gaps(diagnosed: SyncModel, synced: SyncModel) -> list[Gap]:
     """Per camera both models hold (``diagnosed``'s order), how far their times lie apart."""
     gaps = []
     for name, clock in diagnosed.cameras.items():
-        if name not in synced.cameras:
+        other = synced.cameras.get(name)
+        if other is None:
             continue
-        other = synced.camera(name)
         frame, row = probes(clock)
         frame, row = frame[: other.n_frames], row[: other.n_frames]
         difference = clock.t_global_ms(frame, row) - other.t_global_ms(frame, row)
