@@ -4,7 +4,16 @@ import numpy as np
 import pytest
 from scipy.stats import exponnorm
 
-from flashsync.ramp import BAND, MIN_DECAY, _model, _ramp, common_width, fit_pulse_band, fit_pulse_edge
+from flashsync.ramp import (
+    BAND,
+    MIN_DECAY,
+    _longest_minimum,
+    _model,
+    _ramp,
+    common_width,
+    fit_pulse_band,
+    fit_pulse_edge,
+)
 
 SCALE, PLATEAU = 2.9, 0.35  # decay length (rows) and band level of the test clips
 
@@ -98,3 +107,21 @@ def test_one_pulse_length_or_a_longer_exposure_keeps_the_exposure_the_longer():
     assert not longer and abs(width - 30.0) < 1.0
     width, longer = common_width(led_fits([4.0, 9.0, 6.0, 12.0, 7.0], 25.0))
     assert not longer and abs(width - 25.0) < 0.5
+
+
+def test_an_exposure_every_pulse_outlasts_is_read_however_short():
+    """A 4-row exposure under pulses of 8.5-14 rows: no band is as long as the exposure,
+    each is as long as its pulse. Read plainly, the bands' lengths scatter; read the
+    other way round, their ramps share 4 rows. Such a reading used to be refused under 8
+    rows (it came out 8.7 rows, every pulse taken for the exposure)."""
+    width, longer = common_width(led_fits([9.0, 13.0, 10.5, 14.0, 8.5], 4.0))
+    assert longer and abs(width - 4.0) < 0.5
+
+
+def test_of_two_readings_nearly_as_good_the_longer_is_the_exposure():
+    """The last local minimum within the limit: a shorter exposure blurred more mimics a
+    longer one, never the other way round; a cost cut short (inf) is no minimum."""
+    costs = np.array([5.0, 3.0, 9.0, 40.0, 20.0, 45.0, np.inf, 30.0, np.inf])
+    assert _longest_minimum(costs, 3.0 + 50.0) == 7
+    assert _longest_minimum(costs, 3.0 + 25.0) == 4
+    assert _longest_minimum(costs, 3.0 + 10.0) == 1
