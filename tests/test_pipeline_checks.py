@@ -12,11 +12,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+import flashsync.pipeline as pipeline
 from flashsync import detect_videos, synchronize
-from flashsync.detect import LONG_PULSE_EDGE_SIGMA, CameraDetection
+from flashsync.detect import LONG_PULSE_EDGE_SIGMA, SATURATED_EDGE_SIGMA, CameraDetection
 from flashsync.errors import InputError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.pipeline import (
+    EDGE_NOISE_FLOOR_ROWS,
+    EDGE_NOISE_QUALITY,
     LONE_EDGE_SIGMA,
     _Attempt,
     _edge_sigma,
@@ -26,6 +29,7 @@ from flashsync.pipeline import (
     check_anchors,
     check_row_times,
 )
+from flashsync.simulation.band_events import synthetic_detections, synthetic_events
 
 
 @pytest.mark.parametrize(
@@ -169,3 +173,51 @@ def test_only_bands_longer_than_the_exposure_others_share_are_taken_for_their_pu
     assert _pulse_lengths(detection).tolist() == [1, 3]
     assert _pulse_lengths(replace(detection, top_down_exposure_rows=8.0)).tolist() == []
     assert _pulse_lengths(replace(detection, top_down_exposure_rows=None)).tolist() == []
+
+
+def test_a_faint_bands_edges_weigh_less_than_a_bright_ones():
+    """Edges of qualities 2000 (the camera's median), 500, 5000, 500 and 3000: in units of
+    the median one's, the faint edge's noise is hypot(0.21, 485 / 500) over hypot(0.21,
+    485 / 2000) rows (3.1), the bright one's 0.73; a flag's factor multiplies its band's (a
+    saturated faint edge)."""
+    qualities = [2000.0, 500.0, 5000.0, 500.0, 3000.0]
+    flags = [frozenset()] * 3 + [frozenset({Flag.SATURATED}), frozenset()]
+    events = Events.from_columns(
+        ["cam"] * 5, range(5), [3] * 5, [120.0] * 5, [20.0, 60.0, 100.0, 140.0, 160.0], [Edge.LEADING] * 5,
+        [Band.PULSE] * 5, [1.0] * 5, [0.5] * 5, qualities, flags,
+    )  # fmt: skip
+    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events)
+    noise = np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / np.array(qualities))
+    sigma = _edge_sigma(detection, events)
+    assert sigma == pytest.approx(noise / noise[0] * [1.0, 1.0, 1.0, SATURATED_EDGE_SIGMA, 1.0])
+    assert sigma[1] > 3.0 and 0.7 < sigma[2] < 0.75
+
+
+def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
+    """Three cameras, 20 flashes, every other band faint (quality 400, the rest 4000): the
+    solve gets each band's midpoint (its leading edge's row) and length (its trailing edge's)
+    with the noise its quality gives, in units of the camera's median edge's."""
+    events, truth, frame_times = synthetic_events(3, 20, seed=0)
+    detections = []
+    for detection in synthetic_detections(events, truth, frame_times):
+        bands = detection.top_down
+        bands = replace(bands, quality=np.where(bands.event % 2 == 1, 400.0, 4000.0))
+        detections.append(replace(detection, top_down=bands, bottom_up=None))
+    seen = []
+    solve = pipeline.solve_with_drift_model
+    monkeypatch.setattr(
+        pipeline,
+        "solve_with_drift_model",
+        lambda edges, *args, **kwargs: seen.append(edges) or solve(edges, *args, **kwargs),
+    )
+    synchronize(detections)
+    observations = seen[-1]
+    noise = np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / np.array([400.0, 4000.0]))
+    for c, detection in enumerate(detections):
+        expected = noise / np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / np.median(detection.top_down.quality))
+        for trailing in (False, True):
+            factors = observations.sigma_factor[(observations.camera == c) & (observations.trailing == trailing)]
+            factors = np.where(
+                factors >= LONG_PULSE_EDGE_SIGMA * expected.min(), factors / LONG_PULSE_EDGE_SIGMA, factors
+            )
+            assert sorted(set(np.round(factors, 9))) == pytest.approx(sorted(expected)), (c, trailing)
