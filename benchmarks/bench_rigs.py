@@ -11,7 +11,9 @@ exactly as ``flashsync sync`` does: ``detect_videos(videos)`` (both ways up) the
 every 8th row (`flashsync.evaluate.camera_accuracy`): sync error (RMS, max), exposure
 error, time-per-row error, and the calibration of the predicted sigma (RMS of error/sigma
 and the share of probes within 2 sigma, per camera and pairwise). Detection is checked too:
-events on frames that show no flash are false, flashes seen with no event are missed.
+events on frames that show no flash are false, flashes seen with no event are missed; and
+every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
+the noise the solve assumes there (`flashsync.pipeline.EDGE_NOISE_QUALITY`).
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
@@ -31,11 +33,14 @@ import pandas as pd
 
 from flashsync import CameraDetection, detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
+from flashsync.events import Edge
 from flashsync.io.scenario import scenario_from_dict
 from flashsync.io.truth import load_ground_truth
+from flashsync.pipeline import EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY
+from flashsync.robust import MAD_TO_SIGMA
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import RECIPES, random_rig, recipe
-from flashsync.simulation.truth import CameraTruth
+from flashsync.simulation.truth import CameraTruth, GroundTruth
 
 #: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
 TARGET_RMS_MS, TARGET_MAX_MS, TARGET_EXPOSURE_MS = 0.03, 0.1, 0.1
@@ -59,6 +64,51 @@ def detection_counts(detection: CameraDetection, truth_camera: CameraTruth) -> d
         "flashes_seen": len(flash_frames),
         "missed_flashes": missed,
     }
+
+
+def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
+    """The clean edges (no flag) of one camera's reading in use against the truth: each
+    edge's band ``quality`` and its row minus the row whose exposure ended (a leading
+    edge) or started (a trailing one) when its flash had given half its light
+    (``edge_error_rows``); an edge on a frame of no flash the camera saw is left out, and
+    every edge of a reading that is not the camera's true one."""
+    camera = truth.cameras[detection.camera]
+    events = detection.events if detection.flipped == camera.flipped else detection.events.take(slice(0, 0))
+    clean = np.array([not flags for flags in events.flags], dtype=bool)
+    quality, error = [], []
+    for i in np.flatnonzero(clean):
+        frame = int(events.frame[i])
+        flashes = [int(k) for k, frames in camera.flashes_seen.items() if frame in frames]
+        if not flashes:
+            continue
+        top, bottom = truth.global_time_ms(detection.camera, [frame, frame], [0.0, detection.height - 1.0])
+        late = 0.0 if events.edge[i] == Edge.LEADING else camera.exposure_ms
+        rows = [
+            (truth.flashes[k]["half_rise_global_ms"] + late - top) / (bottom - top) * (detection.height - 1)
+            for k in flashes
+        ]
+        true_row = min(rows, key=lambda row: abs(row - events.row[i]))
+        quality.append(float(events.quality[i]))
+        error.append(float(events.row[i] - true_row))
+    return {"edge_quality": quality, "edge_error_rows": error}
+
+
+def edge_block(cameras: pd.DataFrame) -> list[str]:
+    """Clean edges' errors by their band's quality: robust sigma (rows) against the noise
+    the solve assumes at the bin's median quality."""
+    quality = np.concatenate([np.asarray(q, dtype=float) for q in cameras["edge_quality"]])
+    error = np.concatenate([np.asarray(e, dtype=float) for e in cameras["edge_error_rows"]])
+    lines = [f"clean edges against the truth by band quality ({len(error)} edges):"]
+    for low, high in ((0, 1000), (1000, 1700), (1700, 3000), (3000, np.inf)):
+        mine = error[(quality >= low) & (quality < high)]
+        if mine.size:
+            middle = float(np.median(quality[(quality >= low) & (quality < high)]))
+            assumed = float(np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / middle))
+            lines.append(
+                f"  quality {low:>4}-{high:<5} n {mine.size:>5}  median {np.median(mine):+.2f}  robust σ "
+                f"{MAD_TO_SIGMA * np.median(np.abs(mine - np.median(mine))):.2f} rows (assumed {assumed:.2f})"
+            )
+    return lines
 
 
 def describe(scenario) -> dict:
@@ -139,7 +189,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
         detection = by_name[spec.name]
         if detection.undecided and spec.name in model.cameras:
             detection = detection.read_flipped(model.cameras[spec.name].flipped)
-        counts.append(detection_counts(detection, truth.cameras[spec.name]))
+        counts.append(detection_counts(detection, truth.cameras[spec.name]) | edge_errors(detection, truth))
     extra = pd.DataFrame(counts).assign(
         rig=scenario.name,
         height=[c.height for c in scenario.cameras],
@@ -275,6 +325,8 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
         f"  false events             {distribution(tables['false_events'])}",
         f"  missed flashes           {distribution(tables['missed_flashes'])}",
     ]
+    if "edge_error_rows" in tables:  # not in the --json files of runs before 2026-11-27
+        lines += edge_block(tables)
     return "\n".join(lines)
 
 
