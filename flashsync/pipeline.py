@@ -1107,8 +1107,9 @@ def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
 #: A clean edge's noise, rows: ``hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / quality)``,
 #: its band's ``quality`` its plateau over the video's profile noise. Over the 3255 clean
 #: edges of the 40 kept random rigs (errors against the simulator's truth) the robust sigma
-#: falls from 0.81 rows at a quality under 1000 to 0.16 above 3100; the fit is within 30 %
-#: of every cell of 6 quality by 4 ramp-width bins (the ramp's width adds nothing clear).
+#: falls from 0.75 rows at a quality under 950 to 0.20 above 3000, within 20 % of this in
+#: each of six equal bins; fitted on quality by ramp-width bins (the width adds nothing
+#: clear). ``benchmarks/bench_rigs.py`` prints it against the truth.
 EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY = 0.21, 485.0
 
 
