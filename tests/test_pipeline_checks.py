@@ -217,6 +217,7 @@ def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
         expected = noise / np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / np.median(detection.top_down.quality))
         for trailing in (False, True):
             factors = observations.sigma_factor[(observations.camera == c) & (observations.trailing == trailing)]
+            # a leading edge whose trailing one is hidden far from the last row also counts as a long pulse's
             factors = np.where(
                 factors >= LONG_PULSE_EDGE_SIGMA * expected.min(), factors / LONG_PULSE_EDGE_SIGMA, factors
             )
