@@ -13,7 +13,7 @@ error, time-per-row error, and the calibration of the predicted sigma (RMS of er
 and the share of probes within 2 sigma, per camera and pairwise). Detection is checked too:
 events on frames that show no flash are false, flashes seen with no event are missed; and
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
-the noise the solve assumes there (`flashsync.pipeline.EDGE_NOISE_QUALITY`).
+the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`).
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
@@ -36,7 +36,7 @@ from flashsync.evaluate import camera_accuracy
 from flashsync.events import Edge
 from flashsync.io.scenario import scenario_from_dict
 from flashsync.io.truth import load_ground_truth
-from flashsync.pipeline import EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY
+from flashsync.pipeline import edge_noise_rows
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import RECIPES, random_rig, recipe
@@ -100,10 +100,10 @@ def edge_block(cameras: pd.DataFrame) -> list[str]:
     error = np.concatenate([np.asarray(e, dtype=float) for e in cameras["edge_error_rows"]])
     lines = [f"clean edges against the truth by band quality ({len(error)} edges):"]
     for low, high in ((0, 1000), (1000, 1700), (1700, 3000), (3000, np.inf)):
-        mine = error[(quality >= low) & (quality < high)]
+        binned = (quality >= low) & (quality < high)
+        mine = error[binned]
         if mine.size:
-            middle = float(np.median(quality[(quality >= low) & (quality < high)]))
-            assumed = float(np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / middle))
+            assumed = float(edge_noise_rows(np.median(quality[binned])))
             lines.append(
                 f"  quality {low:>4}-{high:<5} n {mine.size:>5}  median {np.median(mine):+.2f}  robust σ "
                 f"{MAD_TO_SIGMA * np.median(np.abs(mine - np.median(mine))):.2f} rows (assumed {assumed:.2f})"

@@ -1114,14 +1114,14 @@ EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY = 0.21, 485.0
 
 
 def _faintness(detection: CameraDetection, events: Events) -> np.ndarray:
-    """Each of the camera's ``events``' noise (:func:`_edge_noise_rows`) over that at the
+    """Each of the camera's ``events``' noise (:func:`edge_noise_rows`) over that at the
     median quality of all its edges: a faint band's edges weigh less than a bright one's."""
     if len(events) == 0:
         return np.ones(0)
-    return _edge_noise_rows(events.quality) / _edge_noise_rows(np.median(detection.events.quality))
+    return edge_noise_rows(events.quality) / edge_noise_rows(np.median(detection.events.quality))
 
 
-def _edge_noise_rows(quality: np.ndarray) -> np.ndarray:
+def edge_noise_rows(quality: np.ndarray) -> np.ndarray:
     """A clean edge's noise, rows, at its band's ``quality`` (:data:`EDGE_NOISE_QUALITY`)."""
     return np.hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / np.maximum(np.abs(quality), 1.0))
 
