@@ -28,7 +28,9 @@ no smaller than the camera's edge floor, :data:`EDGE_FLOOR_ROWS` of a row) are r
 and the final fit uses the rest, each weighed by the noise of its camera's equations of
 its kind (leading edges and band midpoints; trailing edges and band lengths).
 Priors (a datasheet ``T_row``, a weak nominal one, clock drift within a few tens of ppm)
-enter as pseudo-observations.
+enter as pseudo-observations. A time per row multiplies a measured row, whose noise would
+pull it towards zero wherever the rows' spread does not pin it; each solve takes that
+noise out of the times per row's information (:meth:`_System._take_row_noise`).
 """
 
 from __future__ import annotations
@@ -176,10 +178,19 @@ def solve_clocks(
 def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float, iterations: int) -> Solution:
     """The robust iterations of :func:`solve_clocks` on a built system: Cauchy weights at
     ``cauchy_k`` robust sigmas, ``iterations`` solves in all; then the inliers weighed by
-    their groups' own noise (:meth:`_System.group_scales`), which the covariance states."""
+    their groups' own noise (:meth:`_System.group_scales`), which the covariance states.
+    Every solve but the first takes the rows' noise, as the last residuals give it, out of
+    the times per row's information (:meth:`_System._take_row_noise`): a time per row pulled
+    short in the robust iterations moves which events are rejected."""
+
+    def residuals(x: np.ndarray) -> np.ndarray:
+        residual = system.residuals(x)
+        system.estimate_row_noise(x, mad_sigma(residual))
+        return residual
+
     x, residual, _ = cauchy_irls(
         system.solve,
-        system.residuals,
+        residuals,
         system.n_equations,
         lambda residual, _: cauchy_k * mad_sigma(residual, MIN_SCALE_MS),
         iterations - 1,
@@ -194,6 +205,8 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     leading = ~system.trailing
     for _ in range(GROUP_SCALE_ROUNDS):
         scale = system.group_scales(x, weights, inlier)
+        system.estimate_row_noise(x, scale)
+        scale = np.maximum(scale, MIN_SCALE_MS)
         floor = _edge_floor_ms(system, x, n_cameras)
         scale[leading] = np.maximum(scale[leading], floor[system.camera[leading]])
         # trailing edges (band lengths) no less noisy than their camera's leading edges (band midpoints): a
@@ -258,6 +271,9 @@ def _edge_floor_ms(system: _System, x: np.ndarray, n_cameras: int) -> np.ndarray
 #: Weight of equations kept only to determine an unknown (:func:`_all_rejected`); an inlier
 #: weighs 1 to 100: they move nothing else.
 IDLE_WEIGHT = 1e-6
+#: Least time per row by which a row noise is converted (ms): a time per row solved at zero
+#: would make it infinite.
+MIN_ROW_TIME_MS = 1e-6
 #: The least noise of a band edge, rows: clean edges are located to 0.10-0.16 rows RMS
 #: (`benchmarks/bench_edges.py`, README "Edge precision").
 EDGE_FLOOR_ROWS = 0.15
@@ -319,9 +335,9 @@ def _bic(solution: Solution) -> float:
 class _System:
     """The sparse design of :func:`solve_clocks`, columns scaled to unit norm.
 
-    Columns: per camera (drift about mid time, shift at mid time, row time), the
-    reference's first two left out; the warp values of cameras with drift knots; one
-    exposure per camera that has trailing edges; one global time per flash. Rows: events,
+    Columns: per camera but the reference, drift about mid time and shift at mid time; the
+    warp values of cameras with drift knots; one exposure per camera that has trailing
+    edges; every camera's time per row; one global time per flash. Rows: events,
     then priors; each event row divided by its sigma factor (priors carry their own weight).
     A band whose both edges are observed enters as its midpoint and its length
     (:func:`_band_transform`), each with its own noise.
@@ -353,10 +369,9 @@ class _System:
         self.param_columns = np.full((n_cameras, 3), -1)
         n_columns = 0
         for c in range(n_cameras):
-            for k in range(3):
-                if c != reference or k == 2:
-                    self.param_columns[c, k] = n_columns
-                    n_columns += 1
+            if c != reference:
+                self.param_columns[c, :2] = n_columns, n_columns + 1
+                n_columns += 2
         self.knots = {c: np.asarray(knots, dtype=np.float64) for c, knots in drift_knots.items()}
         self.warp_columns = {}
         for c, knots in self.knots.items():
@@ -366,6 +381,10 @@ class _System:
         for c in np.unique(camera[trailing]):
             self.exposure_columns[c] = n_columns
             n_columns += 1
+        # the times per row last: the Cholesky factor's last block is then their information, every
+        # other camera unknown profiled out (_take_row_noise)
+        self.param_columns[:, 2] = n_columns + np.arange(n_cameras)
+        n_columns += n_cameras
         self.n_camera_columns = n_columns
         self.flash_columns = n_columns + np.arange(len(self.flash_ids))
         self.n_unknowns = n_columns + len(self.flash_ids)
@@ -424,8 +443,20 @@ class _System:
         self.matrix = (matrix @ sparse.diags(self.column_scale)).tocsc()
         self.matrix.eliminate_zeros()  # a warp's hats are 0 beyond their two knots
         self._last_reduced = (None, None)
+        #: each equation's row noise, rows² (its sigma factor's worth; shape (n_equations,)): the
+        #: variance its rows add to its time per row's column (:meth:`_take_row_noise`)
+        self.row_noise = np.zeros(self.n_equations)
+        #: each camera's time-per-row prior's weight on the Schur complement's diagonal (scaled)
+        self.row_time_prior = np.zeros(n_cameras)
+        for c, (_, std) in priors.row_time.items():
+            self.row_time_prior[c] = (event_sigma_ms / std * self.column_scale[self.param_columns[c, 2]]) ** 2
         self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
         self.flashes = self.matrix[:, self.n_camera_columns :].tocsr()
+        named = self.flashes[: self.n_equations].tocoo()
+        #: each equation's coefficient of its flash (scaled; 0 for a band's length) and that flash's index
+        self.flash_coefficient = np.zeros(self.n_equations)
+        self.flash_of = np.zeros(self.n_equations, dtype=np.int64)
+        self.flash_coefficient[named.row], self.flash_of[named.row] = named.data, named.col
 
     @staticmethod
     def _band_pairs(events: Observations, trailing: np.ndarray) -> np.ndarray:
@@ -465,11 +496,10 @@ class _System:
         schur = (self.cams.T @ weighted_cams).toarray() - scaled @ scaled.T  # a @ a.T: one BLAS syrk
         right_cams = self.cams.T @ (w * self.rhs)
         right_flashes = self.flashes.T @ (w * self.rhs)
-        try:
-            factor = linalg.cho_factor(schur, check_finite=False)
-        except linalg.LinAlgError:
-            factor = None
-        if factor is None or np.min(np.diag(factor[0])) ** 2 <= 1e-12 * np.max(np.diag(schur)):
+        factor = _cholesky(schur)
+        if factor is not None and np.any(self.row_noise):
+            factor = self._take_row_noise(factor, w[: self.n_equations], d, np.max(np.diag(schur)))
+        if factor is None:
             raise NotEnoughDataError(
                 "the matched events cannot separate every camera's drift, shift and time per row "
                 "(too few flashes, or all at the same rows); record more flashes seen by several "
@@ -477,6 +507,51 @@ class _System:
             )
         self._last_reduced = (weights.copy(), (factor, coupling, d, right_cams, right_flashes))
         return self._last_reduced[1]
+
+    def estimate_row_noise(self, x: np.ndarray, noise_ms: np.ndarray | float) -> None:
+        """Set each equation's row noise (:attr:`row_noise`) from its noise ``noise_ms`` (ms, a
+        clean edge's; scalar or shape (n_equations,)), all of it taken to be in the rows, over
+        its camera's time per row in ``x``."""
+        row_time = np.abs(x[self.param_columns[:, 2]])[self.camera]
+        self.row_noise = (np.broadcast_to(noise_ms, self.camera.shape) / np.maximum(row_time, MIN_ROW_TIME_MS)) ** 2
+        self._last_reduced = (None, None)
+
+    def _take_row_noise(
+        self, factor: tuple[np.ndarray, bool], w: np.ndarray, d: np.ndarray, largest: float
+    ) -> tuple[np.ndarray, bool] | None:
+        """The Cholesky factor of the Schur complement (``factor``, upper, of weights ``w`` and
+        flash diagonal ``d``) without the information on the times per row that the rows' noise
+        alone gives it; None where what is left is singular (a pivot under 1e-12 of
+        ``largest``, the complement's largest diagonal entry).
+
+        A time per row multiplies a measured row, so the noise of the rows enters its column
+        of the design: ``sum(w q**2)`` grows by ``w`` times each row's variance (less its
+        flash's share, which the flash's own time takes), and a least-squares time per row
+        is pulled towards zero as if fewer rows had been needed (regression dilution). The
+        more the rows' spread pins it (cameras of other rates or phases, bands split across
+        frames, many flashes) the less the pull; where nothing does (cameras of one rate and
+        phase, as line-locked ones are) the noise alone made it collapse (three 50 fps
+        cameras: 89 % short at 57 sigma). The factor's last block (the times per row's columns come
+        last) gives the events' information on them ``M``, every other camera unknown
+        profiled out, their own priors left out; with the noise's ``D``, ``D^-1/2 M D^-1/2 =
+        V diag(l) V'``, and what is kept is ``D^1/2 V diag(max(l - 1, 0)) V' D^1/2``: the rows'
+        spread beyond their noise, never below nothing, so the priors decide where the events
+        do not. Only that block of the factor changes.
+        """
+        t = self.param_columns[:, 2]
+        kept = w * self.row_noise * (1.0 - w * self.flash_coefficient**2 / d[self.flash_of])
+        noise = np.bincount(self.camera, kept, minlength=len(t)) * self.column_scale[t] ** 2
+        block = np.triu(factor[0][t[0] :, t[0] :])
+        information = block.T @ block - np.diag(self.row_time_prior)
+        noisy = np.flatnonzero(noise > 0)
+        root = np.sqrt(noise[noisy])
+        values, vectors = np.linalg.eigh(information[np.ix_(noisy, noisy)] / np.outer(root, root))
+        information[np.ix_(noisy, noisy)] = (vectors * np.maximum(values - 1.0, 0.0)) @ vectors.T * np.outer(root, root)
+        corrected = _cholesky(information + np.diag(self.row_time_prior), largest)
+        if corrected is None:
+            return None
+        factor[0][t[0] :, t[0] :] = np.triu(corrected[0])  # cho_factor's own array: the solves read its upper triangle
+        return factor
 
     def solve(self, weights: np.ndarray) -> np.ndarray:
         """Weighted least-squares solution (unscaled units); a clear error where the
@@ -498,8 +573,7 @@ class _System:
         group's inlier residuals over the degrees of freedom they leave (their count less
         their leverages, i.e. the trace of the inverse normal matrix times the group's own),
         shrunk towards the pooled scale of its kind (leading edges and band midpoints;
-        trailing edges and band lengths) with :data:`POOLED_EQUATIONS`; at least
-        :data:`~flashsync.robust.MIN_SCALE_MS`."""
+        trailing edges and band lengths) with :data:`POOLED_EQUATIONS`."""
         residual = self.residuals(x)
         leverages = self._leverages(weights)
         if leverages is None:
@@ -514,7 +588,7 @@ class _System:
         for kind in (slice(0, n_cameras), slice(n_cameras, groups)):  # leading, then trailing edges
             pooled[kind] = sums[kind].sum() / max(dof[kind].sum(), 1.0)
         scale = np.sqrt((sums + POOLED_EQUATIONS * pooled) / (dof + POOLED_EQUATIONS))
-        return np.maximum(scale[self.group], MIN_SCALE_MS)
+        return scale[self.group]
 
     def _leverages(self, weights: np.ndarray) -> np.ndarray | None:
         """Each equation's leverage ``w_i a_i' N^-1 a_i`` (shape (n_equations,)) for the normal
@@ -534,10 +608,7 @@ class _System:
         spread = inverse @ moved
         flash_term = 1.0 / d + np.sum(moved * spread, axis=0)
         cams = self.cams[: self.n_equations]
-        flashes = self.flashes[: self.n_equations].tocoo()
-        f = np.zeros(self.n_equations)
-        k = np.zeros(self.n_equations, dtype=np.int64)
-        f[flashes.row], k[flashes.row] = flashes.data, flashes.col
+        f, k = self.flash_coefficient, self.flash_of
         counts = np.diff(cams.indptr)
         width = int(counts.max()) if counts.size else 0
         slot = np.arange(width) < counts[:, None]
@@ -584,6 +655,18 @@ class _System:
             exposure_ms=float(x[exposure]) if exposure >= 0 else float("nan"),
             exposure_std_ms=float(np.sqrt(max(covariance[exposure, exposure], 0.0))) if exposure >= 0 else float("nan"),
         )
+
+
+def _cholesky(matrix: np.ndarray, largest: float | None = None) -> tuple[np.ndarray, bool] | None:
+    """The upper :func:`scipy.linalg.cho_factor` of a symmetric matrix; None where it is not
+    positive definite by a margin: a pivot under 1e-12 of ``largest`` (None: the matrix's
+    largest diagonal entry)."""
+    try:
+        factor = linalg.cho_factor(matrix, check_finite=False)
+    except linalg.LinAlgError:
+        return None
+    largest = np.max(np.diag(matrix)) if largest is None else largest
+    return factor if np.min(np.diag(factor[0])) ** 2 > 1e-12 * largest else None
 
 
 def _cho_inverse(factor: tuple[np.ndarray, bool]) -> np.ndarray:
