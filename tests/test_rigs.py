@@ -77,6 +77,10 @@ def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
     assert not rigs["flash-free"].flashes
     assert [c.jitter_ms for c in rigs["jittered-stamps"].cameras] == [0.0, 1.2, 0.0]
     assert rigs["stamp-rate-change"].cameras[1].stamp_rate_changes == ((150, 1.5),)  # 300 frames in 10 s
+    locked = rigs["line-locked"].cameras
+    phases = [(c.offset_ms + c.start_ms) % 40.0 for c in locked]  # the world time of a frame's start, mod 40 ms
+    assert [c.fps for c in locked] == [25.0] * 3 and all(c.drift_ppm == 0.0 for c in locked)
+    assert phases[0] == 0.0 and all(0.0 < p < 0.3 for p in phases[1:])
     long = recipe("long-pair")
     assert long.duration_ms == 900_000.0 and len(long.flashes) == 30
     assert long.cameras[1].drift_rate_ppm_per_s > 0 and long.player_radius_m == (0.55, 1.1)

@@ -331,6 +331,23 @@ def _twin_drops(seed: int, duration_ms: float) -> Scenario:
     )
 
 
+def _line_locked(seed: int, duration_ms: float) -> Scenario:
+    """Three 25 fps cameras line-locked to the mains: one clock (no drift between them) and
+    frames that start within 0.3 ms of one phase, so a flash falls on nearly the same row of
+    each; only a flash at a frame's turn splits a band."""
+    rng = np.random.default_rng([seed, zlib.crc32(b"line-locked")])
+
+    def locked(first_frame_ms: float) -> dict:
+        start = float(rng.uniform(0.0, 100_000.0))
+        return dict(drift_ppm=0.0, start_ms=start, offset_ms=first_frame_ms - start)
+
+    cameras = [("cam1", 640, 360, 25.0, 4.0, locked(0.0))]
+    for name, exposure in (("cam2", 3.0), ("cam3", 2.0)):
+        first = 40.0 * int(rng.integers(-20, 21)) + float(rng.uniform(0.0, 0.3))
+        cameras.append((name, 640, 360, 25.0, exposure, locked(first)))
+    return _recipe("line-locked", seed, duration_ms, cameras)
+
+
 def _hd(seed: int, duration_ms: float) -> Scenario:
     return _recipe(
         "hd",
@@ -448,7 +465,8 @@ def _flash_free(seed: int, duration_ms: float) -> Scenario:
 #: twenty players, no flash) are the real-light issue's, with linear sensors;
 #: ``jittered-stamps`` (stamps of one camera jittered by 1.2 ms) and ``stamp-rate-change``
 #: (one camera's stamps advance 1.5x as fast from its middle frame on) the stamp faults of
-#: the silent-harm issue.
+#: the silent-harm issue; ``line-locked`` (three 25 fps cameras on one clock, in one phase)
+#: the equal-rate case of a time per row the flashes barely pin.
 RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
     "four-ms-drops": (_four_ms_drops, 30_000.0),
     "three-rates-flipped": (_three_rates_flipped, 30_000.0),
@@ -462,6 +480,7 @@ RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
     "flash-free": (_flash_free, 30_000.0),
     "jittered-stamps": (_jittered_stamps, 30_000.0),
     "stamp-rate-change": (_stamp_rate_change, 30_000.0),
+    "line-locked": (_line_locked, 30_000.0),
 }
 
 
