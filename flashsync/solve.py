@@ -531,12 +531,13 @@ class _System:
         more the rows' spread pins it (cameras of other rates or phases, bands split across
         frames, many flashes) the less the pull; where nothing does (cameras of one rate and
         phase, as line-locked ones are) the noise alone made it collapse (three 50 fps
-        cameras: 89 % short at 57 sigma). The factor's last block (the times per row's columns come
-        last) gives the events' information on them ``M``, every other camera unknown
-        profiled out, their own priors left out; with the noise's ``D``, ``D^-1/2 M D^-1/2 =
-        V diag(l) V'``, and what is kept is ``D^1/2 V diag(max(l - 1, 0)) V' D^1/2``: the rows'
-        spread beyond their noise, never below nothing, so the priors decide where the events
-        do not. Only that block of the factor changes.
+        cameras: 89 % short at 57 sigma). The factor's last block (the times per row's
+        columns come last) gives the events' information on them ``M``, every other camera
+        unknown profiled out, their own priors left out; with the noise's ``D``,
+        ``D^-1/2 M D^-1/2 = V diag(l) V'``, and what is kept is
+        ``D^1/2 V diag(max(l - 1, 0)) V' D^1/2``: the rows' spread beyond their noise, never
+        below nothing, so the priors decide where the events do not. Only that block of the
+        factor changes; the covariance is its inverse (the priors' where nothing is kept).
         """
         t = self.param_columns[:, 2]
         kept = w * self.row_noise * (1.0 - w * self.flash_coefficient**2 / d[self.flash_of])

@@ -52,7 +52,7 @@ def test_noise_gives_honest_uncertainty():
 
 def test_noisy_rows_leave_a_time_per_row_no_flash_pins_to_its_prior():
     """Three 50 fps cameras in one phase (line-locked): every flash falls on nearly the same
-    row of each, so the rows pin the times per row' ratios, not their scale, which is left
+    row of each, so the rows pin the times per row's ratios, not their scale, which is left
     to the 8 % priors (here 3 % long). Least squares took the rows' 0.05 ms of noise for a
     spread that a shorter time per row explains (63 % short here at 23 σ); the scale must
     stay within 3 σ of the truth, with the priors' σ (8 % over three cameras)."""
