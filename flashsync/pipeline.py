@@ -1042,8 +1042,8 @@ def _with_edge_bias(camera: CameraSolution, height: int, rows: np.ndarray) -> np
     share = BIAS_EVENTS / max(len(rows), 1)
     if np.isfinite(camera.edge_sigma_ms):
         covariance[1, 1] += share * (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
-    turn = np.array([0.0, -float(np.mean(rows)) if len(rows) else 0.0, 1.0])  # (alpha, shift, time per row)
-    covariance[:3, :3] += share * (ROW_BIAS_MS / height) ** 2 * np.outer(turn, turn)
+    pivot = np.array([0.0, -float(np.mean(rows)) if len(rows) else 0.0, 1.0])
+    covariance[:3, :3] += share * (ROW_BIAS_MS / height) ** 2 * np.outer(pivot, pivot)
     return covariance
 
 
