@@ -533,21 +533,20 @@ def _losing(before: _Attempt, after: _Attempt, undecided: list[str]) -> list[str
     """The ``undecided`` cameras read the same way in both attempts that have fewer inlier
     flashes in ``after`` than in ``before`` (none where it left them out, or its time per row
     is :attr:`~_Attempt.implausible`)."""
-    rows_before, rows_after = _inlier_rows(before), _inlier_rows(after)
+    count_before, count_after = _inlier_counts(before), _inlier_counts(after)
     return [
         name
         for name in undecided
         if before.cameras[name].flipped == after.cameras[name].flipped
-        and len(rows_after.get(name, ())) < len(rows_before.get(name, ()))
+        and count_after.get(name, 0) < count_before.get(name, 0)
     ]
 
 
-def _inlier_rows(result: _Attempt) -> dict[str, np.ndarray]:
-    """Per camera tied with a plausible time per row: the readout rows of its inlier sync
-    events, shape (n,)."""
+def _inlier_counts(result: _Attempt) -> dict[str, int]:
+    """Per camera tied with a plausible time per row: its inlier sync events."""
     inlier = result.solution.inlier[: len(result.matches)]
     return {
-        name: result.matches.q[inlier & (result.matches.camera == name)]
+        name: int(np.sum(inlier & (result.matches.camera == name)))
         for name in result.connected
         if name not in result.implausible
     }
@@ -849,7 +848,7 @@ class _Attempt:
         return self.score - UPSIDE_DOWN_PRIOR * sum(d.flipped for d in self.cameras.values())
 
     def model(self, reference: str) -> SyncModel:
-        clocks, rows = {}, _inlier_rows(self)
+        clocks, counts = {}, _inlier_counts(self)
         for index, name in enumerate(self.connected):
             d, s = self.cameras[name], self.solution.cameras[index]
             clocks[name] = CameraClock(
@@ -861,7 +860,7 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                _with_edge_bias(s, d.height, rows.get(name, np.zeros(0))),
+                _with_edge_bias(s, d.height, counts.get(name, 0)),
                 float(s.exposure_ms) if s.exposure_ms > 0 else None,
                 str(d.video),
                 s.knots_ms,
@@ -1027,23 +1026,19 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
 EDGE_BIAS_SIGMAS = 1.5
 
 
-def _with_edge_bias(camera: CameraSolution, height: int, rows: np.ndarray) -> np.ndarray:
+def _with_edge_bias(camera: CameraSolution, height: int, n_events: int) -> np.ndarray:
     """The camera's covariance with the variance of its edges' shared offset,
     (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
     uncertain by that much against the flashes' instants (the reference camera's too); and
     the variance of its events' row-dependent bias, (:data:`ROW_BIAS_MS` / its height)**2,
-    added to its time per row's, pivoting about ``rows``' mean (readout rows of its inlier
-    sync events, shape (n,); row 0 without any): the fit moves the shift with the time per
-    row so that the times stay put where its events are, and a readout row q is off by the
-    bias times (q - mean). Both for a camera of :data:`BIAS_EVENTS` inlier sync events, and
-    in proportion to one over its count: the biases differ from flash to flash and average
-    out over many."""
+    added to its time per row's. Both for a camera of :data:`BIAS_EVENTS` inlier sync
+    events, and in proportion to one over its count: the biases differ from flash to flash
+    and average out over many."""
     covariance = camera.covariance.copy()
-    share = BIAS_EVENTS / max(len(rows), 1)
+    share = BIAS_EVENTS / max(n_events, 1)
     if np.isfinite(camera.edge_sigma_ms):
         covariance[1, 1] += share * (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
-    pivot = np.array([0.0, -float(np.mean(rows)) if len(rows) else 0.0, 1.0])
-    covariance[:3, :3] += share * (ROW_BIAS_MS / height) ** 2 * np.outer(pivot, pivot)
+    covariance[2, 2] += share * (ROW_BIAS_MS / height) ** 2
     return covariance
 
 
