@@ -339,10 +339,12 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     :data:`REFINED_SHARE`: of the minima within :data:`SWAP_EVIDENCE` of the least, the
     longest (:func:`_longest_minimum`), refined to :data:`WIDTH_TOLERANCE` rows, then the
     longest width from there that costs at most :data:`FLAT_EVIDENCE` more
-    (:func:`_upper_end`). That reading is taken only where a pulse outlasts its exposure
-    and it explains the bands better, with the band that favours it most left out
-    (:func:`_explains_better_without_any_one`; one pulse length for
-    every flash tells the two readings apart no better than one band does), and the
+    (:func:`_upper_end`). That reading is taken only where it explains the bands better
+    (:func:`_explains_better`) and the pulses it finds longer than the exposure differ
+    (:func:`_pulses_differ`: one pulse length for every flash tells the two readings apart
+    no better than one band does; a random rig's 98-row camera, whose two false bands 23
+    and 7 rows long made its bands' widths differ, was read 10 rows with its three real
+    pulses 98 rows each, its times 5 ms off), and the
     plain reading's exposure is :data:`PINNED_SHARE` longer or more (the band lengths are
     then the pulses'), or the exposure is :data:`MIN_SWAPPED_ROWS` or more and pinned:
     :data:`PINNED_SHARE` shorter or longer costs the bands :data:`SWAP_EVIDENCE` more.
@@ -354,38 +356,34 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     own = np.array([_data_cost(fit.x, fit.y, fit.p, _f_scale(fit.p), BAND) for fit in fits])
     scales = np.array([max(fit.variance, 1e-12) for fit in fits])
 
-    def costs(width: float, longer: bool, limit: float = np.inf) -> tuple[np.ndarray, bool]:
-        """Each band's cost at ``width``, shape (n_bands,) (as soon as their sum reaches
-        ``limit``, the rest left at 0), and whether a pulse is then the longer."""
-        cost, outlasted = np.zeros(len(fits)), False
+    def total(width: float, longer: bool, limit: float = np.inf) -> tuple[float, np.ndarray]:
+        """The bands' summed cost at ``width`` (as soon as it reaches ``limit``, that far),
+        and which bands' pulses are then the longer, shape (n_bands,)."""
+        cost, outlasted = 0.0, np.zeros(len(fits), dtype=bool)
         for k, (fit, least, scale) in enumerate(zip(fits, own, scales)):
             refit = fit.with_width(width, longer)
-            cost[k] = BAND_COST_CAP if refit is None else min(max(refit[1] - least, 0.0) / scale, BAND_COST_CAP)
-            outlasted |= refit is not None and refit[0].p[1] > width
-            if cost.sum() >= limit:
+            cost += BAND_COST_CAP if refit is None else min(max(refit[1] - least, 0.0) / scale, BAND_COST_CAP)
+            outlasted[k] = refit is not None and refit[0].p[1] > width
+            if cost >= limit:
                 break
         return cost, outlasted
 
-    def total(width: float, longer: bool, limit: float = np.inf) -> float:
-        return float(costs(width, longer, limit)[0].sum())
-
-    plain = _plain_width(widths, lambda width: total(width, False))
+    plain = _plain_width(widths, lambda width: total(width, False)[0])
     if plain is None:
         return None
-    low, high = np.percentile(widths, [10, 90])
     longest = SHORTER_SHARE * float(np.median(widths))
-    if plain[1] < SWAP_EVIDENCE or high - low < PULSES_DIFFER * np.median(widths) or longest <= SHORTEST_ROWS:
+    if plain[1] < SWAP_EVIDENCE or not _pulses_differ(widths) or longest <= SHORTEST_ROWS:
         return plain[0], False
     step = 1 + REFINED_SHARE
     shorter = SHORTEST_ROWS * step ** np.arange(math.ceil(math.log(longest / SHORTEST_ROWS, step)) + 1)
     cut = plain[1] - SWAP_EVIDENCE  # a cost cut short there is no better than the plain reading
-    scored = np.array([total(width, True, cut) for width in shorter])
+    scored = np.array([total(width, True, cut)[0] for width in shorter])
     scored[scored >= cut] = np.inf
     if not _explains_better(scored.min(), plain[1]):
         return plain[0], False
     start = _longest_minimum(scored, scored.min() + SWAP_EVIDENCE)
     refined = minimize_scalar(
-        lambda w: total(w, True),
+        lambda w: total(w, True)[0],
         bounds=(shorter[start] / step, shorter[start] * step),
         method="bounded",
         options={"xatol": WIDTH_TOLERANCE},
@@ -394,15 +392,24 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     if refined.fun < cost:
         width, cost = float(refined.x), float(refined.fun)
     within = shorter[start:][scored[start:] <= cost + FLAT_EVIDENCE]
-    width = _upper_end(lambda w: total(w, True), max([width, *within]), cost + FLAT_EVIDENCE, plain[0])
-    swapped, outlasted = costs(width, True)
-    cost = float(swapped.sum())
-    if not (outlasted and _explains_better_without_any_one(swapped, costs(plain[0], False)[0])):
+    width = _upper_end(lambda w: total(w, True)[0], max([width, *within]), cost + FLAT_EVIDENCE, plain[0])
+    cost, outlasted = total(width, True)
+    if not (_pulses_differ(widths[outlasted]) and _explains_better(cost, plain[1])):
         return plain[0], False
     if width < (1 - PINNED_SHARE) * plain[0]:
         return width, True
-    pinned = all(total(k * width, True) >= cost + SWAP_EVIDENCE for k in (1 - PINNED_SHARE, 1 + PINNED_SHARE))
+    pinned = all(total(k * width, True)[0] >= cost + SWAP_EVIDENCE for k in (1 - PINNED_SHARE, 1 + PINNED_SHARE))
     return (width, True) if width >= MIN_SWAPPED_ROWS and pinned else (plain[0], False)
+
+
+def _pulses_differ(widths: np.ndarray) -> bool:
+    """Whether bands whose own widths (rows, shape (n,)) are their pulses' would have pulses
+    that differ (10th to 90th percentile at least :data:`PULSES_DIFFER` of their median):
+    pulses of one length are as likely the exposure (False for fewer than two bands)."""
+    if len(widths) < 2:
+        return False
+    low, high = np.percentile(widths, [10, 90])
+    return bool(high - low >= PULSES_DIFFER * float(np.median(widths)))
 
 
 def _explains_better(cost: float, plain: float) -> bool:
@@ -410,16 +417,6 @@ def _explains_better(cost: float, plain: float) -> bool:
     explained better than at the ``plain`` cost by :data:`SWAP_EVIDENCE` and to at most
     :data:`SWAP_SHARE` of it (costs in units of the bands' noise, :func:`common_width`)."""
     return cost + SWAP_EVIDENCE < plain and cost <= SWAP_SHARE * plain
-
-
-def _explains_better_without_any_one(costs: np.ndarray, plain: np.ndarray) -> bool:
-    """:func:`_explains_better` for bands costing ``costs`` read with pulses longer than
-    the exposure and ``plain`` read plainly (both shape (n_bands,)), the band that favours
-    the longer pulses most left out of both: one band does not decide the reading (on a
-    random rig a false band 23 rows long, at the cap read plainly, took a 98-row camera's
-    exposure to 10 rows and its time 5 ms off)."""
-    k = int(np.argmax(plain - costs))
-    return _explains_better(float(costs.sum() - costs[k]), float(plain.sum() - plain[k]))
 
 
 def _longest_minimum(costs: np.ndarray, limit: float) -> int:

@@ -65,20 +65,21 @@ def test_a_zeroed_foot_row_does_not_pull_the_edge_late():
     assert abs(fit_pulse_edge(values, crossing, SCALE * np.log(3.0), PLATEAU, True) - edge) < 0.05
 
 
-def led_band(start: float, pulse: float, exposure: float, seed: int) -> np.ndarray:
+def led_band(start: float, pulse: float, exposure: float, seed: int, noise: float = 0.002) -> np.ndarray:
     """Relative change per row of a band of a rectangular pulse of ``pulse`` rows seen with
-    an exposure of ``exposure`` rows: the two rectangles convolved, blurred by 0.7 rows."""
+    an exposure of ``exposure`` rows: the two rectangles convolved, blurred by 0.7 rows,
+    with Gaussian noise of ``noise``."""
     x = np.arange(160.0)
     p = np.array([start, pulse, MIN_DECAY, 0.7, exposure, PLATEAU])
     values = np.array([_model(v, p, BAND) for v in x])
-    return values + np.random.default_rng(seed).normal(0.0, 0.002, x.size)
+    return values + np.random.default_rng(seed).normal(0.0, noise, x.size)
 
 
-def led_fits(pulses: list[float], exposure: float) -> list:
+def led_fits(pulses: list[float], exposure: float, noise: float = 0.002, first_seed: int = 0) -> list:
     """Each band fitted whole from its half-level crossings, as the detector does."""
     fits = []
-    for seed, pulse in enumerate(pulses):
-        values = led_band(40.0, pulse, exposure, seed)
+    for seed, pulse in enumerate(pulses, start=first_seed):
+        values = led_band(40.0, pulse, exposure, seed, noise)
         level = float(np.max(values))
         above = np.flatnonzero(values >= 0.5 * level)
         fits.append(fit_pulse_band(values, float(above[0]), float(above[-1]), 0.5 * min(pulse, exposure), level))
@@ -107,6 +108,21 @@ def test_one_pulse_length_or_a_longer_exposure_keeps_the_exposure_the_longer():
     assert not longer and abs(width - 30.0) < 1.0
     width, longer = common_width(led_fits([4.0, 9.0, 6.0, 12.0, 7.0], 25.0))
     assert not longer and abs(width - 25.0) < 0.5
+
+
+def test_false_bands_do_not_make_pulses_of_one_length_outlast_the_exposure():
+    """A 98-row exposure under pulses of 1.5-13 rows, four noisy bands, and two false narrow
+    bands (7 and 23 rows, e.g. a moving object): their widths differ, and read with pulses
+    longer than the exposure the narrow ones fit and every real band becomes a 98-row
+    pulse. Pulses of one length are the exposure: the plain reading stays (a random rig's
+    camera was read 10 rows so, its times 5 ms off)."""
+    fits = (
+        led_fits([13.0, 11.0, 10.0, 1.5], 98.0, noise=0.05, first_seed=10)
+        + led_fits([1.0], 7.0, noise=0.05, first_seed=60)
+        + led_fits([1.0], 23.0, noise=0.05, first_seed=61)
+    )
+    width, longer = common_width(fits)
+    assert not longer and abs(width - 98.0) < 1.0
 
 
 def test_an_exposure_every_pulse_outlasts_is_read_however_short():
