@@ -912,7 +912,7 @@ def _attempt(
         raise NotEnoughDataError(
             f"no camera shares enough flashes with {reference} to tell them from a chance coincidence (at least "
             f"{MIN_SHARED_FLASHES}, whose intervals match); check that the videos overlap in time and saw the "
-            "same flashes, or record more flashes"
+            f"same flashes, or record more flashes{_another_reference(matching, usable, reference)}"
         )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     chosen = [cameras[name] for name in connected]
@@ -940,6 +940,22 @@ def _attempt(
         if contradicted:
             solution = solve({name: value for name, value in given.items() if name not in contradicted})
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, observations, solution)
+
+
+def _another_reference(matching: Matching, usable: list[str], reference: str) -> str:
+    """Words naming the largest group of two or more ``usable`` cameras tied among
+    themselves without ``reference``, and the one of them with the most matched events as
+    the reference to give instead; empty where there is no such group."""
+    groups = {frozenset(matching.tied_to(name)) for name in usable if name != reference}
+    groups = [group for group in groups if len(group) >= 2 and reference not in group]
+    if not groups:
+        return ""
+    group = [name for name in usable if name in max(groups, key=len)]
+    matched = [sum(camera == name for camera, _ in matching.flashes) for name in group]
+    return (
+        f"; {', '.join(group)} share enough among themselves: make one of them the reference "
+        f"(--reference {group[int(np.argmax(matched))]}) to sync them without {reference}"
+    )
 
 
 #: The visible rows of a frame are read within this many frame periods (a little over one:
