@@ -946,11 +946,10 @@ def _another_reference(matching: Matching, usable: list[str], reference: str) ->
     """Words naming the largest group of two or more ``usable`` cameras tied among
     themselves without ``reference``, and the one of them with the most matched events as
     the reference to give instead; empty where there is no such group."""
-    groups = {frozenset(matching.tied_to(name)) for name in usable if name != reference}
-    groups = [group for group in groups if len(group) >= 2 and reference not in group]
-    if not groups:
+    largest = max((matching.tied_to(name) for name in usable if name != reference), key=len, default=set())
+    if len(largest) < 2:  # the reference is tied to none of them: none of these groups holds it
         return ""
-    group = [name for name in usable if name in max(groups, key=len)]
+    group = [name for name in usable if name in largest]
     matched = [sum(camera == name for camera, _ in matching.flashes) for name in group]
     return (
         f"; {', '.join(group)} share enough among themselves: make one of them the reference "
