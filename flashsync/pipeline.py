@@ -912,7 +912,7 @@ def _attempt(
         raise NotEnoughDataError(
             f"no camera shares enough flashes with {reference} to tell them from a chance coincidence (at least "
             f"{MIN_SHARED_FLASHES}, whose intervals match); check that the videos overlap in time and saw the "
-            f"same flashes, or record more flashes{_another_reference(matching, usable, reference)}"
+            f"same flashes, or record more flashes{another_reference(matching, usable, reference)}"
         )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     chosen = [cameras[name] for name in connected]
@@ -942,7 +942,7 @@ def _attempt(
     return _Attempt(cameras, connected, matching.alignments, warnings, matches, observations, solution)
 
 
-def _another_reference(matching: Matching, usable: list[str], reference: str) -> str:
+def another_reference(matching: Matching, usable: list[str], reference: str) -> str:
     """Words naming the largest group of two or more ``usable`` cameras tied among
     themselves without ``reference``, and the one of them with the most matched events as
     the reference to give instead; empty where there is no such group."""

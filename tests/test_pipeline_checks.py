@@ -15,6 +15,7 @@ import pytest
 import flashsync.pipeline as pipeline
 from flashsync import detect_videos, synchronize
 from flashsync.detect import LONG_PULSE_EDGE_SIGMA, SATURATED_EDGE_SIGMA, CameraDetection
+from flashsync.diagnose import diagnose
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.pipeline import (
@@ -248,10 +249,14 @@ def test_equal_rate_cameras_without_split_bands_keep_an_honest_time_per_row():
 def test_a_reference_tied_to_no_camera_names_the_cameras_tied_without_it():
     """The reference saw two of the flashes, the other cameras all thirty: nothing can be
     tied to it, and the error names the cameras tied among themselves and the one to give
-    as the reference instead (a random rig's first camera saw two of six flashes)."""
+    as the reference instead (a random rig's first camera saw two of six flashes); so does
+    diagnose's."""
     events, truth, frames = synthetic_events(3, 30, seed=1)
     keep = (events.camera != 0) | (events.flash < 2)
     columns = {name: getattr(events, name)[keep] for name in ("camera", "flash", "t_frame_ms", "q")}
     seen = replace(events, **columns)
+    detections = synthetic_detections(seen, truth, frames)
     with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
-        synchronize(synthetic_detections(seen, truth, frames))
+        synchronize(detections)
+    with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
+        diagnose(detections)

@@ -29,7 +29,7 @@ from flashsync.events import Band, Bands, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import MIN_SHARED_FLASHES, approximate_times_ms, match_events, match_tolerance_ms, shared_flashes
-from flashsync.pipeline import flicker_row_time_ms, mains_flicker
+from flashsync.pipeline import another_reference, flicker_row_time_ms, mains_flicker
 from flashsync.robust import mad_sigma
 from flashsync.timestamps import median_step_ms
 
@@ -200,6 +200,7 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         raise NotEnoughDataError(
             f"no camera shares at least {MIN_SHARED_FLASHES} flashes with {reference}; "
             "check that the videos overlap in time and saw the same flashes"
+            + another_reference(matching, names, reference)
         )
     warnings = tuple(
         f"{d.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other cameras; left out"
