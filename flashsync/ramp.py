@@ -371,11 +371,13 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     plain = _plain_width(widths, lambda width: total(width, False)[0])
     if plain is None:
         return None
-    longest = SHORTER_SHARE * float(np.median(widths))
+    longest = max(SHORTER_SHARE * float(np.median(widths)), plain[0])
     if plain[1] < SWAP_EVIDENCE or not _pulses_differ(widths) or longest <= SHORTEST_ROWS:
         return plain[0], False
     step = 1 + REFINED_SHARE
-    shorter = SHORTEST_ROWS * step ** np.arange(math.ceil(math.log(longest / SHORTEST_ROWS, step)) + 1)
+    grid = SHORTEST_ROWS * step ** np.arange(math.ceil(math.log(longest / SHORTEST_ROWS, step)) + 1)
+    paired = (np.abs(widths[:, None] - widths) <= PINNED_SHARE * widths[:, None]).sum(axis=1) >= 2
+    shorter = np.union1d(grid, widths[paired & (widths >= SHORTEST_ROWS) & (widths <= longest)])
     cut = plain[1] - SWAP_EVIDENCE  # a cost cut short there is no better than the plain reading
     scored = np.array([total(width, True, cut)[0] for width in shorter])
     scored[scored >= cut] = np.inf
@@ -392,11 +394,12 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     if refined.fun < cost:
         width, cost = float(refined.x), float(refined.fun)
     within = shorter[start:][scored[start:] <= cost + FLAT_EVIDENCE]
-    width = _upper_end(lambda w: total(w, True)[0], max([width, *within]), cost + FLAT_EVIDENCE, plain[0])
+    width = _upper_end(lambda w: total(w, True)[0], max([width, *within]), cost + FLAT_EVIDENCE, longest)
     cost, outlasted = total(width, True)
-    if not (_pulses_differ(widths[outlasted]) and _explains_better(cost, plain[1])):
+    exposure_long = _one_exposure_long(widths[~outlasted], width)
+    if not ((_pulses_differ(widths[outlasted]) or exposure_long) and _explains_better(cost, plain[1])):
         return plain[0], False
-    if width < (1 - PINNED_SHARE) * plain[0]:
+    if width < (1 - PINNED_SHARE) * plain[0] or (exposure_long and np.all(widths[outlasted] >= (1 + PINNED_SHARE) * width)):
         return width, True
     pinned = all(total(k * width, True)[0] >= cost + SWAP_EVIDENCE for k in (1 - PINNED_SHARE, 1 + PINNED_SHARE))
     return (width, True) if width >= MIN_SWAPPED_ROWS and pinned else (plain[0], False)
@@ -410,6 +413,13 @@ def _pulses_differ(widths: np.ndarray) -> bool:
         return False
     low, high = np.percentile(widths, [10, 90])
     return bool(high - low >= PULSES_DIFFER * float(np.median(widths)))
+
+
+def _one_exposure_long(widths: np.ndarray, width: float) -> bool:
+    """Whether two or more bands, their own widths (rows, shape (n,)), are all within
+    :data:`PINNED_SHARE` of the exposure ``width`` (rows): a band whose pulse is shorter
+    than the exposure is one exposure long, so bands that a reading finds so must be."""
+    return len(widths) >= 2 and bool(np.all(np.abs(widths - width) <= PINNED_SHARE * width))
 
 
 def _explains_better(cost: float, plain: float) -> bool:

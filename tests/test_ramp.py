@@ -125,6 +125,22 @@ def test_false_bands_do_not_make_pulses_of_one_length_outlast_the_exposure():
     assert not longer and abs(width - 98.0) < 1.0
 
 
+@pytest.mark.parametrize(
+    "pulses, exposure",
+    [([4.3, 7.5, 34.4, 35.8, 39.6], 22.0), ([1.4, 1.6, 2.4, 2.4, 3.0, 7.0, 8.8, 9.0], 4.46)],
+    ids=["most-outlast", "most-shorter"],
+)
+def test_pulses_shorter_and_longer_than_the_exposure_read_it_from_the_bands_one_exposure_long(pulses, exposure):
+    """Some flashes shorter than the exposure, some longer (two random rigs' LED cameras):
+    a band is as long as the longer of its pulse and the exposure, so the bands of the
+    shorter pulses are one exposure long and the others outlast it. The three longer
+    pulses of one length no longer keep the 35-row plain reading (it put a camera 0.24 ms
+    off); five bands one exposure long no longer lose to an exposure of the two 0.5 ms
+    pulses, every band then read as outlasting it (2.2 rows for 4.46)."""
+    width, longer = common_width(led_fits(pulses, exposure))
+    assert longer and abs(width - exposure) < 0.3
+
+
 def test_an_exposure_every_pulse_outlasts_is_read_however_short():
     """A 4-row exposure under pulses of 8.5-14 rows: no band is as long as the exposure,
     each is as long as its pulse. Read plainly, the bands' lengths scatter; read the
