@@ -334,21 +334,27 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     :data:`WIDTH_GRID` widths between the 10th and 90th percentile of the bands' own (and
     the parabola through the lowest); then, where that leaves the bands costing
     :data:`SWAP_EVIDENCE` or more and their widths differ (:data:`PULSES_DIFFER`), with
-    longer pulses allowed, over widths from
-    :data:`SHORTEST_ROWS` to :data:`SHORTER_SHARE` of the bands' median in steps of
-    :data:`REFINED_SHARE`: of the minima within :data:`SWAP_EVIDENCE` of the least, the
-    longest (:func:`_longest_minimum`), refined to :data:`WIDTH_TOLERANCE` rows, then the
-    longest width from there that costs at most :data:`FLAT_EVIDENCE` more
-    (:func:`_upper_end`). That reading is taken only where it explains the bands better
-    (:func:`_explains_better`) and the pulses it finds longer than the exposure differ
-    (:func:`_pulses_differ`: one pulse length for every flash tells the two readings apart
-    no better than one band does; a random rig's 98-row camera, whose two false bands 23
-    and 7 rows long made its bands' widths differ, was read 10 rows with its three real
-    pulses 98 rows each, its times 5 ms off), and the
-    plain reading's exposure is :data:`PINNED_SHARE` longer or more (the band lengths are
-    then the pulses'), or the exposure is :data:`MIN_SWAPPED_ROWS` or more and pinned:
-    :data:`PINNED_SHARE` shorter or longer costs the bands :data:`SWAP_EVIDENCE` more.
-    None with fewer than three bands."""
+    longer pulses allowed, over widths from :data:`SHORTEST_ROWS` to :data:`SHORTER_SHARE`
+    of the bands' median or the plain reading, whichever is longer, in steps of
+    :data:`REFINED_SHARE`, and at the own widths of bands that another band's is within
+    :data:`PINNED_SHARE` of (a band is as long as the longer of its pulse and the exposure,
+    so where some pulses are the shorter their bands are one exposure long; the 10 % steps
+    missed a 22-row camera's narrow minimum there, and the plain reading took the majority
+    of three longer bands, its times 0.24 ms off): of the minima within
+    :data:`SWAP_EVIDENCE` of the least, the longest (:func:`_longest_minimum`), refined to
+    :data:`WIDTH_TOLERANCE` rows, then the longest width from there that costs at most
+    :data:`FLAT_EVIDENCE` more (:func:`_upper_end`). That reading is taken only where it
+    explains the bands better (:func:`_explains_better`) and the pulses it finds longer
+    than the exposure differ (:func:`_pulses_differ`: one pulse length for every flash
+    tells the two readings apart no better than one band does; a random rig's 98-row
+    camera, whose two false bands 23 and 7 rows long made its bands' widths differ, was
+    read 10 rows with its three real pulses 98 rows each, its times 5 ms off) or two or
+    more bands it finds no longer are one exposure long (:func:`_one_exposure_long`); and
+    where the plain reading's exposure is :data:`PINNED_SHARE` longer or more (the band
+    lengths are then the pulses'), or bands are one exposure long and those it finds
+    longer are :data:`PINNED_SHARE` longer or more, or the exposure is
+    :data:`MIN_SWAPPED_ROWS` or more and pinned: :data:`PINNED_SHARE` shorter or longer
+    costs the bands :data:`SWAP_EVIDENCE` more. None with fewer than three bands."""
     if len(fits) < 3:
         return None
     fits = fits[:: math.ceil(len(fits) / MAX_WIDTH_BANDS)]  # evenly over the recording
@@ -399,7 +405,8 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     exposure_long = _one_exposure_long(widths[~outlasted], width)
     if not ((_pulses_differ(widths[outlasted]) or exposure_long) and _explains_better(cost, plain[1])):
         return plain[0], False
-    if width < (1 - PINNED_SHARE) * plain[0] or (exposure_long and np.all(widths[outlasted] >= (1 + PINNED_SHARE) * width)):
+    apart = exposure_long and bool(np.all(widths[outlasted] >= (1 + PINNED_SHARE) * width))
+    if width < (1 - PINNED_SHARE) * plain[0] or apart:
         return width, True
     pinned = all(total(k * width, True)[0] >= cost + SWAP_EVIDENCE for k in (1 - PINNED_SHARE, 1 + PINNED_SHARE))
     return (width, True) if width >= MIN_SWAPPED_ROWS and pinned else (plain[0], False)
