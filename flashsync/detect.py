@@ -58,6 +58,12 @@ SATURATED_EDGE_SIGMA = 12.0
 #: 4-14 rows at 0.7-1.0 ms under pulses of 1.2-2 ms; at 12, a saturated edge's weight,
 #: they still put a camera of the 24 kept random rigs 3.5 % off in its time per row).
 LONG_PULSE_EDGE_SIGMA = 50.0
+#: A band split across two frames whose part in the next frame peaks under this share of
+#: the first's is the pulse's tail: its trailing edge lay in the rows hidden between frames
+#: (a random rig's 270-row camera: the next frame's five rows at 0.036 under a 0.168 band,
+#: read on a level of their own as a trailing edge 1.1 ms late; its clock rested on four
+#: flashes, and its times went 0.37 ms off).
+TAIL_SHARE = 1.0 / 3.0
 #: Fewest profiles in the baseline before a frame is searched for bands (the first frames of
 #: a video, or after a light switch, compare with one or two frames only: codec and flicker
 #: differences between two frames are not averaged out).
@@ -355,7 +361,9 @@ class EventDetector:
         then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
         exposure apart and at the flash's half-light instant even where the exposure is
         shorter than the pulse; a band split across two frames too,
-        :func:`~flashsync.ramp.fit_split_band`) and hold them for the recurrence filter; a band that darkens
+        :func:`~flashsync.ramp.fit_split_band`, its trailing edge hidden where the next frame
+        shows only the pulse's tail, :data:`TAIL_SHARE`) and hold them for the recurrence
+        filter; a band that darkens
         rows without staying dark (a passing shadow) is not an event, and a degenerate one
         (no positive plateau to fit an edge on) is dropped and counted in
         :attr:`n_degenerate`."""
@@ -371,6 +379,8 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
+        if kind is Band.PULSE and len(event.segments) == 2 and _peak(last) < TAIL_SHARE * _peak(first):
+            trailing, trailing_rise = None, np.nan
         whole = None
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
             whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
@@ -405,6 +415,11 @@ class EventDetector:
         faint = max(segment.step for segment in event.segments) < self.settings.min_band_step
         payload = None if faint else (found, whole)  # still held: its repeats count as recurrence
         self._recurrence.hold(stripes, first.sign * plateau, payload, checked=kind is Band.PULSE)
+
+
+def _peak(segment: _Segment) -> float:
+    """The largest relative change of a band's rows in one frame."""
+    return float(np.max(segment.change[segment.start : segment.stop]))
 
 
 def _step(rows: np.ndarray, strength: float, sign: int) -> float:
