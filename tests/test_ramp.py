@@ -131,12 +131,13 @@ def test_false_bands_do_not_make_pulses_of_one_length_outlast_the_exposure():
     ids=["most-outlast", "most-shorter"],
 )
 def test_pulses_shorter_and_longer_than_the_exposure_read_it_from_the_bands_one_exposure_long(pulses, exposure):
-    """Some flashes shorter than the exposure, some longer (two random rigs' LED cameras):
-    a band is as long as the longer of its pulse and the exposure, so the bands of the
-    shorter pulses are one exposure long and the others outlast it. The three longer
-    pulses of one length no longer keep the 35-row plain reading (it put a camera 0.24 ms
-    off); five bands one exposure long no longer lose to an exposure of the two 0.5 ms
-    pulses, every band then read as outlasting it (2.2 rows for 4.46)."""
+    """Some flashes shorter than the exposure, some longer (the pulses of two random rigs'
+    LED cameras): a band is as long as the longer of its pulse and the exposure, so the
+    bands of the shorter pulses are one exposure long and the others outlast it, and are
+    refitted so. Before, the first was read plainly (22.0 rows, but no pulse found longer:
+    three pulses of one length vetoed it; on the rig the plain reading was the three longer
+    bands' 35 rows, its times 0.24 ms off), the second as an exposure of its 2.4-row pulses
+    with every band outlasting it (2.2 rows for 4.46)."""
     width, longer = common_width(led_fits(pulses, exposure))
     assert longer and abs(width - exposure) < 0.3
 
