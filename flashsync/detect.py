@@ -59,11 +59,12 @@ SATURATED_EDGE_SIGMA = 12.0
 #: they still put a camera of the 24 kept random rigs 3.5 % off in its time per row).
 LONG_PULSE_EDGE_SIGMA = 50.0
 #: A band split across two frames whose part in the next frame peaks under this share of
-#: the first's is the pulse's tail: its trailing edge lay in the rows hidden between frames
-#: (a random rig's 270-row camera: the next frame's five rows at 0.036 under a 0.168 band,
-#: read on a level of their own as a trailing edge 1.1 ms late; its clock rested on four
-#: flashes, and its times went 0.37 ms off).
-TAIL_SHARE = 1.0 / 3.0
+#: the first's is the pulse's tail: its half-level trailing edge lay in the rows hidden
+#: between frames, and only the leading edge of the two parts' fit is kept (random rigs: a
+#: 270-row camera's next frame held five rows at 0.036 under a 0.168 band, read on a level
+#: of their own as a trailing edge 1.1 ms late, its times 0.37 ms off; a 360-row camera's
+#: tail at 0.41 of its band, 1.4 ms late, its time per row 5 % off).
+TAIL_SHARE = 0.5
 #: Fewest profiles in the baseline before a frame is searched for bands (the first frames of
 #: a video, or after a light switch, compare with one or two frames only: codec and flicker
 #: differences between two frames are not averaged out).
@@ -361,8 +362,8 @@ class EventDetector:
         then fitted whole, :func:`~flashsync.ramp.fit_pulse_band`, so that its edges are one
         exposure apart and at the flash's half-light instant even where the exposure is
         shorter than the pulse; a band split across two frames too,
-        :func:`~flashsync.ramp.fit_split_band`, its trailing edge hidden where the next frame
-        shows only the pulse's tail, :data:`TAIL_SHARE`) and hold them for the recurrence
+        :func:`~flashsync.ramp.fit_split_band`, its trailing edge then hidden where the next
+        frame shows only the pulse's tail, :data:`TAIL_SHARE`) and hold them for the recurrence
         filter; a band that darkens
         rows without staying dark (a passing shadow) is not an event, and a degenerate one
         (no positive plateau to fit an edge on) is dropped and counted in
@@ -379,8 +380,6 @@ class EventDetector:
         if any(edge is not None and not np.isfinite(edge) for edge in (leading, trailing)):
             self.n_degenerate += 1
             return
-        if kind is Band.PULSE and len(event.segments) == 2 and _peak(last) < TAIL_SHARE * _peak(first):
-            trailing, trailing_rise = None, np.nan
         whole = None
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
             whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
@@ -388,6 +387,8 @@ class EventDetector:
         elif kind is Band.PULSE and len(event.segments) == 2 and leading is not None and trailing is not None:
             split = fit_split_band(first.change, leading, last.change, trailing, trailing_rise, plateau)
             leading, trailing = split if split is not None else (leading, trailing)
+            if _peak(last) < TAIL_SHARE * _peak(first):  # the next frame holds the pulse's tail alone
+                trailing, trailing_rise = None, np.nan
         flags = {Flag.SPLIT} if len(event.segments) > 1 and kind is Band.PULSE else set()
         flags |= {Flag.SATURATED} if any(s.saturated for s in event.segments) else set()
         flags |= {Flag.LEADING_HIDDEN} if leading is None else set()
