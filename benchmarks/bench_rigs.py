@@ -33,7 +33,7 @@ import pandas as pd
 
 from flashsync import CameraDetection, detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
-from flashsync.events import Edge
+from flashsync.events import Band, Edge, Flag
 from flashsync.io.scenario import scenario_from_dict
 from flashsync.io.truth import load_ground_truth
 from flashsync.pipeline import edge_noise_rows
@@ -67,16 +67,19 @@ def detection_counts(detection: CameraDetection, truth_camera: CameraTruth) -> d
 
 
 def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
-    """The clean edges (no flag) of one camera's reading in use against the truth: each
-    edge's band ``quality`` and its row minus the row whose exposure ended (a leading
-    edge) or started (a trailing one) when its flash had given half its light
-    (``edge_error_rows``); an edge on a frame of no flash the camera saw is left out, and
-    every edge of a reading that is not the camera's true one."""
+    """The flash edges of one camera's reading in use against the truth: each edge's row
+    minus the row whose exposure ended (a leading edge) or started (a trailing one) when its
+    flash had given half its light, rows; for the clean ones (no flag) with their band's
+    ``quality`` (``edge_quality``, ``edge_error_rows``), for all with their kind
+    (``flash_edge_kinds``: leading or trailing, whole or lone where the other edge is
+    hidden; ``flash_edge_error_rows``). An edge on a frame of no flash the camera saw is
+    left out, and every edge of a reading that is not the camera's true one."""
     camera = truth.cameras[detection.camera]
     events = detection.events if detection.flipped == camera.flipped else detection.events.take(slice(0, 0))
     clean = np.array([not flags for flags in events.flags], dtype=bool)
-    quality, error = [], []
-    for i in np.flatnonzero(clean):
+    lone = events.has_flag(Flag.LEADING_HIDDEN) | events.has_flag(Flag.TRAILING_HIDDEN)
+    quality, error, kinds, errors = [], [], [], []
+    for i in np.flatnonzero(events.band == Band.PULSE):
         frame = int(events.frame[i])
         flashes = [int(k) for k, frames in camera.flashes_seen.items() if frame in frames]
         if not flashes:
@@ -88,9 +91,17 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
             for k in flashes
         ]
         true_row = min(rows, key=lambda row: abs(row - events.row[i]))
-        quality.append(float(events.quality[i]))
-        error.append(float(events.row[i] - true_row))
-    return {"edge_quality": quality, "edge_error_rows": error}
+        kinds.append(f"{events.edge[i]} {'lone' if lone[i] else 'whole'}")
+        errors.append(float(events.row[i] - true_row))
+        if clean[i]:
+            quality.append(float(events.quality[i]))
+            error.append(errors[-1])
+    return {
+        "edge_quality": quality,
+        "edge_error_rows": error,
+        "flash_edge_kinds": kinds,
+        "flash_edge_error_rows": errors,
+    }
 
 
 def edge_block(cameras: pd.DataFrame) -> list[str]:
@@ -108,6 +119,27 @@ def edge_block(cameras: pd.DataFrame) -> list[str]:
                 f"  quality {low:>4}-{high:<5} n {mine.size:>5}  median {np.median(mine):+.2f}  robust σ "
                 f"{MAD_TO_SIGMA * np.median(np.abs(mine - np.median(mine))):.2f} rows (assumed {assumed:.2f})"
             )
+    return lines
+
+
+def tone_block(cameras: pd.DataFrame) -> list[str]:
+    """Flash edges' median error (rows) by their camera's tone curve and their kind (a lone
+    edge's partner is hidden): a tone curve compresses the light of a band's plateau, so
+    its half-level crossings move out, leading edges early and trailing ones late, the
+    more the longer the ramp."""
+    edges = pd.DataFrame(
+        {
+            "tone": np.repeat(cameras["tone"].to_numpy(), [len(k) for k in cameras["flash_edge_kinds"]]),
+            "kind": np.concatenate([np.asarray(k, dtype=object) for k in cameras["flash_edge_kinds"]]),
+            "error": np.concatenate([np.asarray(e, dtype=float) for e in cameras["flash_edge_error_rows"]]),
+        }
+    )
+    edges = edges[edges["error"].abs() < 50]  # an edge matched to the wrong flash
+    kinds = ["leading whole", "trailing whole", "leading lone", "trailing lone"]
+    lines = [f"flash edges against the truth by tone curve, median rows (count): {', '.join(kinds)}"]
+    for tone, mine in edges.groupby("tone"):
+        medians = [mine.loc[mine["kind"] == kind, "error"] for kind in kinds]
+        lines.append(f"  {tone:<7}" + "".join(f"  {m.median():+6.2f} ({m.size:>4})" for m in medians))
     return lines
 
 
@@ -195,6 +227,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
         height=[c.height for c in scenario.cameras],
         fps=[c.fps for c in scenario.cameras],
         exposure_ms=[c.exposure_ms for c in scenario.cameras],
+        tone=[c.tone for c in scenario.cameras],
         true_flipped=[c.flipped for c in scenario.cameras],
         equal_rate=info["equal_rate"],
         shared_flashes=[shared[c.name] for c in scenario.cameras],
@@ -327,6 +360,8 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
     ]
     if "edge_error_rows" in tables:  # not in the --json files of runs before 2026-11-27
         lines += edge_block(tables)
+    if "flash_edge_kinds" in tables:  # not in the --json files of earlier runs
+        lines += tone_block(tables)
     return "\n".join(lines)
 
 
