@@ -71,7 +71,7 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
     minus the row whose exposure ended (a leading edge) or started (a trailing one) when its
     flash had given half its light, rows; for the clean ones (no flag) with their band's
     ``quality`` (``edge_quality``, ``edge_error_rows``), for all with their kind
-    (``flash_edge_kinds``: leading or trailing, whole or lone where the other edge is
+    (``flash_edge_kinds``: leading or trailing, paired or lone where the other edge is
     hidden; ``flash_edge_error_rows``). An edge on a frame of no flash the camera saw is
     left out, and every edge of a reading that is not the camera's true one."""
     camera = truth.cameras[detection.camera]
@@ -91,7 +91,7 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
             for k in flashes
         ]
         true_row = min(rows, key=lambda row: abs(row - events.row[i]))
-        kinds.append(f"{events.edge[i]} {'lone' if lone[i] else 'whole'}")
+        kinds.append(f"{events.edge[i]} {'lone' if lone[i] else 'paired'}")
         errors.append(float(events.row[i] - true_row))
         if clean[i]:
             quality.append(float(events.quality[i]))
@@ -135,7 +135,7 @@ def tone_block(cameras: pd.DataFrame) -> list[str]:
         }
     )
     edges = edges[edges["error"].abs() < 50]  # an edge matched to the wrong flash
-    kinds = ["leading whole", "trailing whole", "leading lone", "trailing lone"]
+    kinds = ["leading paired", "trailing paired", "leading lone", "trailing lone"]
     lines = [f"flash edges against the truth by tone curve, median rows (count): {', '.join(kinds)}"]
     for tone, mine in edges.groupby("tone"):
         medians = [mine.loc[mine["kind"] == kind, "error"] for kind in kinds]
