@@ -13,7 +13,8 @@ error, time-per-row error, and the calibration of the predicted sigma (RMS of er
 and the share of probes within 2 sigma, per camera and pairwise). Detection is checked too:
 events on frames that show no flash are false, flashes seen with no event are missed; and
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
-the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`).
+the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`), and every flash
+edge's median error by its camera's tone curve and its kind (paired, or lone).
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
