@@ -80,7 +80,7 @@ def cauchy_irls(
 
 
 def cauchy_fit(
-    design: np.ndarray, observed: np.ndarray, min_scale_ms: float = MIN_SCALE_MS
+    design: np.ndarray, observed: np.ndarray, min_scale_ms: float = MIN_SCALE_MS, n_fixed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, float] | None:
     """:func:`cauchy_irls` fit of ``observed ≈ design @ parameters`` (dense), with the
     maximum-likelihood Cauchy scale refined along.
@@ -92,6 +92,9 @@ def cauchy_fit(
     min_scale_ms : float
         Floor of the scale, ms: with few observations per parameter (four edges per flash)
         a free Cauchy scale collapses onto the few residuals the fit makes vanish.
+    n_fixed : int
+        The last rows are Gaussian (priors, pseudo-observations): they keep their full
+        weight and stay out of the scale.
 
     Returns
     -------
@@ -106,11 +109,14 @@ def cauchy_fit(
     if singular[-1] < MIN_SINGULAR * singular[0]:
         return None
 
+    robust = len(observed) - n_fixed
+
     def solve(weights: np.ndarray) -> np.ndarray:
-        root = np.sqrt(weights)
+        root = np.sqrt(np.concatenate([weights[:robust], np.ones(n_fixed)]))
         return np.linalg.lstsq(scaled * root[:, None], observed * root, rcond=None)[0]
 
     def scale(residual: np.ndarray, previous: float | None) -> float:
+        residual = residual[:robust]
         if previous is None:
             return max(float(np.median(np.abs(residual))), min_scale_ms)
         return max(_scale_step(residual, previous), min_scale_ms)

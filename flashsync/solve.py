@@ -69,6 +69,11 @@ class Observations:
     leading_of: np.ndarray | None = None
 
 
+#: Prior std of a camera's clock rate about the reference's (``alpha - 1``): oscillators of
+#: consumer cameras keep within some tens of ppm.
+DRIFT_PRIOR_STD = 50e-6
+
+
 @dataclass(frozen=True)
 class Priors:
     """Pseudo-observations: ``row_time`` maps a camera index to (mean, std) of ``T_row`` in
@@ -77,7 +82,7 @@ class Priors:
     uncertain)."""
 
     row_time: dict[int, tuple[float, float]]
-    drift_std: float | None = 50e-6
+    drift_std: float | None = DRIFT_PRIOR_STD
     wider_drift_std: dict[int, float] = field(default_factory=dict)
 
 

@@ -16,7 +16,7 @@ from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
 from flashsync.diagnose.measure import Measurement, measure
-from flashsync.diagnose.workflow import residual_test
+from flashsync.diagnose.workflow import SYNC_SHAPE, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import probe_errors, probes, sync_errors
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
@@ -159,7 +159,11 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     floor of 0.029-0.124 ms, before 0.100-0.156 ms; the model is closer to the truth than the
     plain one. The verdict is not asserted: on some draws the clipped edges still scatter
     0.02-0.05 ms per band beyond the unclipped bands' noise (the flash's pulse length varies
-    from flash to flash, and with it how far the edges move)."""
+    from flash to flash, and with it how far the edges move). The model ``diagnose -o`` writes
+    (the effect in ``sync``'s shape) is closer to the truth than the plain model in that shape:
+    0.024 against 0.107 ms in the first world, 0.069 against 0.135 in the second (``sync``,
+    which does not know the effect, 0.120 and 0.085; the plain model at frame period / height
+    is 0.015 and 0.038: this rig has no hidden rows, so the nominal time per row is exact)."""
     detections, truth, world = rendered
     cameras = pair(detections, CAMERA["saturation"])
     d = diagnose(cameras)
@@ -169,8 +173,9 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     assert step.rms_before_ms > floor, "the hidden effect must show above the noise"
     assert step.rms_after_ms <= max(step.rms_before_ms / 5.0, floor), format_diagnosis(d)
     assert d.model[1]["saturation_ms"] > 0.05 and 0.2 < d.model[1]["saturation_share"] < 0.6, d.model[1]
-    plain = fit_candidate(measure(cameras), frozenset())
-    assert pooled_error_ms(d.sync_model, truth) < pooled_error_ms(plain.sync_model(), truth)
+    measurement = measure(cameras)
+    plain = in_sync_shape(measurement, fit_candidate(measurement, frozenset()))
+    assert pooled_error_ms(d.sync_model, truth) < 0.7 * pooled_error_ms(plain.sync_model(), truth)
 
 
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
@@ -190,13 +195,13 @@ def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
     assert data["steps"][1]["evidence"].startswith("ΔBIC") and data["verdict"] == d.verdict
 
 
-def test_no_hidden_effect_names_nothing_and_leaves_the_model_alone(rendered):
+def test_no_hidden_effect_names_nothing_and_ends_at_the_plain_model_in_syncs_shape(rendered):
     detections, truth, world = rendered
     cameras = pair(detections, f"{CAMERA['flipped']}+declared")
     d = diagnose(cameras)
     assert d.steps == [], format_diagnosis(d)
-    assert all(model["effects"] == [] for model in d.model)
-    assert d.final_rms_ms == d.initial_rms_ms
+    assert d.sync_shape and all(set(model["effects"]) <= set(SYNC_SHAPE) for model in d.model)
+    assert d.found_rms_ms == d.initial_rms_ms
     assert_settled(d, cameras, truth, world)
     assert "no effect of the catalogue" in format_diagnosis(d)
 
@@ -264,40 +269,82 @@ def test_models_apart_by_more_than_syncs_sigma_disagree():
 
 
 @pytest.fixture(scope="module")
-def rig15(tmp_path_factory) -> tuple[GroundTruth, list[Path]]:
-    """Random rig 15 of the second world rendered once: its truth and videos."""
-    scenario = random_rig(15, max_height=360, duration_ms=8000.0)
-    folder = tmp_path_factory.mktemp("rig15")
-    return render_scenario(scenario, folder), [folder / f"{c.name}.{c.container}" for c in scenario.cameras]
+def changing_drift(tmp_path_factory) -> tuple[GroundTruth, list[Path]]:
+    """The reference (25 fps) and a 30 fps camera whose clock's drift changes 100 ppm/s (the
+    ``drift_rate`` case above), first world, rendered once: its truth and videos."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
+        CameraSpec("cam1", 320, 180, 30.0, exposure_ms=8.0, start_ms=3000.0, offset_ms=-2830.0, **HIDDEN["drift_rate"]),
+    )
+    folder = tmp_path_factory.mktemp("drift_rate")
+    scenario = Scenario("drift_rate", cameras, duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1)
+    return render_scenario(scenario, folder), [folder / f"{c.name}.mp4" for c in cameras]
 
 
-def test_diagnose_says_where_its_model_and_syncs_part(rig15):
-    """Random rig 15 of the second world (25 and 50 fps, 360 rows, 8 s): ``diagnose`` pairs
-    3 of the 4 flashes its reference saw (complete, clean bands away from the image's edges) and
-    fits a drift-rate change of 190 ppm/s to them; its model is 0.57 and 0.77 ms RMS off the
-    truth (``sync``'s 0.031 and 0.042) and its verdict passes. The report says that the two
-    models disagree, on which cameras and by how much (not which is right)."""
-    truth, videos = rig15
+def test_diagnose_says_where_its_model_and_syncs_part(changing_drift):
+    """A drift-rate change ``sync`` does not fit (100 ppm/s on cam1): ``diagnose`` names it
+    and its model is 0.08 and 0.09 ms RMS off the truth, ``sync``'s 0.24 and 0.59. The report
+    says that the two models disagree, on which camera and by how much (not which is right).
+    (Random rig 15 of the second world showed it before: there the workflow's own model was
+    0.57 and 0.77 ms off; in ``sync``'s shape it is 0.11 and 0.15, within 3 sigma of ``sync``'s.)"""
+    truth, videos = changing_drift
     d = diagnose(detect_videos(videos))
-    assert (sync_errors(d.sync_model, truth).rms_ms > 0.3).all(), format_diagnosis(d)  # the defect it names
-    assert d.disagrees == ["cam1", "cam2"] and "disagree beyond 3 sigma on cam1" in d.agreement, d.agreement
+    assert "drift_rate" in {s.effect for s in d.steps}, format_diagnosis(d)
+    synced, _ = synchronize(detect_videos(videos))
+    assert (sync_errors(d.sync_model, truth).rms_ms < 0.15).all() and sync_errors(synced, truth).rms_ms.max() > 0.4
+    assert d.disagrees == ["cam1"] and "disagree beyond 3 sigma on cam1" in d.agreement, d.agreement
     assert d.agreement in format_diagnosis(d) and d.to_dict()["agreement"] == d.agreement
 
 
-def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(rig15, tmp_path, capsys):
-    """``flashsync diagnose -o`` on the same rig still writes its model (asked for), and its
-    ``model ->`` line names the cameras on which it and ``sync``'s disagree; the JSON holds
-    the gaps."""
+def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(changing_drift, tmp_path, capsys):
+    """``flashsync diagnose -o`` on the same rig writes its model, and its ``model ->`` line
+    names the camera on which it and ``sync``'s disagree; the JSON holds the gaps."""
     from flashsync.cli import main
 
-    _, videos = rig15
+    _, videos = changing_drift
     out = ["-o", str(tmp_path / "sync.json"), "--json", str(tmp_path / "d.json")]
     assert main(["diagnose", *map(str, videos), *out]) == 0
     shown = capsys.readouterr()
-    assert f"model -> {tmp_path / 'sync.json'} (it and sync's disagree on cam1, cam2)" in shown.err, shown.err
+    assert f"model -> {tmp_path / 'sync.json'} (it and sync's disagree on cam1)" in shown.err, shown.err
     assert "they disagree beyond 3 sigma" in shown.out
-    gaps = json.loads((tmp_path / "d.json").read_text())["sync_gaps"]
-    assert [g["camera"] for g in gaps] == ["cam1", "cam2"] and all(g["rms_ms"] > 3 * g["sigma_ms"] for g in gaps)
+    gaps = {g["camera"]: g for g in json.loads((tmp_path / "d.json").read_text())["sync_gaps"]}
+    assert [name for name, gap in gaps.items() if gap["rms_ms"] > 3 * gap["sigma_ms"]] == ["cam1"]
+
+
+def test_syncs_shape_frees_every_time_per_row_exposure_and_drift_under_syncs_priors(tmp_path):
+    """Three cameras (25, 30, 50 fps, 8 s, twelve flashes) with hidden rows on each (their
+    times per row 8-10 % under frame period / height), exposures of 4, 2 and 6 ms and clocks
+    30 and -25 ppm from the reference's. The plain model in ``sync``'s shape is 0.017 ms RMS
+    off the truth where the plain model is 2.45: every camera's time per row, exposure and
+    drift come from the edges and ``sync``'s priors, with no step. The workflow names them
+    all here and its model (in that shape) is 0.019 ms off, ``sync``'s 0.014 (on the second
+    world's random rigs, twelve cameras of a few flashes each, steps above the threshold
+    leave many of them at the plain model's: README, ``flashsync diagnose``)."""
+    duration = 8000.0
+    rig = (
+        CameraSpec("cam1", 320, 180, 25.0, r0=6, r1=14, exposure_ms=4.0),
+        CameraSpec(
+            "cam2", 320, 180, 30.0, r0=10, r1=10, exposure_ms=2.0, drift_ppm=30.0, start_ms=1000.0, offset_ms=-900.0
+        ),
+        CameraSpec(
+            "cam3", 320, 180, 50.0, r0=4, r1=16, exposure_ms=6.0, drift_ppm=-25.0, start_ms=2000.0, offset_ms=-1950.0
+        ),
+    )
+    scenario = Scenario(
+        "hidden-rows", rig, duration_ms=duration, flashes=flashes(4, duration)[::2], n_players=0, seed=4
+    )
+    truth = render_scenario(scenario, tmp_path)
+    cameras = detect_videos([tmp_path / f"{c.name}.mp4" for c in rig])
+    measurement = measure(cameras)
+    plain = fit_candidate(measurement, frozenset())
+    shaped = in_sync_shape(measurement, plain)
+    assert pooled_error_ms(plain.sync_model(), truth) > 1.0
+    assert pooled_error_ms(shaped.sync_model(), truth) < 0.03
+    for name, camera in shaped.sync_model().cameras.items():
+        assert camera.row_time_ms == pytest.approx(truth.cameras[name].row_time_ms, rel=0.005), name
+        assert camera.exposure_ms == pytest.approx(truth.cameras[name].exposure_ms, abs=0.1), name
+    d = diagnose(cameras)
+    assert d.sync_shape and pooled_error_ms(d.sync_model, truth) < 0.03, format_diagnosis(d)
 
 
 def test_a_model_with_a_time_per_row_or_exposure_below_zero_is_neither_added_nor_kept(tmp_path):
@@ -326,7 +373,8 @@ def test_too_few_cameras_or_shared_flashes_is_one_line_error(detections):
 
 def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsys):
     """``flashsync diagnose`` on the shipped sample: a table, JSON with the steps, and a Rerun
-    recording whose residual series are one per step, camera and edge kind."""
+    recording whose residual series are one per step, camera and edge kind, then the final
+    model's in ``sync``'s shape."""
     import json
     import subprocess
     import sys
@@ -340,6 +388,7 @@ def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsy
     assert main(["diagnose", *videos, *outputs]) == 0
     shown = capsys.readouterr()
     assert "χ²" in shown.out and "against the model flashsync sync writes: within 3 sigma" in shown.out
+    assert "in sync's shape" in shown.out
     assert "sync.json\n" in shown.err  # no disagreement to name
     model = load_model(tmp_path / "sync.json")
     assert list(model.cameras) == ["cam1", "cam2", "cam3", "cam4"] and len(model.events) > 0
@@ -361,7 +410,8 @@ def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsy
     stamped = pd.read_csv(restamped)
     assert stamped["t_global_ms"].notna().all() and (stamped["t_global_std_ms"] > 0).all()
     data = json.loads((tmp_path / "d.json").read_text())
-    assert data["steps"] and len(data["edge_residuals"]["residual_ms"]) == len(data["steps"]) + 1
+    assert data["steps"] and data["sync_shape"]
+    assert len(data["edge_residuals"]["residual_ms"]) == len(data["steps"]) + 2
     rerun = Path(sys.executable).with_name("rerun")
     printed = subprocess.run(
         [str(rerun), "rrd", "print", "-v", str(tmp_path / "d.rrd")], capture_output=True, text=True, check=True
@@ -369,6 +419,7 @@ def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsy
     first = data["steps"][0]
     assert "/diagnose/0_plain/cam1/leading" in printed
     assert f"/diagnose/1_{first['effect']}_{first['camera']}/" in printed
+    assert f"/diagnose/{len(data['steps']) + 1}_sync_shape/cam4/trailing" in printed
 
 
 def pooled_error_ms(model: SyncModel, truth: GroundTruth) -> float:
@@ -520,7 +571,10 @@ def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path, world):
     camera's band-length noise 0.25 ms against 0.02 for its other bands, and no drift step
     was taken). The band is an outlier of the band lengths and left out of the noise, so
     both drifts are named and the model is within 0.02 ms RMS of the truth; in the second
-    world, whose bands on that camera scatter as 0.045 ms of edge noise, within 0.04. There
+    world, whose bands on that camera scatter as 0.045 ms of edge noise, within 0.06 (0.052:
+    in ``sync``'s shape the reference's time per row is free, and comes out 0.2 % short of
+    frame period / height, which this rig without hidden rows has exactly; 0.04 before, at
+    frame period / height; ``sync`` 0.033). There
     the band is 19 robust sigmas off, under :data:`OUTLIER_BAND_SIGMAS` (the three split
     bands, fitted whole since 2026-11-26, count now and widen the spread; 25 sigmas before),
     so it stays in the noise (0.21 ms), and both drifts are named all the same."""
@@ -544,7 +598,7 @@ def test_one_band_moved_a_millisecond_does_not_hide_a_drift(tmp_path, world):
     drifting = {c for s in d.steps if "drift" in s.effect.split("+") for c in s.camera.split("+")}
     assert drifting == {"cam2", "cam3"}, format_diagnosis(d)
     assert [m["drift_ppm"] for m in d.model] == pytest.approx([0.0, 30.0, 40.0], abs=5.0)
-    assert pooled_error_ms(d.sync_model, truth) < (0.02 if world == FIRST else 0.04)
+    assert pooled_error_ms(d.sync_model, truth) < (0.02 if world == FIRST else 0.06)
 
 
 @pytest.fixture(scope="module", params=[FIRST, SECOND])
@@ -567,22 +621,19 @@ def flickering(request, tmp_path_factory) -> tuple[list, GroundTruth, str]:
     return detect_videos([folder / "cam0.mp4", folder / "cam1.mp4"], estimate_readout=False), truth, request.param
 
 
-def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loose(flickering, tmp_path):
+def test_rolling_flicker_is_named_first_and_times_the_rows(flickering, tmp_path):
     """The flicker (its frequency and depth) is named first on the camera that sees it roll,
     its period in rows then times that camera's rows (the model's time per row is the
     flicker's: the gap between them, 4.5 ms over the image under frame period / height,
-    closes), the flashes carry it to the reference, and the model ``diagnose -o`` writes is
-    within 0.1 ms RMS of the truth (0.026 in the first world, 0.074 in the second, where the
-    tone curve leaves 1.8 % of the flicker's 5 % and the period comes out 0.26 % long), where
-    the same workflow blind to the flicker is 2.1 ms off in the first world: the flashes
-    cannot see the hidden rows (in the second world the blind workflow may take the time per
-    row of both cameras as a pair from the three flashes, ΔBIC 10.9 against the threshold of
-    10 once the edge noise comes from unclipped bands alone, and land 0.09 ms off: there it
-    must name that pair to be right). ``sync`` (the same flicker, :func:`~flashsync.pipeline.mains_flicker`, is its
-    prior) is within 0.1 ms of the truth: 0.021 and 0.071 ms, and 0.022 and 0.068 without
-    the prior (both edges of every band pin its time per row here); and of ``diagnose -o``
-    in the first world; in the second both are up to 0.1 off, in opposite directions (0.109
-    ms apart on cam1 in one suite run), so within the sum of their bounds."""
+    closes; in ``sync``'s shape the flicker is that time per row's prior, as in ``sync``), the
+    flashes carry it to the reference, and the model ``diagnose -o`` writes is within 0.1 ms
+    RMS of the truth (0.036 in the first world, 0.073 in the second, where the tone curve
+    leaves 1.8 % of the flicker's 5 % and the period comes out 0.26 % long). The same
+    workflow blind to the flicker is as close (0.036 and 0.082 ms): in ``sync``'s shape both
+    edges of every band pin the times per row here, as they do for ``sync`` without the
+    flicker's prior; at frame period / height, before ``sync``'s shape, it was 2.1 ms off.
+    ``sync`` (the same flicker, :func:`~flashsync.pipeline.mains_flicker`, is its prior) is
+    within 0.1 ms of the truth (0.038 and 0.049 ms) and of ``diagnose -o``."""
     cameras, truth, world = flickering
     d = diagnose(cameras)
     step = d.steps[0]
@@ -594,16 +645,14 @@ def test_rolling_flicker_is_named_first_and_times_the_rows_the_flashes_leave_loo
     assert "flicker" not in {s.effect for s in blind.steps}, format_diagnosis(blind)
     error = pooled_error_ms(d.sync_model, truth)
     assert error < 0.1, format_diagnosis(d)
-    blind_error = pooled_error_ms(blind.sync_model, truth)
-    found_rows = any(s.effect == "row_time+row_time" for s in blind.steps)
-    assert blind_error > 5.0 * error or (world == SECOND and found_rows and blind_error < 0.1), format_diagnosis(blind)
+    assert pooled_error_ms(blind.sync_model, truth) < 0.1, format_diagnosis(blind)
     model, _ = synchronize(cameras)  # the same flicker (pipeline.mains_flicker) as its prior
     assert pooled_error_ms(model, truth) < 0.1
-    assert max(gap.rms_ms for gap in model_gaps(d.sync_model, model)) < (0.1 if world == FIRST else 0.2)
+    assert max(gap.rms_ms for gap in model_gaps(d.sync_model, model)) < 0.1
     save_model(d.sync_model, tmp_path / "sync.json")
     written = load_model(tmp_path / "sync.json").camera("cam1")
     flicker = cameras[1].flicker
-    assert written.row_time_ms == pytest.approx(1000.0 / flicker.hz / flicker.period_rows, rel=1e-9)
+    assert written.row_time_ms == pytest.approx(1000.0 / flicker.hz / flicker.period_rows, rel=0.005)
     assert written.row_time_ms == pytest.approx(truth.cameras["cam1"].row_time_ms, rel=0.01)
 
 

@@ -288,6 +288,27 @@ def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_
     assert cauchy_fit(np.column_stack([x, 2 * x]), observed) is None
 
 
+def test_the_dense_cauchy_fit_keeps_its_gaussian_rows_at_full_weight():
+    """A prior 250 scales from where the observations put the parameter (a pseudo-observation
+    among the last ``n_fixed`` rows) pulls the fit at least as far as a Gaussian compromise of
+    the two would, where a robust row that far off is all but ignored."""
+    from flashsync.robust import cauchy_fit
+
+    rng = np.random.default_rng(4)
+    x = np.linspace(-1.0, 1.0, 40)
+    design = np.vstack([np.column_stack([np.ones_like(x), x]), [[0.0, 1.0]]])
+    observed = np.concatenate([2.0 + 0.5 * x + rng.normal(0.0, 0.01, len(x)), [1.0]])
+    weight = 0.01 / 0.002  # the slope's prior: 1.0 +- 0.002, on the observations' scale
+    design[-1] *= weight
+    observed[-1] *= weight
+    robust, _, _ = cauchy_fit(design, observed)
+    fixed, _, _ = cauchy_fit(design, observed, n_fixed=1)
+    information = np.sum(x**2) / 0.01**2 + 1.0 / 0.002**2
+    gaussian = (np.sum(x**2) / 0.01**2 * 0.5 + 1.0 / 0.002**2 * 1.0) / information  # 0.82
+    assert robust[1] == pytest.approx(0.5, abs=0.005)
+    assert gaussian <= fixed[1] <= 1.0
+
+
 def test_the_flash_eliminated_leverages_and_covariance_are_the_dense_normal_equations():
     """Group scales' leverages and the covariance come from the Schur complement of the flash
     block; on a small system (warp knots, trailing edges with their exposures, priors, weights

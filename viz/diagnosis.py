@@ -26,8 +26,9 @@ def log_diagnosis(diagnosis: Diagnosis, recording: rr.RecordingStream | None = N
     """Log each model's edge residuals (ms) on a ``flash`` sequence timeline.
 
     Entity ``diagnose/<k>_<effect>/<camera>/<edge>`` holds the residuals after step ``k``
-    (``0_plain`` is the plain model), one scalar per edge at its flash number, in the
-    camera's colour, so the gap closing step by step is seen side by side.
+    (``0_plain`` is the plain model, ``<k>_sync_shape`` the final one in ``sync``'s shape),
+    one scalar per edge at its flash number, in the camera's colour, so the gap closing step
+    by step is seen side by side.
     """
     recording = recording if recording is not None else rr.RecordingStream("flashsync-diagnose")
     data = diagnosis.edge_residuals
@@ -38,6 +39,7 @@ def log_diagnosis(diagnosis: Diagnosis, recording: rr.RecordingStream | None = N
     titles = ["plain"] + [
         ("out_" if step.removed else "") + step.effect + "_" + step.camera for step in diagnosis.steps
     ]
+    titles += ["sync_shape"] * diagnosis.sync_shape
     for k, (title, residual) in enumerate(zip(titles, data["residual_ms"])):
         residual = np.asarray(residual, dtype=np.float64)
         for name in diagnosis.cameras:

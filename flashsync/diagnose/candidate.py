@@ -12,7 +12,10 @@ residuals about the model's frame clock (:class:`flashsync.frame_clock.FrameCloc
 parts the model's effects switch on) get a Cauchy likelihood of their own. Where a camera saw
 rolling mains flicker, the time per row its period tells is a third: Gaussian about the
 model's time per row, with the flicker's standard deviation; where the model fits that
-camera's time per row, the flicker enters the fit as one more equation.
+camera's time per row, the flicker enters the fit as one more equation, and where it saw
+none, ``sync``'s weak nominal prior does; where the model fits a camera's drift, ``sync``'s
+drift prior does (:func:`_pseudo_rows`). These equations are Gaussian: they keep their full
+weight in the robust fit, whatever the edges say.
 
 A model's score is its Bayesian information criterion over all its streams::
 
@@ -45,8 +48,11 @@ from flashsync.diagnose.effects import (
 )
 from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock
+from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.pipeline import NOMINAL_ROW_TIME_STD
 from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
+from flashsync.solve import DRIFT_PRIOR_STD
 
 
 @dataclass(frozen=True, order=True)
@@ -200,11 +206,12 @@ class Candidate:
         keys, design = _design(measurement, self.terms, self.features)
         weight = _edge_weights(measurement)
         weighted = self.residual_ms * weight
-        rows, observed, row_weight = _flicker_rows(measurement, self.terms, self.timing, keys)
+        rows, observed, row_weight = _pseudo_rows(measurement, self.terms, self.timing, keys)
         covariance = _covariance(
             np.vstack([design * weight[:, None], rows * row_weight[:, None]]),
             np.concatenate([weighted, (observed - rows @ self._parameters(keys)) * row_weight]),
             self.scale_ms,
+            n_fixed=len(rows),
         )
         clocks = {}
         for c, (camera, clock, timing) in enumerate(zip(measurement.cameras, self.clocks, self.timing)):
@@ -265,11 +272,12 @@ WARP_KNOTS = 64
 INLIER_SCALES = 5.0
 
 
-def _covariance(design: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
+def _covariance(design: np.ndarray, residual: np.ndarray, scale: float, n_fixed: int) -> np.ndarray:
     """Covariance of a Cauchy IRLS fit's parameters, shape (p, p): ``s**2 (X' W X)^-1`` with
-    the final Cauchy weights ``W`` and ``s**2`` their weighted mean squared residual over
-    the degrees of freedom."""
+    the final Cauchy weights ``W`` (1 on the last ``n_fixed`` rows, the Gaussian ones) and
+    ``s**2`` their weighted mean squared residual over the degrees of freedom."""
     weights = 1.0 / (1.0 + (residual / scale) ** 2)
+    weights[len(weights) - n_fixed :] = 1.0
     dof = max(weights.sum() - design.shape[1], 1.0)
     variance = float(np.sum(weights * residual**2) / dof)
     return variance * np.linalg.pinv(design.T @ (design * weights[:, None]))
@@ -352,11 +360,12 @@ def _fit(
     keys, design = _design(measurement, terms, features)
     noise = measurement.noise_ms
     weight = _edge_weights(measurement)
-    rows, row_observed, row_weight = _flicker_rows(measurement, terms, timing, keys)
+    rows, row_observed, row_weight = _pseudo_rows(measurement, terms, timing, keys)
     solved = cauchy_fit(
         np.vstack([design * weight[:, None], rows * row_weight[:, None]]),
         np.concatenate([observed * weight, row_observed * row_weight]),
         noise if np.isfinite(noise) else MIN_SCALE_MS,
+        n_fixed=len(rows),
     )
     if solved is None:
         return None
@@ -397,26 +406,35 @@ def _base_row_time_ms(
     return timing[camera].period_ms / measurement.cameras[camera].height
 
 
-def _flicker_rows(
+def _pseudo_rows(
     measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], keys: list[tuple[str, int]]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The flicker's equations for the fit: per camera that saw rolling flicker and whose
-    time per row the model fits (``row_time``), ``correction = flicker's time per row -
-    base``; design rows of shape (k, len(keys) + n_flashes), right-hand sides (k,) in ms per
-    row and weights (k,) that put them on the edges' scale (pooled edge noise over the
-    flicker's standard deviation)."""
+    """The fit's equations beyond the edges, those of ``sync``'s solve: per camera whose
+    time per row the model fits (``row_time``), ``correction = its rolling flicker's time per
+    row - base`` where it saw flicker, else the weak nominal prior's (frame period /
+    (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height), std
+    :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` of it); per camera whose drift it fits,
+    the drift prior (0, std :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
+    (k, len(keys) + n_flashes), right-hand sides (k,) in the parameters' units and weights
+    (k,) that put them on the edges' scale (pooled edge noise over their standard deviation)."""
     noise = measurement.noise_ms if np.isfinite(measurement.noise_ms) else MIN_SCALE_MS
-    rows, observed, weights = [], [], []
+    equations = []  # (key, value, std)
     for c in range(len(measurement.cameras)):
-        row_time, std = measurement.flicker_row_time_ms(c)
-        if np.isfinite(row_time) and (ROW_TIME, c) in keys:
-            row = np.zeros(len(keys) + measurement.n_flashes)
-            row[keys.index((ROW_TIME, c))] = 1.0
-            rows.append(row)
-            observed.append(row_time - _base_row_time_ms(measurement, terms, timing, c))
-            weights.append(noise / std)
-    width = len(keys) + measurement.n_flashes
-    return np.reshape(rows, (-1, width)), np.asarray(observed, dtype=np.float64), np.asarray(weights, dtype=np.float64)
+        if (ROW_TIME, c) in keys:
+            base = _base_row_time_ms(measurement, terms, timing, c)
+            row_time, std = measurement.flicker_row_time_ms(c)
+            if not np.isfinite(row_time):
+                nominal = timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * measurement.cameras[c].height)
+                row_time, std = nominal, NOMINAL_ROW_TIME_STD * nominal
+            equations.append(((ROW_TIME, c), row_time - base, std))
+        if (DRIFT, c) in keys:
+            equations.append(((DRIFT, c), 0.0, DRIFT_PRIOR_STD))
+    rows = np.zeros((len(equations), len(keys) + measurement.n_flashes))
+    for row, (key, _, _) in zip(rows, equations):
+        row[keys.index(key)] = 1.0
+    observed = np.array([value for _, value, _ in equations], dtype=np.float64)
+    weights = np.array([noise / std for _, _, std in equations], dtype=np.float64)
+    return rows, observed, weights
 
 
 def _flicker_nll(

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from flashsync.diagnose.workflow import THRESHOLD, Diagnosis
 
+SYNC_SHAPE_TITLE = "in sync's shape"
+
 
 def format_diagnosis(diagnosis: Diagnosis) -> str:
     """The diagnosis as aligned text.
@@ -32,6 +34,12 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
         lines.append(
             "      no effect of the catalogue, alone or paired on one camera, lowers the BIC by "
             "more than the threshold and shrinks the RMS of the edges or the stamps or the flicker's gap"
+        )
+    if d.sync_shape:
+        lines.append(
+            f"{'':>4}  {SYNC_SHAPE_TITLE:<32} {'every':<10} {d.found_rms_ms:>13.4f} "
+            f"{d.final_rms_ms:>9.4f}  the effects above with every camera's time per row, exposure and drift "
+            "free under sync's priors (time per row nominal ± 8 % or its flicker's, drift 0 ± 50 ppm)"
         )
     lines += [d.verdict, d.agreement]
     lines.append(
