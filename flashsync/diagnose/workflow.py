@@ -393,7 +393,8 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
     if not shaped:
         warnings.append(
             "the effects found cannot be fitted in sync's shape (every camera's time per row, exposure and drift "
-            "free under sync's priors) without a time per row or an exposure below zero; the model is the last step's"
+            "free under sync's priors): undetermined, or a time per row or an exposure below zero; the model is the "
+            "last step's"
         )
     n_edges = len(measurement.edges)
     dof = max(n_edges - measurement.n_flashes - len(final.coefficients), 1)
