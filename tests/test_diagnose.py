@@ -317,7 +317,7 @@ def test_syncs_shape_frees_every_time_per_row_exposure_and_drift_under_syncs_pri
     30 and -25 ppm from the reference's. The plain model in ``sync``'s shape is 0.017 ms RMS
     off the truth where the plain model is 2.45: every camera's time per row, exposure and
     drift come from the edges and ``sync``'s priors, with no step. The workflow names them
-    all here and its model (in that shape) is 0.019 ms off, ``sync``'s 0.014 (on the second
+    all here and its model (in that shape) is 0.017 ms off, ``sync``'s 0.014 (on the second
     world's random rigs, twelve cameras of a few flashes each, steps above the threshold
     leave many of them at the plain model's: README, ``flashsync diagnose``)."""
     duration = 8000.0

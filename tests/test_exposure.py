@@ -208,8 +208,9 @@ def test_diagnose_does_not_take_lengths_fitted_at_the_exposure_for_noise(led):
     failed at chi-squared 184 over 14 degrees of freedom ("expected 0.0001 ms"). And the
     0.7 ms camera was left out: at the loose tolerance of a readout that may be wrong (a
     frame period) its seven flashes at nearly regular intervals left a rival shift, so it
-    was not paired; ``sync``'s tolerance (a quarter period) pairs it. Now all three: 0.015,
-    0.045 and 0.040 ms RMS, every time per row named, the verdict passes at p = 0.98."""
+    was not paired; ``sync``'s tolerance (a quarter period) pairs it. Now all three, in
+    ``sync``'s shape: 0.015, 0.036 and 0.023 ms RMS (0.015, 0.045 and 0.040 before it), the
+    verdict passes at p = 0.98."""
     truth, detections = led
     d = diagnose(detections)
     assert d.cameras == ["ref", "fast", "short"] and d.consistent, format_diagnosis(d)

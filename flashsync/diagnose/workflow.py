@@ -23,7 +23,7 @@ The model it ends with, and ``flashsync diagnose -o`` writes, is the effects fou
 free under the priors ``sync``'s solve gives them. An effect too small to pass the threshold
 on its own still moves the times between and beyond the flashes: on the second world's
 random rigs (hidden rows and clock drifts of tens of ppm on every camera) the last step's
-model was a median 0.32 ms off the truth, the same effects in ``sync``'s shape 0.09 ms."""
+model was a median 0.34 ms off the truth, the same effects in ``sync``'s shape 0.087 ms."""
 
 from __future__ import annotations
 
