@@ -156,10 +156,10 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     pulse's tail). The edge noise comes from the unclipped bands (a clipped band's length is
     the effect's evidence). Named first in both worlds and the gap shrinks 5x or to the noise
     floor: over scenario seeds 1-3 in each world 2.1-6.8x, after 0.015-0.065 ms against a
-    floor of 0.029-0.124 ms, before 0.100-0.156 ms; the model is closer to the truth than the
-    plain one. The verdict is not asserted: on some draws the clipped edges still scatter
-    0.02-0.05 ms per band beyond the unclipped bands' noise (the flash's pulse length varies
-    from flash to flash, and with it how far the edges move). The model ``diagnose -o`` writes
+    floor of 0.029-0.124 ms, before 0.100-0.156 ms. The verdict is not asserted: on some
+    draws the clipped edges still scatter 0.02-0.05 ms per band beyond the unclipped bands'
+    noise (the flash's pulse length varies from flash to flash, and with it how far the edges
+    move). The model ``diagnose -o`` writes
     (the effect in ``sync``'s shape) is closer to the truth than the plain model in that shape:
     0.024 against 0.107 ms in the first world, 0.069 against 0.135 in the second (``sync``,
     which does not know the effect, 0.120 and 0.085; the plain model at frame period / height
