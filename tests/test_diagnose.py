@@ -16,7 +16,7 @@ from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
 from flashsync.diagnose.measure import Measurement, measure
-from flashsync.diagnose.workflow import SYNC_SHAPE, in_sync_shape, residual_test
+from flashsync.diagnose.workflow import SYNC_SHAPE, _diagnosis, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import probe_errors, probes, sync_errors
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
@@ -345,6 +345,20 @@ def test_syncs_shape_frees_every_time_per_row_exposure_and_drift_under_syncs_pri
         assert camera.exposure_ms == pytest.approx(truth.cameras[name].exposure_ms, abs=0.1), name
     d = diagnose(cameras)
     assert d.sync_shape and pooled_error_ms(d.sync_model, truth) < 0.03, format_diagnosis(d)
+
+
+def test_without_syncs_shape_the_diagnosis_says_so_and_keeps_the_last_steps_model(detections):
+    """Where the found effects cannot be fitted in ``sync``'s shape (:func:`in_sync_shape`
+    gives None: undetermined, or a time per row or an exposure below zero), the diagnosis is
+    the last step's model, and a warning says why."""
+    measurement = measure(pair(detections, CAMERA["exposure"]))
+    found = fit_candidate(measurement, frozenset({Term("exposure", 1)}))
+    step = [s for s in diagnose(pair(detections, CAMERA["exposure"])).steps if not s.removed][:1]
+    d = _diagnosis(measurement, [fit_candidate(measurement, frozenset()), found], step)
+    assert not d.sync_shape and d.final_rms_ms == d.found_rms_ms == found.rms_ms
+    assert any("cannot be fitted in sync's shape" in w and "the model is the last step's" in w for w in d.warnings)
+    text = format_diagnosis(d)
+    assert "in sync's shape".ljust(32) + " every" not in text and "warning: the effects found cannot" in text
 
 
 def test_a_model_with_a_time_per_row_or_exposure_below_zero_is_neither_added_nor_kept(tmp_path):

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from flashsync.diagnose.workflow import THRESHOLD, Diagnosis
 
-SYNC_SHAPE_TITLE = "in sync's shape"
-
 
 def format_diagnosis(diagnosis: Diagnosis) -> str:
     """The diagnosis as aligned text.
@@ -37,7 +35,7 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
         )
     if d.sync_shape:
         lines.append(
-            f"{'':>4}  {SYNC_SHAPE_TITLE:<32} {'every':<10} {d.found_rms_ms:>13.4f} "
+            " " * 6 + "in sync's shape".ljust(32) + f" {'every':<10} {d.found_rms_ms:>13.4f} "
             f"{d.final_rms_ms:>9.4f}  the effects above with every camera's time per row, exposure and drift "
             "free under sync's priors (time per row nominal ± 8 % or its flicker's, drift 0 ± 50 ppm)"
         )
