@@ -57,7 +57,7 @@ from flashsync.match import (
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.segments import SEGMENT_MS
-from flashsync.solve import CameraSolution, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.solve import DRIFT_PRIOR_STD, CameraSolution, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: the nominal one
@@ -256,6 +256,7 @@ def synchronize(
         + readout_warnings
         + _few_flashes(best, reference)
         + _row_time_doubts(best)
+        + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
@@ -656,6 +657,18 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
                 "across frames, or the same frame rate as the others); give it (--row-time CAMERA=MS) if known"
             )
     return warnings
+
+
+def _free_drifts(best: _Attempt, reference: str) -> list[str]:
+    """A warning per camera whose drift prior the events contradicted, solved without it
+    (:func:`~flashsync.solve.solve_with_drift_model`)."""
+    return [
+        f"{best.cameras[best.connected[c]].video}: its clock runs "
+        f"{(best.solution.cameras[c].alpha - 1.0) * 1e6:+.0f} ppm from {reference}'s, beyond the "
+        f"± {DRIFT_PRIOR_STD * 1e6:.0f} ppm camera clocks keep; solved without that prior (its clock's rate "
+        "changes during the recording, or its stamps were written at a nominal frame rate)"
+        for c in best.solution.free_drift
+    ]
 
 
 def _readout_doubts(

@@ -117,7 +117,9 @@ class Solution:
     are observed, its leading edge's ``inlier`` is its midpoint's, its trailing edge's its
     length's. ``flash_ms`` the global
     time of each flash index (NaN for an index no inlier event names); ``sigma_ms`` is the
-    robust scale of the residuals over their sigma factors.
+    robust scale of the residuals over their sigma factors. ``free_drift``: the camera
+    indices whose drift prior the events contradicted, solved without it
+    (:func:`solve_with_drift_model`).
     """
 
     cameras: list[CameraSolution]
@@ -127,6 +129,7 @@ class Solution:
     sigma_ms: float
     n_unknowns: int
     sigma_factor: np.ndarray
+    free_drift: tuple[int, ...] = ()
 
 
 #: Noise of an edge against which the priors are weighed, ms.
@@ -296,6 +299,10 @@ DRIFT_SEGMENTS = (1, 2, 4, 8, 16)
 MIN_EVENTS_PER_SEGMENT = 4
 #: BIC decrease that counts as strong evidence for a richer drift model.
 MIN_BIC_GAIN = 10.0
+#: A camera's drift prior is dropped where the events alone put its (affine) drift this many
+#: combined standard deviations from it, and it has flashes enough for a changing rate (two
+#: segments' worth): a few flashes matched by chance fit any rate.
+DRIFT_CONTRADICTION_SIGMAS = 5.0
 
 
 def solve_with_drift_model(events: Observations, n_cameras: int, reference: int = 0, **options) -> Solution:
@@ -305,9 +312,15 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
     over 2, 4, 8 and 16 equal segments of its recording (cameras with fewer than
     :data:`MIN_EVENTS_PER_SEGMENT` leading edges per segment stay at what they support). A richer
     model is kept only if it lowers the Bayesian information criterion (on the inlier
-    equations) by :data:`MIN_BIC_GAIN`: strong evidence.
+    equations) by :data:`MIN_BIC_GAIN`: strong evidence. First, the drift prior is dropped
+    for every camera whose events contradict it (:func:`_drift_prior_contradicted`).
     """
-    leading = np.ones(len(events.camera), dtype=bool) if events.trailing is None else ~np.asarray(events.trailing)
+    free_drift = _drift_prior_contradicted(events, n_cameras, reference, options)
+    if free_drift:
+        priors = options["priors"]
+        wider = {**priors.wider_drift_std, **dict.fromkeys(free_drift, np.inf)}
+        options = {**options, "priors": replace(priors, wider_drift_std=wider)}
+    leading = _leading(events)
     camera = np.asarray(events.camera)[leading]
     t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)[leading]
     best = solve_clocks(events, n_cameras, reference, **options)
@@ -327,7 +340,39 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
         bic = _bic(trial)
         if bic < best_bic - MIN_BIC_GAIN:
             best, best_bic = trial, bic
-    return best
+    return replace(best, free_drift=free_drift)
+
+
+def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: int, options: dict) -> tuple:
+    """The camera indices whose affine drift, solved from the events without the drift prior,
+    lies over :data:`DRIFT_CONTRADICTION_SIGMAS` combined standard deviations (its own and
+    the prior's) from the prior's 0, on cameras of eight flashes or more: a clock hundreds of ppm off the reference's (a rate that
+    changes during the recording, stamps written at a nominal rate) is not one the prior of
+    consumer oscillators describes, and held to it, the robust solve rejects the flashes
+    at the ends of the recording instead of the prior. ``options``: those of :func:`solve_clocks`."""
+    priors = options.get("priors")
+    if priors is None or priors.drift_std is None:
+        return ()
+    try:
+        free = solve_clocks(events, n_cameras, reference, **{**options, "priors": replace(priors, drift_std=None)})
+    except NotEnoughDataError:
+        return ()
+
+    flashes = np.bincount(np.asarray(events.camera)[_leading(events)], minlength=n_cameras)
+
+    def contradicted(c: int, camera: CameraSolution) -> bool:
+        if flashes[c] < MIN_EVENTS_PER_SEGMENT * DRIFT_SEGMENTS[1]:
+            return False
+        own = np.sqrt(max(camera.covariance[0, 0], 0.0))
+        prior = max(priors.drift_std, priors.wider_drift_std.get(c, 0.0))
+        return abs(camera.alpha - 1.0) > DRIFT_CONTRADICTION_SIGMAS * np.hypot(own, prior)
+
+    return tuple(c for c, camera in enumerate(free.cameras) if c != reference and contradicted(c, camera))
+
+
+def _leading(events: Observations) -> np.ndarray:
+    """Which events are leading edges (bool, shape (n,)): one per flash a camera saw."""
+    return np.ones(len(events.camera), dtype=bool) if events.trailing is None else ~np.asarray(events.trailing)
 
 
 def _bic(solution: Solution) -> float:

@@ -274,6 +274,38 @@ def test_steady_clock_stays_affine():
     assert solve_with_drift_model(events, n_cameras=2).cameras[1].warp_ms.size == 0
 
 
+def test_a_clock_hundreds_of_ppm_off_is_solved_without_the_drift_prior():
+    """Twelve flashes in 8 s; camera 1's clock runs 600 ppm fast (stamps at a nominal rate),
+    camera 2's 30 ppm slow. Held to the 50 ppm prior, the robust solve takes camera 1's
+    drift 107 ppm short and drags camera 2 96 ppm off with it; the events contradict that
+    prior on camera 1 only, which is solved without it: both within 10 ppm."""
+    from flashsync.solve import solve_with_drift_model
+
+    cameras = [
+        (1.0, 0.0, 0.0370, 25.0, 1000),
+        (1.0 + 600e-6, -3_234.5, 0.0310, 30.0, 1020),
+        (1.0 - 30e-6, 2_101.25, 0.0185, 50.0, 1000),
+    ]
+    rng = np.random.default_rng(0)
+    tau = np.sort(rng.uniform(500.0, 8_000.0, 12))
+    camera, flash, t_frame, q = [], [], [], []
+    for index, (alpha, beta, row_time, fps, height) in enumerate(cameras):
+        frame_times = (np.arange(-5_000.0, 13_000.0, 1000 / fps) - beta) / alpha
+        seen, frame, rows = observe(tau, alpha, beta, row_time, frame_times, height)
+        camera += [index] * len(seen)
+        flash += list(seen)
+        t_frame += list(frame_times[frame])
+        q += list(rows + rng.normal(0.0, 0.02 / row_time, len(rows)))
+    events = Observations(*map(np.asarray, (camera, flash, t_frame, q)))
+    held = solve_clocks(events, n_cameras=3, priors=Priors({}))
+    solved = solve_with_drift_model(events, n_cameras=3, priors=Priors({}))
+    assert solved.free_drift == (1,)
+    held_error, error = (
+        [abs(s.alpha - c[0]) * 1e6 for s, c in zip(x.cameras[1:], cameras[1:])] for x in (held, solved)
+    )
+    assert min(held_error) > 50.0 and max(error) < 10.0, (held_error, error)
+
+
 def test_the_dense_cauchy_fit_ignores_one_bad_observation_and_refuses_dependent_columns():
     from flashsync.robust import cauchy_fit
 
