@@ -413,8 +413,9 @@ def _pseudo_rows(
     time per row the model fits (``row_time``), ``correction = its rolling flicker's time per
     row - base`` where it saw flicker, else the weak nominal prior's (frame period /
     (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height), std
-    :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` of it); per camera whose drift it fits,
-    the drift prior (0, std :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
+    :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` of it); per camera whose drift it fits
+    (but those of :attr:`Measurement.free_drift`), the drift prior (0, std
+    :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
     (k, len(keys) + n_flashes), right-hand sides (k,) in the parameters' units and weights
     (k,) that put them on the edges' scale (pooled edge noise over their standard deviation)."""
     noise = measurement.noise_ms if np.isfinite(measurement.noise_ms) else MIN_SCALE_MS
@@ -427,7 +428,7 @@ def _pseudo_rows(
                 nominal = timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * measurement.cameras[c].height)
                 row_time, std = nominal, NOMINAL_ROW_TIME_STD * nominal
             equations.append(((ROW_TIME, c), row_time - base, std))
-        if (DRIFT, c) in keys:
+        if (DRIFT, c) in keys and c not in measurement.free_drift:
             equations.append(((DRIFT, c), 0.0, DRIFT_PRIOR_STD))
     rows = np.zeros((len(equations), len(keys) + measurement.n_flashes))
     for row, (key, _, _) in zip(rows, equations):

@@ -126,6 +126,9 @@ class Measurement:
     flicker : tuple of (Flicker or None)
         Per camera, the rolling mains flicker whose period in rows times its rows
         (:func:`~flashsync.pipeline.mains_flicker`); None where it saw none to trust.
+    free_drift : frozenset of int
+        Cameras whose drift is fitted without ``sync``'s drift prior: their edges contradict
+        it (:func:`~flashsync.diagnose.workflow.in_sync_shape`).
     """
 
     cameras: tuple[CameraDetection, ...]
@@ -135,6 +138,7 @@ class Measurement:
     camera_noise_ms: np.ndarray
     warnings: tuple[str, ...] = ()
     flicker: tuple[Flicker | None, ...] = ()
+    free_drift: frozenset[int] = frozenset()
     _clocks: dict = field(default_factory=dict, repr=False, compare=False)
 
     def frame_clock(self, camera: int, count_gaps: bool, least_squares: bool) -> FrameClock:

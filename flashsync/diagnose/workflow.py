@@ -42,6 +42,7 @@ from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
 from flashsync.model import SyncModel
 from flashsync.pipeline import synchronize
+from flashsync.solve import DRIFT_PRIOR_STD, drift_prior_contradicted
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -267,17 +268,46 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
 def in_sync_shape(measurement: Measurement, found: Candidate) -> Candidate | None:
     """The ``found`` model's effects with every camera's time per row, exposure and drift
     (:data:`SYNC_SHAPE`) free under ``sync``'s priors (the fit's pseudo-observations: time per
-    row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm); None where it cannot be
-    fitted or gives a camera a time per row or an exposure below zero."""
+    row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm, dropped where ``sync`` drops
+    it: :func:`_contradicted_drift_priors`); None where it cannot be fitted or gives a camera a
+    time per row or an exposure below zero."""
     cameras = range(len(measurement.cameras))
-    terms = found.terms | {
-        Term(effect, c)
-        for effect in SYNC_SHAPE
-        for c in cameras
-        if not (CATALOGUE[effect].scope == OTHER_CAMERAS and c == measurement.reference)
-    }
-    shaped = fit_candidate(measurement, frozenset(terms))
+    terms = frozenset(
+        found.terms
+        | {
+            Term(effect, c)
+            for effect in SYNC_SHAPE
+            for c in cameras
+            if not (CATALOGUE[effect].scope == OTHER_CAMERAS and c == measurement.reference)
+        }
+    )
+    shaped = fit_candidate(_contradicted_drift_priors(measurement, terms), terms)
     return shaped if shaped is not None and shaped.physical(set(cameras)) else None
+
+
+def _contradicted_drift_priors(measurement: Measurement, terms: frozenset[Term]) -> Measurement:
+    """``measurement`` with the cameras whose drift the edges put beyond ``sync``'s drift
+    prior (the model ``terms`` fitted without it; ``sync``'s rule,
+    :func:`~flashsync.solve.drift_prior_contradicted`) fitted without it, a warning each."""
+    unheld = fit_candidate(replace(measurement, free_drift=frozenset(range(len(measurement.cameras)))), terms)
+    if unheld is None:
+        return measurement
+    clocks = unheld.sync_model().cameras
+    edges = measurement.edges
+    flashes = np.bincount(edges.camera[~edges.trailing], minlength=len(measurement.cameras))
+    free = {}
+    for c, camera in enumerate(measurement.cameras):
+        clock = clocks[camera.camera]
+        drift_std = np.sqrt(max(clock.covariance[0, 0], 0.0))
+        if c != measurement.reference and drift_prior_contradicted(clock.alpha - 1.0, drift_std, int(flashes[c])):
+            free[c] = clock.alpha - 1.0
+    warnings = tuple(
+        f"{measurement.cameras[c].video}: its edges put its clock {drift * 1e6:+.0f} ppm from the reference's, "
+        f"beyond sync's drift prior (± {DRIFT_PRIOR_STD * 1e6:.0f} ppm); in sync's shape it is fitted without it, "
+        "as sync does"
+        for c, drift in free.items()
+    )
+    return replace(measurement, free_drift=frozenset(free), warnings=measurement.warnings + warnings)
 
 
 def _gaps_from_sync(detections: Sequence[CameraDetection], reference: str | None, model: SyncModel) -> list[Gap]:
@@ -389,7 +419,7 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
     the last step's effects in ``sync``'s shape."""
     plain, final = fits[0], fits[-1]
     shaped = len(fits) > len(steps) + 1
-    warnings = list(measurement.warnings)
+    warnings = list(final.measurement.warnings)
     if not shaped:
         warnings.append(
             "the effects found cannot be fitted in sync's shape (every camera's time per row, exposure and drift "
