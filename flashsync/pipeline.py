@@ -174,6 +174,8 @@ class SyncReport:
     frame_times : per camera whose stamps change rate, which frame times the flashes chose
         (:func:`_best_frame_times`).
     flipped_found : cameras found to read bottom-up (upside down).
+    free_drift : cameras whose clock drift was solved without the drift prior: their events
+        contradict it (:func:`~flashsync.solve.solve_with_drift_model`).
     warnings : cameras left out and why; stamps that follow no steady clock or change rate;
         datasheet times per row the events contradict.
     sigma_ms : robust residual scale of the solve, ms.
@@ -183,6 +185,7 @@ class SyncReport:
     frame_clocks: dict[str, FrameClock] = field(default_factory=dict)
     frame_times: dict[str, str] = field(default_factory=dict)
     flipped_found: list[str] = field(default_factory=list)
+    free_drift: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
 
@@ -260,6 +263,7 @@ def synchronize(
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
+    report.free_drift = [best.connected[c] for c in best.solution.free_drift]
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
     for name, clock in model.cameras.items():

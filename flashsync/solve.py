@@ -345,7 +345,9 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
 
 def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: int, options: dict) -> tuple:
     """The camera indices whose affine drift, solved from the events without the drift prior,
-    contradicts it (:func:`drift_prior_contradicted`): a clock hundreds of ppm off the
+    lies over :data:`DRIFT_CONTRADICTION_SIGMAS` combined standard deviations (its own and
+    the prior's) from the prior's 0, on cameras of flashes enough for a changing rate
+    (:data:`MIN_EVENTS_PER_SEGMENT` x 2): a clock hundreds of ppm off the
     reference's (a rate that changes during the recording, stamps written at a nominal rate)
     is not one the prior of consumer oscillators describes, and held to it, the robust solve
     gives up flashes instead of the prior. ``options``: those of :func:`solve_clocks`."""
@@ -357,28 +359,14 @@ def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: i
     except NotEnoughDataError:
         return ()
     flashes = np.bincount(np.asarray(events.camera)[_leading(events)], minlength=n_cameras)
-    return tuple(
-        c
-        for c, camera in enumerate(free.cameras)
-        if c != reference
-        and drift_prior_contradicted(
-            camera.alpha - 1.0,
-            np.sqrt(max(camera.covariance[0, 0], 0.0)),
-            int(flashes[c]),
-            max(priors.drift_std, priors.wider_drift_std.get(c, 0.0)),
-        )
-    )
+    enough = flashes >= MIN_EVENTS_PER_SEGMENT * DRIFT_SEGMENTS[1]
 
+    def contradicted(c: int, camera: CameraSolution) -> bool:
+        own = np.sqrt(max(camera.covariance[0, 0], 0.0))
+        prior = max(priors.drift_std, priors.wider_drift_std.get(c, 0.0))
+        return abs(camera.alpha - 1.0) > DRIFT_CONTRADICTION_SIGMAS * np.hypot(own, prior)
 
-def drift_prior_contradicted(
-    drift: float, drift_std: float, n_flashes: int, prior_std: float = DRIFT_PRIOR_STD
-) -> bool:
-    """Whether a camera's drift (``alpha - 1``) of ``drift`` ± ``drift_std``, solved from its
-    ``n_flashes`` flashes without the drift prior, contradicts that prior (0 ± ``prior_std``):
-    over :data:`DRIFT_CONTRADICTION_SIGMAS` combined standard deviations from it, on flashes
-    enough for a changing rate (:data:`MIN_EVENTS_PER_SEGMENT` x 2)."""
-    enough = n_flashes >= MIN_EVENTS_PER_SEGMENT * DRIFT_SEGMENTS[1]
-    return enough and abs(drift) > DRIFT_CONTRADICTION_SIGMAS * np.hypot(drift_std, prior_std)
+    return tuple(c for c, camera in enumerate(free.cameras) if c != reference and enough[c] and contradicted(c, camera))
 
 
 def _leading(events: Observations) -> np.ndarray:

@@ -41,8 +41,8 @@ from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
 from flashsync.model import SyncModel
-from flashsync.pipeline import synchronize
-from flashsync.solve import DRIFT_PRIOR_STD, drift_prior_contradicted
+from flashsync.pipeline import SyncReport, synchronize
+from flashsync.solve import DRIFT_PRIOR_STD
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -260,64 +260,45 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
             removed.add(term)
             current = without
             fits.append(current)
-    shaped = in_sync_shape(measurement, current)
+    synced = _synchronized(detections, reference)
+    shaped = in_sync_shape(measurement, current, synced[1].free_drift if synced else ())
     diagnosis = _diagnosis(measurement, fits + [shaped] * (shaped is not None), steps)
-    return replace(diagnosis, sync_gaps=_gaps_from_sync(detections, reference, diagnosis.sync_model))
+    return replace(diagnosis, sync_gaps=model_gaps(diagnosis.sync_model, synced[0]) if synced else [])
 
 
-def in_sync_shape(measurement: Measurement, found: Candidate) -> Candidate | None:
+def in_sync_shape(measurement: Measurement, found: Candidate, free_drift: Sequence[str] = ()) -> Candidate | None:
     """The ``found`` model's effects with every camera's time per row, exposure and drift
     (:data:`SYNC_SHAPE`) free under ``sync``'s priors (the fit's pseudo-observations: time per
-    row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm, dropped where ``sync`` drops
-    it: :func:`_contradicted_drift_priors`); None where it cannot be fitted or gives a camera a
-    time per row or an exposure below zero."""
+    row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm but on the cameras
+    ``free_drift``, whose drift ``sync`` solved without it, a warning each); None where it
+    cannot be fitted or gives a camera a time per row or an exposure below zero."""
     cameras = range(len(measurement.cameras))
-    terms = frozenset(
-        found.terms
-        | {
-            Term(effect, c)
-            for effect in SYNC_SHAPE
-            for c in cameras
-            if not (CATALOGUE[effect].scope == OTHER_CAMERAS and c == measurement.reference)
-        }
+    terms = found.terms | {
+        Term(effect, c)
+        for effect in SYNC_SHAPE
+        for c in cameras
+        if not (CATALOGUE[effect].scope == OTHER_CAMERAS and c == measurement.reference)
+    }
+    free = frozenset(c for c in cameras if measurement.cameras[c].camera in free_drift)
+    warnings = tuple(
+        f"{measurement.cameras[c].video}: sync solves its clock without the drift prior (its events put the drift "
+        f"beyond ± {DRIFT_PRIOR_STD * 1e6:.0f} ppm), and so does sync's shape"
+        for c in sorted(free)
     )
-    shaped = fit_candidate(_contradicted_drift_priors(measurement, terms), terms)
+    shaped = fit_candidate(
+        replace(measurement, free_drift=free, warnings=measurement.warnings + warnings), frozenset(terms)
+    )
     return shaped if shaped is not None and shaped.physical(set(cameras)) else None
 
 
-def _contradicted_drift_priors(measurement: Measurement, terms: frozenset[Term]) -> Measurement:
-    """``measurement`` with the cameras whose drift the edges put beyond ``sync``'s drift
-    prior (the model ``terms`` fitted without it; ``sync``'s rule,
-    :func:`~flashsync.solve.drift_prior_contradicted`) fitted without it, a warning each."""
-    unheld = fit_candidate(replace(measurement, free_drift=frozenset(range(len(measurement.cameras)))), terms)
-    if unheld is None:
-        return measurement
-    clocks = unheld.sync_model().cameras
-    edges = measurement.edges
-    flashes = np.bincount(edges.camera[~edges.trailing], minlength=len(measurement.cameras))
-    free = {}
-    for c, camera in enumerate(measurement.cameras):
-        clock = clocks[camera.camera]
-        drift_std = np.sqrt(max(clock.covariance[0, 0], 0.0))
-        if c != measurement.reference and drift_prior_contradicted(clock.alpha - 1.0, drift_std, int(flashes[c])):
-            free[c] = clock.alpha - 1.0
-    warnings = tuple(
-        f"{measurement.cameras[c].video}: its edges put its clock {drift * 1e6:+.0f} ppm from the reference's, "
-        f"beyond sync's drift prior (± {DRIFT_PRIOR_STD * 1e6:.0f} ppm); in sync's shape it is fitted without it, "
-        "as sync does"
-        for c, drift in free.items()
-    )
-    return replace(measurement, free_drift=frozenset(free), warnings=measurement.warnings + warnings)
-
-
-def _gaps_from_sync(detections: Sequence[CameraDetection], reference: str | None, model: SyncModel) -> list[Gap]:
-    """:func:`~flashsync.diagnose.agreement.model_gaps` of ``model`` against the model
-    :func:`~flashsync.pipeline.synchronize` fits to the same detections; none where it cannot."""
+def _synchronized(detections: Sequence[CameraDetection], reference: str | None) -> tuple[SyncModel, SyncReport] | None:
+    """What :func:`~flashsync.pipeline.synchronize` makes of the same detections: the model
+    the workflow's is compared with (:func:`~flashsync.diagnose.agreement.model_gaps`) and
+    the cameras it solved without the drift prior; None where it cannot."""
     try:
-        synced, _ = synchronize(detections, reference)
+        return synchronize(detections, reference)
     except FlashsyncError:
-        return []
-    return model_gaps(model, synced)
+        return None
 
 
 def _best_addition(
