@@ -127,8 +127,8 @@ class Measurement:
         Per camera, the rolling mains flicker whose period in rows times its rows
         (:func:`~flashsync.pipeline.mains_flicker`); None where it saw none to trust.
     free_drift : frozenset of int
-        Cameras whose drift is fitted without ``sync``'s drift prior: their edges contradict
-        it (:func:`~flashsync.diagnose.workflow.in_sync_shape`).
+        Cameras whose drift is fitted without ``sync``'s drift prior, as ``sync`` solved them
+        (:func:`~flashsync.diagnose.workflow.in_sync_shape`).
     """
 
     cameras: tuple[CameraDetection, ...]
