@@ -297,11 +297,13 @@ POOLED_EQUATIONS = 3.0
 DRIFT_SEGMENTS = (1, 2, 4, 8, 16)
 #: Fewest events per segment and camera for a segment to be fitted.
 MIN_EVENTS_PER_SEGMENT = 4
+#: Fewest flashes of a camera whose clock may be given a changing rate (two segments).
+MIN_FLASHES_FOR_CHANGING_RATE = MIN_EVENTS_PER_SEGMENT * DRIFT_SEGMENTS[1]
 #: BIC decrease that counts as strong evidence for a richer drift model.
 MIN_BIC_GAIN = 10.0
 #: A camera's drift prior is dropped where the events alone put its (affine) drift this many
-#: combined standard deviations from it, and it has flashes enough for a changing rate (two
-#: segments' worth): a few flashes matched by chance fit any rate.
+#: combined standard deviations from it, and it has flashes enough for a changing rate
+#: (:data:`MIN_FLASHES_FOR_CHANGING_RATE`): a few flashes matched by chance fit any rate.
 DRIFT_CONTRADICTION_SIGMAS = 5.0
 
 
@@ -347,7 +349,7 @@ def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: i
     """The camera indices whose affine drift, solved from the events without the drift prior,
     lies over :data:`DRIFT_CONTRADICTION_SIGMAS` combined standard deviations (its own and
     the prior's) from the prior's 0, on cameras of flashes enough for a changing rate
-    (:data:`MIN_EVENTS_PER_SEGMENT` x 2): a clock hundreds of ppm off the
+    (:data:`MIN_FLASHES_FOR_CHANGING_RATE`): a clock hundreds of ppm off the
     reference's (a rate that changes during the recording, stamps written at a nominal rate)
     is not one the prior of consumer oscillators describes, and held to it, the robust solve
     gives up flashes instead of the prior. ``options``: those of :func:`solve_clocks`."""
@@ -359,7 +361,7 @@ def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: i
     except NotEnoughDataError:
         return ()
     flashes = np.bincount(np.asarray(events.camera)[_leading(events)], minlength=n_cameras)
-    enough = flashes >= MIN_EVENTS_PER_SEGMENT * DRIFT_SEGMENTS[1]
+    enough = flashes >= MIN_FLASHES_FOR_CHANGING_RATE
 
     def contradicted(c: int, camera: CameraSolution) -> bool:
         own = np.sqrt(max(camera.covariance[0, 0], 0.0))

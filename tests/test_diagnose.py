@@ -5,7 +5,7 @@ own model) and the simulator's second (:func:`~flashsync.simulation.rigs.second_
 xenon and LED pulses in turn, tone curves, black levels, x264 at crf 23)."""
 
 import json
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +15,9 @@ import pytest
 from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
-from flashsync.diagnose.measure import Measurement, measure
-from flashsync.diagnose.workflow import SYNC_SHAPE, _diagnosis, in_sync_shape, residual_test
+from flashsync.diagnose.effects import DRIFT_RATE
+from flashsync.diagnose.measure import Edges, Measurement, measure
+from flashsync.diagnose.workflow import SYNC_SHAPE, _candidates, _diagnosis, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import probe_errors, probes, sync_errors
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
@@ -321,6 +322,22 @@ def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(changing_d
     assert "they disagree beyond 3 sigma" in shown.out
     gaps = {g["camera"]: g for g in json.loads((tmp_path / "d.json").read_text())["sync_gaps"]}
     assert [name for name, gap in gaps.items() if gap["rms_ms"] > 3 * gap["sigma_ms"]] == ["cam1"]
+
+
+def test_a_changing_rate_is_offered_only_to_a_camera_of_eight_flashes_or_more(changing_drift):
+    """``sync`` gives a clock a changing rate on eight flashes or more (two warp segments), and
+    so does the workflow: on the drift-rate rig it offers cam1 the drift-rate change, on the
+    edges of its first seven flashes alone it does not (random rig 15 of the second world: a
+    drift-rate change named on the four flashes its cameras share put ``diagnose -o`` 0.13 ms
+    off the truth; without it, 0.10)."""
+    _, videos = changing_drift
+    measurement = measure(detect_videos(videos))
+    edges = measurement.edges
+    first = edges.flash < 7
+    fewer = replace(measurement, edges=Edges(*(getattr(edges, f.name)[first] for f in fields(Edges))))
+    assert np.sum((edges.camera == 1) & ~edges.trailing) >= 8 and fewer.n_flashes == 7
+    assert Term(DRIFT_RATE, 1) in _candidates(measurement, frozenset())
+    assert Term(DRIFT_RATE, 1) not in _candidates(fewer, frozenset())
 
 
 def test_syncs_shape_frees_every_time_per_row_exposure_and_drift_under_syncs_priors(tmp_path):

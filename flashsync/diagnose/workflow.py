@@ -36,13 +36,13 @@ import numpy as np
 from flashsync.detect import CameraDetection
 from flashsync.diagnose.agreement import Gap, agreement, model_gaps
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
-from flashsync.diagnose.effects import CATALOGUE, DRIFT, EXPOSURE, FLICKER, OTHER_CAMERAS, ROW_TIME
+from flashsync.diagnose.effects import CATALOGUE, DRIFT, DRIFT_RATE, EXPOSURE, FLICKER, OTHER_CAMERAS, ROW_TIME
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
 from flashsync.model import SyncModel
 from flashsync.pipeline import SyncReport, synchronize
-from flashsync.solve import DRIFT_PRIOR_STD
+from flashsync.solve import DRIFT_PRIOR_STD, MIN_FLASHES_FOR_CHANGING_RATE
 
 #: Smallest drop of the BIC that adds an effect: "very strong" evidence (Kass & Raftery 1995).
 THRESHOLD = 10.0
@@ -380,7 +380,11 @@ def _weakest(measurement: Measurement, current: Candidate, newest: tuple[Term, .
 
 def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
     """Every effect on every camera it applies to, not yet in the model, catalogue order
-    (the flicker only where the camera saw rolling mains flicker)."""
+    (the flicker only where the camera saw rolling mains flicker; a drift-rate change only
+    on a camera of :data:`~flashsync.solve.MIN_FLASHES_FOR_CHANGING_RATE` measured flashes
+    or more, as ``sync`` gives a clock a changing rate)."""
+    edges = measurement.edges
+    flashes = np.bincount(edges.camera[~edges.trailing], minlength=len(measurement.cameras))
     return [
         Term(effect.name, c)
         for effect in CATALOGUE.values()
@@ -388,6 +392,7 @@ def _candidates(measurement: Measurement, terms: frozenset[Term]) -> list[Term]:
         if Term(effect.name, c) not in terms
         and not (effect.scope == OTHER_CAMERAS and c == measurement.reference)
         and not (effect.name == FLICKER and np.isnan(measurement.flicker_row_time_ms(c)[0]))
+        and not (effect.name == DRIFT_RATE and flashes[c] < MIN_FLASHES_FOR_CHANGING_RATE)
     ]
 
 
