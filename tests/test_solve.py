@@ -12,8 +12,10 @@ CAMERAS = [  # alpha, beta_ms, row_time_ms, fps, height
 ]
 
 
-def observations(rng, n_flashes=40, cameras=CAMERAS):
-    tau = np.sort(rng.uniform(1_000, 120_000, n_flashes))
+def observations(rng, n_flashes=40, cameras=CAMERAS, span_ms=(1_000.0, 120_000.0), noise_ms=0.0):
+    """Every camera's exact observations of ``n_flashes`` flashes at random instants within
+    ``span_ms`` (its rows with Gaussian noise of ``noise_ms``): (camera, flash, t_frame, q), tau."""
+    tau = np.sort(rng.uniform(*span_ms, n_flashes))
     camera, flash, t_frame, q = [], [], [], []
     for index, (alpha, beta, row_time, fps, height) in enumerate(cameras):
         frame_times = (np.arange(0, 130_000, 1000 / fps) - beta) / alpha
@@ -21,7 +23,7 @@ def observations(rng, n_flashes=40, cameras=CAMERAS):
         camera += [index] * len(seen)
         flash += list(seen)
         t_frame += list(frame_times[frame])
-        q += list(rows)
+        q += list(rows + rng.normal(0.0, noise_ms / row_time, len(rows)) if noise_ms else rows)
     return [np.asarray(v) for v in (camera, flash, t_frame, q)], tau
 
 
@@ -286,17 +288,8 @@ def test_a_clock_hundreds_of_ppm_off_is_solved_without_the_drift_prior():
         (1.0 + 600e-6, -3_234.5, 0.0310, 30.0, 1020),
         (1.0 - 30e-6, 2_101.25, 0.0185, 50.0, 1000),
     ]
-    rng = np.random.default_rng(0)
-    tau = np.sort(rng.uniform(500.0, 8_000.0, 12))
-    camera, flash, t_frame, q = [], [], [], []
-    for index, (alpha, beta, row_time, fps, height) in enumerate(cameras):
-        frame_times = (np.arange(-5_000.0, 13_000.0, 1000 / fps) - beta) / alpha
-        seen, frame, rows = observe(tau, alpha, beta, row_time, frame_times, height)
-        camera += [index] * len(seen)
-        flash += list(seen)
-        t_frame += list(frame_times[frame])
-        q += list(rows + rng.normal(0.0, 0.02 / row_time, len(rows)))
-    events = Observations(*map(np.asarray, (camera, flash, t_frame, q)))
+    observed, _ = observations(np.random.default_rng(0), 12, cameras, (500.0, 8_000.0), noise_ms=0.02)
+    events = Observations(*observed)
     held = solve_clocks(events, n_cameras=3, priors=Priors({}))
     solved = solve_with_drift_model(events, n_cameras=3, priors=Priors({}))
     assert solved.free_drift == (1,)
