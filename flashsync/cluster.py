@@ -69,8 +69,10 @@ def connect(scheduler: str) -> Iterator:
         ) from None
     if scheduler.startswith("local:"):
         n_workers = int(scheduler.partition(":")[2])
+        # its scheduler serves HTTP whatever the dashboard setting (distributed 2026.8), on 8787
+        # unless told otherwise, and warns on stderr where that port is taken: a free port instead
         with (
-            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+            LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster,
             Client(cluster) as client,
         ):
             yield client
