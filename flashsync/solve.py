@@ -354,21 +354,23 @@ def _drift_prior_contradicted(events: Observations, n_cameras: int, reference: i
     is not one the prior of consumer oscillators describes, and held to it, the robust solve
     gives up flashes instead of the prior. ``options``: those of :func:`solve_clocks`."""
     priors = options.get("priors")
-    if priors is None or priors.drift_std is None:
+    enough = np.bincount(np.asarray(events.camera)[_leading(events)], minlength=n_cameras) >= (
+        MIN_FLASHES_FOR_CHANGING_RATE
+    )
+    enough[reference] = False
+    if priors is None or priors.drift_std is None or not enough.any():
         return ()
     try:
         free = solve_clocks(events, n_cameras, reference, **{**options, "priors": replace(priors, drift_std=None)})
     except NotEnoughDataError:
         return ()
-    flashes = np.bincount(np.asarray(events.camera)[_leading(events)], minlength=n_cameras)
-    enough = flashes >= MIN_FLASHES_FOR_CHANGING_RATE
 
     def contradicted(c: int, camera: CameraSolution) -> bool:
         own = np.sqrt(max(camera.covariance[0, 0], 0.0))
         prior = max(priors.drift_std, priors.wider_drift_std.get(c, 0.0))
         return abs(camera.alpha - 1.0) > DRIFT_CONTRADICTION_SIGMAS * np.hypot(own, prior)
 
-    return tuple(c for c, camera in enumerate(free.cameras) if c != reference and enough[c] and contradicted(c, camera))
+    return tuple(c for c, camera in enumerate(free.cameras) if enough[c] and contradicted(c, camera))
 
 
 def _leading(events: Observations) -> np.ndarray:
