@@ -118,7 +118,7 @@ class Measurement:
         (shorter by the hidden rows); NaN without three bands of a kind. Bands clipped at
         white are left out (their length varies with the clip: the saturation effect's
         evidence, not noise). Errors common to both edges of a band do not show in its
-        length, so this is a lower bound.
+        length, so this is a lower bound (per camera, not quite: :attr:`camera_noise_ms`).
     camera_noise_ms : float array of shape (n_cameras,)
         The same per camera (its own unclipped bands), shrunk towards :attr:`noise_ms` as
         ``sync``'s solve shrinks its groups' scales (the pooled noise counts as
