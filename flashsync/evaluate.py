@@ -11,9 +11,10 @@ covariance); pass another one to try a new definition of sigma:
 
 - per camera, the error of each probe against ``sigma`` of the camera and of the reference
   camera at the same true instant, ``sqrt(sigma_c**2 + sigma_ref**2)``: a camera's sigma
-  is its uncertainty against the flashes' instants, the reference's too (its edges locate
-  the flashes no better than any camera's), and the error is measured against the
-  reference's clock. The reference camera's own calibration is not defined (NaN);
+  is its uncertainty on the reference's clock (the reference's edges' share in it: see
+  :mod:`flashsync.jackknife`), the reference's that of its rows below its first, and the
+  error is measured against the reference's clock. The reference camera's own calibration
+  is not defined (NaN);
 - pairwise, for every camera including the reference: each probe of camera ``c`` is
   located in every other camera ``d`` at the same true instant (frame and row, from the
   truth; skipped where ``d`` is not recording then), and the error of the difference

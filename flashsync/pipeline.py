@@ -37,6 +37,7 @@ from flashsync.events import Band, Bands, Edge, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
+from flashsync.jackknife import flash_scatter
 from flashsync.likelihood import (
     SCORE_MIN_SIGMA_MS,
     HeldClock,
@@ -57,7 +58,7 @@ from flashsync.match import (
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
 from flashsync.segments import SEGMENT_MS
-from flashsync.solve import DRIFT_PRIOR_STD, CameraSolution, Observations, Priors, Solution, solve_with_drift_model
+from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
 #: Weak prior on T_row where no datasheet value is given: the nominal one
@@ -252,6 +253,7 @@ def synchronize(
         readout_warnings += more_warnings
     for name, spread in spreads.items():
         frame_std[name] = np.hypot(frame_std[name], spread)
+    best = best.with_flash_scatter()
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -817,6 +819,8 @@ class _Attempt:
     matches: Matches
     observations: Observations
     solution: Solution
+    priors: Priors
+    reference: str
 
     @cached_property
     def implausible(self) -> list[str]:
@@ -864,8 +868,21 @@ class _Attempt:
         readings are compared by (:func:`_best_readout`, :func:`_readout_doubts`)."""
         return self.score - UPSIDE_DOWN_PRIOR * sum(d.flipped for d in self.cameras.values())
 
+    def with_flash_scatter(self) -> _Attempt:
+        """This attempt with the scatter its flashes make added to every camera's
+        covariance (:func:`~flashsync.jackknife.flash_scatter`): the errors a flash brings to
+        all its edges, which the residuals do not show, in the cameras' sigma."""
+        scatter = flash_scatter(
+            self.observations, len(self.connected), self.connected.index(self.reference), self.solution, self.priors
+        )
+        cameras = [
+            replace(camera, covariance=camera.covariance + extra)
+            for camera, extra in zip(self.solution.cameras, scatter)
+        ]
+        return replace(self, solution=replace(self.solution, cameras=cameras))
+
     def model(self, reference: str) -> SyncModel:
-        clocks, counts = {}, _inlier_counts(self)
+        clocks = {}
         for index, name in enumerate(self.connected):
             d, s = self.cameras[name], self.solution.cameras[index]
             clocks[name] = CameraClock(
@@ -877,7 +894,7 @@ class _Attempt:
                 s.beta_ms,
                 s.row_time_ms,
                 d.flipped,
-                _with_edge_bias(s, d.height, counts.get(name, 0)),
+                s.covariance,
                 float(s.exposure_ms) if s.exposure_ms > 0 else None,
                 str(d.video),
                 s.knots_ms,
@@ -941,9 +958,11 @@ def _attempt(
         for index, name in enumerate(connected)
     }
 
+    def priors(given: dict[str, float]) -> Priors:
+        return Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
+
     def solve(given: dict[str, float]) -> Solution:
-        priors = Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
-        return solve_with_drift_model(observations, len(connected), connected.index(reference), priors=priors)
+        return solve_with_drift_model(observations, len(connected), connected.index(reference), priors=priors(given))
 
     given = {name: value for name, value in (row_times or {}).items() if name in connected}
     solution = solve(given)
@@ -954,9 +973,12 @@ def _attempt(
                 f"{cameras[name].video}: the datasheet time per row {given[name]:g} ms contradicts the events, "
                 f"which give {value:.5f} ± {std:.5f} ms; the events' value is used"
             )
+        given = {name: value for name, value in given.items() if name not in contradicted}
         if contradicted:
-            solution = solve({name: value for name, value in given.items() if name not in contradicted})
-    return _Attempt(cameras, connected, matching.alignments, warnings, matches, observations, solution)
+            solution = solve(given)
+    return _Attempt(
+        cameras, connected, matching.alignments, warnings, matches, observations, solution, priors(given), reference
+    )
 
 
 def another_reference(matching: Matching, usable: list[str], reference: str) -> str:
@@ -1047,48 +1069,6 @@ def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]
             nominal = nominal_row_time_ms(camera)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
     return priors
-
-
-#: A camera's sync events share an offset the solve cannot see (it moves the shift, not the
-#: residuals): the half-rise of a flash's band is not the same instant of the flash in every
-#: camera where the pulse is not the ramp the detector fits (a rectangle, a xenon tail, a
-#: slow rise) or the exposure is shorter than the pulse. Over the simulator's random rigs
-#: it is about this many times the camera's own edge noise (README, "Calibrated sigma"),
-#: for a camera of :data:`BIAS_EVENTS` sync events.
-EDGE_BIAS_SIGMAS = 1.5
-
-
-def _with_edge_bias(camera: CameraSolution, height: int, n_events: int) -> np.ndarray:
-    """The camera's covariance with the variance of its edges' shared offset,
-    (:data:`EDGE_BIAS_SIGMAS` x its edge noise)**2, added to its shift's: its times are then
-    uncertain by that much against the flashes' instants (the reference camera's too); and
-    the variance of its events' row-dependent bias, (:data:`ROW_BIAS_MS` / its height)**2,
-    added to its time per row's. Both for a camera of :data:`BIAS_EVENTS` inlier sync
-    events, and in proportion to one over its count: the biases differ from flash to flash
-    and average out over many."""
-    covariance = camera.covariance.copy()
-    share = BIAS_EVENTS / max(n_events, 1)
-    if np.isfinite(camera.edge_sigma_ms):
-        covariance[1, 1] += share * (EDGE_BIAS_SIGMAS * camera.edge_sigma_ms) ** 2
-    covariance[2, 2] += share * (ROW_BIAS_MS / height) ** 2
-    return covariance
-
-
-#: A camera's sync events share a bias that grows with the row (an edge's offset differs
-#: between the bands near the top and the bottom of a frame: split bands, codec ramps, LED
-#: pulses longer than the exposure), up to about this much (ms) across its frame for a
-#: camera of :data:`BIAS_EVENTS` sync events: its time per row is off by this over its
-#: readout, relatively twice as much at 50 fps as at 25. Chosen on the 24 kept random rigs
-#: (README, "Time per row's sigma"): error/sigma of the time per row RMS 0.94 and 4 of 168
-#: cameras over 3 (with 0.3 % of the time per row instead, as before: 1.56 and 12, 9 of
-#: them 50-60 fps cameras 1.4-4.3 % off).
-ROW_BIAS_MS = 0.15
-#: The inlier sync events of a camera whose biases are :data:`EDGE_BIAS_SIGMAS` and
-#: :data:`ROW_BIAS_MS`; a camera of n events has them times sqrt(BIAS_EVENTS / n). With
-#: the same terms for every camera, error/sigma on the 24 kept random rigs fell with the
-#: events (time per row RMS 1.42 for cameras of 5 events or fewer, 0.63 for 12-15; sync
-#: 0.84 and 0.53); with 7, 1.19 and 0.76, 0.75 and 0.63 (README, "Time per row's sigma").
-BIAS_EVENTS = 7
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:

@@ -68,6 +68,29 @@ class Observations:
     trailing: np.ndarray | None = None
     leading_of: np.ndarray | None = None
 
+    def take(self, keep: np.ndarray) -> Observations:
+        """The observations a boolean mask (n,) keeps, a trailing edge's ``leading_of``
+        renumbered (-1 where its leading edge is not kept)."""
+        keep = np.asarray(keep, dtype=bool)
+
+        def kept(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else np.asarray(values)[keep]
+
+        leading_of = None
+        if self.leading_of is not None:
+            index = np.full(len(keep) + 1, -1)  # index[-1] = -1: no leading edge stays none
+            index[np.flatnonzero(keep)] = np.arange(np.count_nonzero(keep))
+            leading_of = index[np.asarray(self.leading_of)[keep]]
+        return Observations(
+            kept(self.camera),
+            kept(self.flash),
+            kept(self.t_frame_ms),
+            kept(self.q),
+            kept(self.sigma_factor),
+            kept(self.trailing),
+            leading_of,
+        )
+
 
 #: Prior std of a camera's clock rate about the reference's (``alpha - 1``): oscillators of
 #: consumer cameras keep within some tens of ppm.

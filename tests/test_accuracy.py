@@ -238,7 +238,9 @@ def test_a_flash_in_a_cameras_vertical_blanking_ties_it_by_its_trailing_edge(twi
     """The five flashes that fell in ``late``'s blanking are matched by the trailing edges of
     its bands (one exposure after the flash) and tie the twins to a few hundredths of a ms.
     Leading edges alone matched 4 of the 10 flashes, and the twins were 1.1 and 1.9 ms RMS
-    off with a time per row 5 % off."""
+    off with a time per row 5 % off. At one frame rate the times per row rest on one flash
+    (left out, both move 5.6 %): the flashes' scatter puts that in sigma, and a warning
+    per camera says the flashes do not pin its time per row down."""
     scenario, in_blanking, truth, detections = twins
     late = detections[1].events
     lone = late.has_flag(Flag.LEADING_HIDDEN) & (late.edge == Edge.TRAILING)
@@ -249,7 +251,8 @@ def test_a_flash_in_a_cameras_vertical_blanking_ties_it_by_its_trailing_edge(twi
     assert model.events["flash"].nunique() == len(scenario.flashes) and matched["inlier"].all()
     accuracy = camera_accuracy(model, truth).set_index("camera")
     assert accuracy.rms_ms.max() < 0.1 and accuracy.reference_rms_ms["late"] < 0.1, accuracy
-    assert accuracy.pair_z_rms.max() < 2.0 and not report.warnings, (accuracy, report.warnings)
+    assert accuracy.pair_z_rms.max() < 2.0, accuracy
+    assert [w.split(": ")[1][:16] for w in report.warnings] == ["its time per row"] * 2, report.warnings
 
 
 def test_a_camera_tied_by_trailing_edges_alone_is_left_out(twins):

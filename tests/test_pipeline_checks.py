@@ -101,22 +101,6 @@ def test_a_flip_needs_the_upside_down_prior_in_its_lead_on_the_reference_given(l
         assert spreads["cam2"] == pytest.approx([1.0, 1.0, 1.0]) and "cam2.mp4: read bottom-up" in warnings[0]
 
 
-def test_the_biases_sigma_shares_average_out_over_a_cameras_events():
-    """The offsets and row-dependent biases the solve cannot see differ from flash to flash:
-    their variances in a camera's sigma go as one over its inlier sync events, at their
-    chosen size for BIAS_EVENTS (on the 24 kept random rigs error/sigma of the time per row
-    was 1.42 RMS for cameras of 5 events or fewer and 0.63 for 12-15 with one size for all)."""
-    from flashsync.pipeline import BIAS_EVENTS, EDGE_BIAS_SIGMAS, ROW_BIAS_MS, _with_edge_bias
-    from flashsync.solve import CameraSolution
-
-    solved = CameraSolution(1.0, 0.0, 0.1, np.zeros((3, 3)), np.zeros(0), np.zeros(0), edge_sigma_ms=0.02)
-    for events in (3, BIAS_EVENTS, 14):
-        covariance = _with_edge_bias(solved, 360, events)
-        share = BIAS_EVENTS / events
-        assert covariance[1, 1] == pytest.approx(share * (EDGE_BIAS_SIGMAS * 0.02) ** 2)
-        assert covariance[2, 2] == pytest.approx(share * (ROW_BIAS_MS / 360) ** 2)
-
-
 @pytest.mark.parametrize("flipped", [False, True])
 def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it(flipped):
     """180 rows, a 20-row exposure: a band whose leading edge is hidden is matched by its

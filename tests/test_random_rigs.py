@@ -13,6 +13,7 @@ import pytest
 
 from flashsync import detect_videos, synchronize
 from flashsync.evaluate import camera_accuracy
+from flashsync.model import readout_rows
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import random_rig
 
@@ -86,11 +87,17 @@ def test_sigma_is_calibrated(solved):
     assert 0.3 <= np.sqrt(np.mean(tables["pair_z_rms"] ** 2)), tables
 
 
-def test_the_reference_camera_has_a_sigma(solved):
-    """The reference's sigma is its uncertainty against the flashes (its edges' own), not 0."""
+def test_the_reference_cameras_sigma_is_its_rows(solved):
+    """The global clock is the reference's: at its first row the reference's times are that
+    clock, uncertain by its frame times' own std alone; further down they carry its time per
+    row's uncertainty. (Every other camera's sigma holds the reference's edges' share: the
+    flashes' scatter, :mod:`flashsync.jackknife`.)"""
     for _, model, _, _ in solved:
         reference = model.camera(model.reference)
-        assert float(reference.t_global_std_ms(np.array([0]), np.array([0.0]))[0]) > 0.005
+        rows = readout_rows(np.array([0.0, reference.height - 1.0]), reference.height, reference.flipped)
+        std = reference.t_global_std_ms(np.array([0, 0]), rows)
+        assert std[0] == pytest.approx(reference.alpha * reference.frame_std_ms[0], abs=1e-9)
+        assert std[1] > std[0] + 0.001
 
 
 @pytest.fixture(scope="module")

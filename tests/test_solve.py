@@ -369,3 +369,20 @@ def test_the_flash_eliminated_leverages_and_covariance_are_the_dense_normal_equa
     pseudo = np.linalg.pinv(dense.T @ dense)
     expected = np.einsum("ij,jk,ik->i", dense, pseudo, dense)[: system.n_equations]
     np.testing.assert_allclose(system._leverages(weights), expected, atol=1e-9)
+
+
+def test_observations_taken_keep_their_bands_pairs():
+    """A subset of observations renumbers each kept trailing edge's leading edge; one whose
+    leading edge is left out has none."""
+    events = Observations(
+        np.array([0, 0, 1, 1, 1]),
+        np.array([0, 0, 0, 1, 1]),
+        np.arange(5.0),
+        np.arange(5.0),
+        None,
+        np.array([False, True, False, False, True]),
+        np.array([-1, 0, -1, -1, 3]),
+    )
+    kept = events.take(np.array([False, False, True, True, True]))
+    assert kept.leading_of.tolist() == [-1, -1, 1] and kept.flash.tolist() == [0, 1, 1]
+    assert events.take(np.array([True, True, True, False, True])).leading_of.tolist() == [-1, 0, -1, -1]
