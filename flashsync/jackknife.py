@@ -23,7 +23,7 @@ from flashsync.solve import CameraSolution, Observations, Priors, Solution, solv
 
 #: Flashes are left out in this many groups at most (the k-th of the sorted flash indices
 #: in group k mod GROUPS), one solve each; fewer flashes are left out one at a time.
-GROUPS = 20
+GROUPS = 10
 
 
 def flash_scatter(

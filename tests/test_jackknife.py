@@ -53,9 +53,9 @@ def test_a_flashs_error_in_all_of_a_cameras_edges_is_in_its_sigma(n_flashes):
     """An offset that a flash gives all of one camera's edges (0.05 ms, ten times the edges'
     noise, different for every flash) moves that camera's clock and barely shows in the
     residuals, which the solve's covariance comes from: over 30 draws its error is a median
-    2.3-2.7 of those sigmas. With the flashes' scatter (each flash left out in turn) it is
-    0.6-0.7; with twelve flashes RMS 0.96. Six solves are a rough estimate of a variance:
-    with six flashes 3 of the 30 draws stay over two sigmas (RMS 1.7)."""
+    2.3-2.7 of those sigmas. With the flashes' scatter (each flash left out in turn; twelve
+    in ten groups) it is 0.6-0.7, with twelve flashes RMS 0.94. Six solves are a rough
+    estimate of a variance: with six flashes 3 of the 30 draws stay over two sigmas (RMS 1.7)."""
     rng = np.random.default_rng(7)
     draws = [biased_rig(rng, n_flashes, 0.05) for _ in range(30)]
     blind = np.array([camera_2_z(o, truth, False) for o, truth in draws])
