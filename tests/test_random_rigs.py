@@ -68,13 +68,10 @@ def test_sigma_is_calibrated(solved):
     either: the RMS of error / sigma over all cameras' probes is 0.3 at least. Per camera
     it may be less: a camera's error is one draw of its few parameters' errors (shift, time
     per row), and a calibrated sigma gives an RMS under 0.5 to a fifth of the cameras
-    (chi-square of two degrees of freedom over two under 0.25: 22 %). And sigma has floors
-    for the biases the solve cannot see (`pipeline.EDGE_BIAS_SIGMAS`, `pipeline.ROW_BIAS_MS`,
-    set on the 24 random rigs of bench_rigs, where the pooled RMS is 0.66 and pairwise
-    0.63): with split bands fitted whole, rig-20 and rig-22 are 0.004-0.016 ms off against
-    a sigma of 0.07-0.14 ms (error / sigma 0.10-0.15), and the pooled RMS of these three
-    rigs is 0.42, pairwise 0.36 (the bound was 0.4 while rig-20 was read upside down,
-    warned, at 0.5). Rig-20 included: a
+    (chi-square of two degrees of freedom over two under 0.25: 22 %). Sigma holds the
+    errors a flash brings to all of a camera's edges, which the solve's residuals do not
+    show, from the solve with each flash left out (:mod:`flashsync.jackknife`; before, two
+    bias terms set by hand). Rig-20 included: a
     59.94 fps reference and a 29.97 fps camera with six LED flashes, whose one split band
     used to tie the reference's time per row 1.6 % off at a claimed 0.02 % (error / sigma 2.5)."""
     tables = pd.concat([table.assign(rig=scenario.name) for scenario, _, _, table in solved])
