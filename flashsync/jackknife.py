@@ -14,8 +14,6 @@ reference's edges' share too (the reference's shift is 0 by definition).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from flashsync.errors import NotEnoughDataError
@@ -38,10 +36,7 @@ def flash_scatter(
     is skipped; with fewer than two solves every matrix is zero.
     """
     knots = {c: camera.knots_ms for c, camera in enumerate(solution.cameras) if len(camera.knots_ms)}
-    if solution.free_drift:
-        priors = replace(
-            priors, wider_drift_std={**priors.wider_drift_std, **dict.fromkeys(solution.free_drift, np.inf)}
-        )
+    priors = priors.without_drift_prior(solution.free_drift)
     flashes = np.unique(events.flash)
     groups = min(len(flashes), GROUPS)
     solved = []

@@ -108,6 +108,10 @@ class Priors:
     drift_std: float | None = DRIFT_PRIOR_STD
     wider_drift_std: dict[int, float] = field(default_factory=dict)
 
+    def without_drift_prior(self, cameras: tuple[int, ...]) -> Priors:
+        """These priors with no drift prior on the given camera indices."""
+        return replace(self, wider_drift_std={**self.wider_drift_std, **dict.fromkeys(cameras, np.inf)})
+
 
 @dataclass(frozen=True)
 class CameraSolution:
@@ -342,9 +346,7 @@ def solve_with_drift_model(events: Observations, n_cameras: int, reference: int 
     """
     free_drift = _drift_prior_contradicted(events, n_cameras, reference, options)
     if free_drift:
-        priors = options["priors"]
-        wider = {**priors.wider_drift_std, **dict.fromkeys(free_drift, np.inf)}
-        options = {**options, "priors": replace(priors, wider_drift_std=wider)}
+        options = {**options, "priors": options["priors"].without_drift_prior(free_drift)}
     leading = _leading(events)
     camera = np.asarray(events.camera)[leading]
     t_frame = np.asarray(events.t_frame_ms, dtype=np.float64)[leading]
