@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -33,6 +34,14 @@ from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
 
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 FOLDER = Path(tempfile.mkdtemp(prefix="flashsync-properties-"))
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _remove_folder():
+    """The examples' files go when the module's tests are done (hypothesis cannot use tmp_path)."""
+    yield
+    shutil.rmtree(FOLDER, ignore_errors=True)
+
 
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
 positive = st.floats(1e-3, 1e3, allow_nan=False, allow_infinity=False)
