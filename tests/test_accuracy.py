@@ -182,13 +182,14 @@ def test_upside_down_camera_is_found(solved):
 
 
 def test_predicted_uncertainty_is_honest(solved):
-    from flashsync.report import sync_uncertainty_ms
-
+    """The calibration of issue #11 on every camera, the reference included: error/sigma
+    RMS at most 2 and 90 % of the probes within 2 sigma, against the reference and
+    against every other camera (measured 2026-11-27: RMS 0.29-1.07 against the reference)."""
     _, _, model, _, truth = solved
-    errors = sync_errors(model, truth).set_index("camera")
-    for name, camera in model.cameras.items():
-        if name != model.reference:
-            assert errors.loc[name, "rms_ms"] <= 4 * sync_uncertainty_ms(camera) + 0.01, name
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    others = accuracy[~accuracy["reference"]]
+    assert (others["z_rms"] <= 2).all() and (others["within_2sigma"] >= 0.9).all(), others
+    assert (accuracy["pair_z_rms"] <= 2).all() and (accuracy["pair_within_2sigma"] >= 0.9).all(), accuracy
 
 
 def test_exposure_and_stamp_grid_are_found(solved):
