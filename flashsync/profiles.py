@@ -95,9 +95,12 @@ def row_profile(luma: np.ndarray, black: float = 0.0, white: float = 255.0, bloc
 
 
 def luma_range(frame: av.VideoFrame) -> tuple[float, float]:
-    """Luma of black and of white, DN: 0 and 255 for full-range video (JPEG range,
-    ``yuvj*``, gray), else 16 and 235."""
-    full = frame.color_range == 2 or frame.format.name.startswith(("yuvj", "gray"))
+    """Luma of black and of white in :func:`luma_plane`'s values, DN: 0 and 255 for
+    full-range video (JPEG range, ``yuvj*``, gray) and for every frame converted to gray
+    (FFmpeg's gray is full range: it stretches a 10-bit or 4:2:2 video's limited range, an
+    RGB one's is full), else 16 and 235."""
+    name = frame.format.name
+    full = frame.color_range == 2 or name.startswith(("yuvj", "gray")) or name not in _PLANAR_LUMA
     return (0.0, 255.0) if full else (16.0, 235.0)
 
 
@@ -180,26 +183,28 @@ RECOPY = "copy the whole file again, or remux the part that is there (ffmpeg -i 
 
 
 def cut_short(container: av.container.InputContainer, decoded: int, last_times_ms: list[float]) -> str | None:
-    """What shows a video is cut short, or None: fewer frames decoded than its index lists
-    (an MP4 whose index is at the front), or frames that end well before the duration its
-    header states (a Matroska file). ``last_times_ms``: the last one or two frame times."""
+    """What shows a video is cut short, or None: frames that end well before the duration its
+    header states (a Matroska file), or fewer frames decoded than its index lists (an MP4
+    whose index is at the front) where they also end more than a frame and a half before
+    that duration or it states none: an AVI lists a dropped frame as an empty entry of its
+    index, and one with drops ends where its header says. ``last_times_ms``: the last one
+    or two frame times."""
     stream = container.streams.video[0]
-    listed = stream.frames or 0
-    if listed and decoded < listed - max(2, 0.01 * listed):
-        return f"cut short: {decoded} frames decoded of the {listed} its index lists"
     if stream.duration and stream.time_base:
         duration_ms = float(stream.duration * stream.time_base) * 1000.0
     elif container.duration:
         duration_ms = container.duration / 1000.0
     else:
-        return None
-    if not last_times_ms:
-        return None  # nothing decoded: not a matter of length
+        duration_ms = None
     # the header's end is at least its duration (a Matroska duration runs from time 0, an
     # MP4 stream's from its first frame)
     step = last_times_ms[-1] - last_times_ms[0] if len(last_times_ms) > 1 else 0.0
-    end = last_times_ms[-1] + step
-    if duration_ms - end > max(3.0 * step, 0.02 * duration_ms):
+    short_ms = duration_ms - (last_times_ms[-1] + step) if duration_ms is not None and last_times_ms else None
+    listed = stream.frames or 0
+    if listed and decoded < listed - max(2, 0.01 * listed) and (short_ms is None or short_ms > 1.5 * step):
+        return f"cut short: {decoded} frames decoded of the {listed} its index lists"
+    if short_ms is not None and short_ms > max(3.0 * step, 0.02 * duration_ms):
+        end = duration_ms - short_ms
         return (
             f"cut short: its frames end at {end / 1000.0:.2f} s of the {duration_ms / 1000.0:.2f} s its header states"
         )
