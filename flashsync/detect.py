@@ -638,6 +638,10 @@ class CameraDetection:
         each reading fitted them (:attr:`EventDetector.exposure_rows`); None where fewer
         than three were fitted or not read that way (:attr:`exposure_rows`: the reading
         in use).
+    display_rotation_deg : int
+        Degrees counterclockwise that the video's display matrix turns its stored frames
+        (:attr:`~flashsync.profiles.VideoInfo.display_rotation_deg`); rows here are always
+        the stored frame's.
     """
 
     camera: str
@@ -653,6 +657,7 @@ class CameraDetection:
     n_degenerate: int = 0
     top_down_exposure_rows: float | None = None
     bottom_up_exposure_rows: float | None = None
+    display_rotation_deg: int = 0
 
     @property
     def events(self) -> Events:
@@ -772,6 +777,7 @@ class VideoDetection:
             n_degenerate=self._detectors[0].n_degenerate,
             top_down_exposure_rows=exposures.get(False),
             bottom_up_exposure_rows=exposures.get(True),
+            display_rotation_deg=self.info.display_rotation_deg,
         )
 
     def _detect(self, frames: list[tuple[float, np.ndarray]]) -> None:

@@ -260,6 +260,7 @@ def synchronize(
         + clock_warnings
         + readout_warnings
         + _few_flashes(best, reference)
+        + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
@@ -608,6 +609,19 @@ def _few_flashes(best: _Attempt, reference: str) -> list[str]:
                 "record more flashes seen by it"
             )
     return warnings
+
+
+def _turned_for_display(cameras: dict[str, CameraDetection]) -> list[str]:
+    """A warning per video whose display matrix turns its stored frames: the model's rows,
+    and a detection's ``y``, are the stored frame's, not the picture's a player shows."""
+    return [
+        f"{d.video}: its frames are stored turned ({d.display_rotation_deg} degrees counterclockwise for display, "
+        "as a phone held upright records); rows here are the stored frame's, so give detections in its pixels "
+        "(OpenCV turns frames upright unless CAP_PROP_ORIENTATION_AUTO is 0), or their times are off by up to "
+        "a frame's readout"
+        for d in cameras.values()
+        if d.display_rotation_deg
+    ]
 
 
 #: A reference whose frame clock's rate is uncertain by more than this over half its

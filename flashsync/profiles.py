@@ -32,6 +32,10 @@ class VideoInfo:
     width: int
     height: int
     n_frames_hint: int
+    #: Degrees counterclockwise (-90, 0, 90 or 180, as FFmpeg states it) that the video's
+    #: display matrix turns its stored frames for showing: a phone held upright stores them
+    #: on their side.
+    display_rotation_deg: int = 0
 
     @property
     def camera(self) -> str:
@@ -44,7 +48,20 @@ def video_info(container: av.container.InputContainer, path: Path) -> VideoInfo:
     if not stream.width or not stream.height:
         raise InputError(f"{path}: video stream has no frame size; is the file complete?")
     hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
-    return VideoInfo(path, stream.width, stream.height, hint)
+    return VideoInfo(path, stream.width, stream.height, hint, display_rotation_deg(path))
+
+
+def display_rotation_deg(path: Path) -> int:
+    """The display matrix's turn of the video's first frame, degrees counterclockwise
+    rounded to a quarter turn (-90, 0, 90 or 180); 0 where it has none or the first frame
+    does not decode (the decoding proper reports that)."""
+    try:
+        with av.open(str(path)) as container:
+            for frame in container.decode(video=0):
+                return (round(frame.rotation / 90.0) + 1) % 4 * 90 - 90
+    except av.FFmpegError:
+        pass
+    return 0
 
 
 def luma_plane(frame: av.VideoFrame) -> np.ndarray:

@@ -2,7 +2,8 @@
 reference camera by re-encoding its decoded frames at their own times: 10-bit HEVC (phones,
 action cameras), 10-bit 4:2:2 ProRes (cinema cameras), RGB and VP9 are synchronised as
 closely as the original; an AVI that lists its dropped frames as empty index entries (IP
-cameras, capture cards) is read whole, not called cut short."""
+cameras, capture cards) is read whole, not called cut short; a video stored turned for
+display (a phone held upright) is named."""
 
 from fractions import Fraction
 from pathlib import Path
@@ -30,12 +31,17 @@ FORMATS = {
 }
 
 
-def reencode(source: Path, target: Path, codec: str, pixel_format: str, options: dict, drop=frozenset()) -> int:
+def reencode(
+    source: Path, target: Path, codec: str, pixel_format: str, options: dict, drop=frozenset(), turn_deg: int = 0
+) -> int:
     """``source``'s frames into ``target`` at 25 fps, frame k at k / 25 s, but those in
-    ``drop``; returns the frames written."""
+    ``drop``, with a display matrix turning them ``turn_deg`` counterclockwise; returns the
+    frames written."""
     written = 0
     with av.open(str(source)) as video, av.open(str(target), "w") as out:
         stream = out.add_stream(codec, rate=25, options=options)
+        if turn_deg:
+            stream.set_display_rotation(turn_deg)
         stream.width, stream.height, stream.pix_fmt = (
             video.streams.video[0].width,
             video.streams.video[0].height,
@@ -87,3 +93,15 @@ def test_an_avi_listing_its_dropped_frames_is_read_whole(synced_scenario, tmp_pa
     assert main(["detect", str(tmp_path / "cut.avi"), "-o", str(tmp_path / "cut.csv")]) == 1
     assert "cut.avi: cut short" in capsys.readouterr().err
     assert not (tmp_path / "cut.csv").exists()
+
+
+def test_a_video_stored_turned_for_display_is_named(synced_scenario, others, tmp_path):
+    """A phone held upright stores its frames on their side and a display matrix to turn
+    them: `sync` warns that rows (a detection's ``y``) are the stored frame's, for that
+    video only."""
+    reencode(synced_scenario / "r.mp4", tmp_path / "r.mp4", "libx264", "yuv420p", {"crf": "18"}, turn_deg=-90)
+    _, report = synchronize(detect_videos([tmp_path / "r.mp4"], estimate_readout=True) + others)
+    turned = [warning for warning in report.warnings if "stored turned" in warning]
+    assert len(turned) == 1 and turned[0].startswith(f"{tmp_path / 'r.mp4'}: ") and "-90 degrees" in turned[0], turned
+    _, plain = synchronize(detect_videos([synced_scenario / "r.mp4"], estimate_readout=True) + others)
+    assert not [warning for warning in plain.warnings if "stored turned" in warning]
