@@ -150,11 +150,11 @@ def _detect_segment(state: VideoDetection | tuple, frames: list, last: bool) -> 
     segment's is ``VideoDetection``'s arguments."""
     if not isinstance(state, VideoDetection):
         state = VideoDetection(*state)
-    for t_ms, profile, picture in frames:
-        state.push(t_ms, profile, picture)
+    for frame in frames:
+        state.push(*frame)
     if not last:
         return state
-    check_complete(state.info.path, state.n_frames, [t_ms for t_ms, _, _ in frames[-2:]])
+    check_complete(state.info.path, state.n_frames, [frame[0] for frame in frames[-2:]])
     return state.finish()
 
 

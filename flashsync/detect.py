@@ -640,7 +640,7 @@ class CameraDetection:
         in use).
     display_rotation_deg : int
         Degrees counterclockwise that the video's display matrix turns its stored frames
-        (:attr:`~flashsync.profiles.VideoInfo.display_rotation_deg`); rows here are always
+        for showing (:func:`~flashsync.profiles.display_rotation_deg`); rows here are always
         the stored frame's.
     """
 
@@ -714,8 +714,8 @@ def detect_video(
     info, profiles = read_profiles(path)
     update = progress(info.camera, info.n_frames_hint) if progress else None
     detection = VideoDetection(info, flipped, settings)
-    for t_ms, profile, picture in profiles:
-        detection.push(t_ms, profile, picture)
+    for frame in profiles:
+        detection.push(*frame)
         if update is not None:
             update(1)
     return detection.finish()
@@ -744,15 +744,19 @@ class VideoDetection:
         ]
         self._remove_flicker = FlickerRemover(info.height)
         self._times: list[float] = []
+        self._rotation_deg: int | None = None
 
     @property
     def n_frames(self) -> int:
         """Frames pushed so far."""
         return self._remove_flicker.n_seen
 
-    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P") -> None:
-        """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`)
-        and picture type (``"I"``, ``"P"`` or ``"B"``, :func:`~flashsync.profiles.read_profiles`)."""
+    def push(self, t_ms: float, profile: np.ndarray, picture: str = "P", rotation_deg: int = 0) -> None:
+        """One decoded frame: its time (ms), row profile (:func:`~flashsync.profiles.row_profile`),
+        picture type (``"I"``, ``"P"`` or ``"B"``) and display turn (degrees; the first
+        frame's is the video's), as :func:`~flashsync.profiles.read_profiles` gives them."""
+        if self._rotation_deg is None:
+            self._rotation_deg = rotation_deg
         self._detect(self._remove_flicker.push(t_ms, profile, picture))
 
     def finish(self) -> CameraDetection:
@@ -777,7 +781,7 @@ class VideoDetection:
             n_degenerate=self._detectors[0].n_degenerate,
             top_down_exposure_rows=exposures.get(False),
             bottom_up_exposure_rows=exposures.get(True),
-            display_rotation_deg=self.info.display_rotation_deg,
+            display_rotation_deg=self._rotation_deg or 0,
         )
 
     def _detect(self, frames: list[tuple[float, np.ndarray]]) -> None:

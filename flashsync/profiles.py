@@ -32,10 +32,6 @@ class VideoInfo:
     width: int
     height: int
     n_frames_hint: int
-    #: Degrees counterclockwise (-90, 0, 90 or 180, as FFmpeg states it) that the video's
-    #: display matrix turns its stored frames for showing: a phone held upright stores them
-    #: on their side.
-    display_rotation_deg: int = 0
 
     @property
     def camera(self) -> str:
@@ -48,20 +44,7 @@ def video_info(container: av.container.InputContainer, path: Path) -> VideoInfo:
     if not stream.width or not stream.height:
         raise InputError(f"{path}: video stream has no frame size; is the file complete?")
     hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
-    return VideoInfo(path, stream.width, stream.height, hint, display_rotation_deg(path))
-
-
-def display_rotation_deg(path: Path) -> int:
-    """The display matrix's turn of the video's first frame, degrees counterclockwise
-    rounded to a quarter turn (-90, 0, 90 or 180); 0 where it has none or the first frame
-    does not decode (the decoding proper reports that)."""
-    try:
-        with av.open(str(path)) as container:
-            for frame in container.decode(video=0):
-                return (round(frame.rotation / 90.0) + 1) % 4 * 90 - 90
-    except av.FFmpegError:
-        pass
-    return 0
+    return VideoInfo(path, stream.width, stream.height, hint)
 
 
 def luma_plane(frame: av.VideoFrame) -> np.ndarray:
@@ -133,11 +116,19 @@ def picture_type(frame: av.VideoFrame) -> str:
     return "B" if frame.pict_type == av.video.frame.PictureType.B else "P"
 
 
+def display_rotation_deg(frame: av.VideoFrame) -> int:
+    """Degrees counterclockwise that the frame's display matrix turns it for showing (a
+    phone held upright stores its frames on their side), to a quarter turn: -90, 0, 90 or
+    180, as FFmpeg states it; 0 without one."""
+    return (round(frame.rotation / 90.0) + 1) % 4 * 90 - 90
+
+
 def read_profiles(
     path: str | Path, start_pts: int | None = None, stop_pts: int | None = None
-) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, str]]]:
+) -> tuple[VideoInfo, Iterator[tuple[float, np.ndarray, str, int]]]:
     """Open a video once: its :class:`VideoInfo` and an iterator of ``(t_frame_ms, profile,
-    picture)`` per decoded frame, presentation order (the file closes when the iterator ends).
+    picture, rotation_deg)`` per decoded frame, presentation order (the file closes when the
+    iterator ends).
 
     ``start_pts``, ``stop_pts`` (stream time-base units) read a segment only: the frames
     whose stamps are in ``[start_pts, stop_pts)``, decoded from the key frame at or before
@@ -150,8 +141,8 @@ def read_profiles(
     multiplies it by the same factor whatever the row's content. ``picture``: how the frame
     was coded, ``"I"`` a key frame (on its own; the codec refreshes there what it kept from
     frame to frame), ``"P"`` predicted from frames before it, ``"B"`` from frames before and
-    after it (:data:`PICTURES`).
-    Frames without a timestamp are an error naming the file.
+    after it (:data:`PICTURES`). ``rotation_deg``: its display matrix's turn
+    (:func:`display_rotation_deg`). Frames without a timestamp are an error naming the file.
     """
     path = Path(path)
     container = open_video(path)
@@ -165,7 +156,7 @@ def read_profiles(
 
 def _profiles(
     container: av.container.InputContainer, path: Path, start_pts: int | None, stop_pts: int | None
-) -> Iterator[tuple[float, np.ndarray, str]]:
+) -> Iterator[tuple[float, np.ndarray, str, int]]:
     whole = start_pts is None and stop_pts is None
     with container:
         stream = container.streams.video[0]
@@ -184,7 +175,8 @@ def _profiles(
                 time_ms = float(frame.pts * frame.time_base) * 1000.0
                 decoded += 1
                 times = [*times[-1:], time_ms]
-                yield time_ms, row_profile(luma_plane(frame), *luma_range(frame)), picture_type(frame)
+                profile = row_profile(luma_plane(frame), *luma_range(frame))
+                yield time_ms, profile, picture_type(frame), display_rotation_deg(frame)
         except av.FFmpegError as error:
             cut = cut_short(container, decoded, times) if whole else None
             if cut:

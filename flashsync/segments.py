@@ -60,8 +60,8 @@ def plan_segments(path: str | Path, segment_ms: float = SEGMENT_MS) -> tuple[Vid
     return info, [Segment(path, start, stop) for start, stop in zip(ends[:-1], ends[1:])]
 
 
-def read_segment(segment: Segment) -> list[tuple[float, np.ndarray, str]]:
-    """``(t_frame_ms, profile, picture)`` of every frame of the segment, presentation order
+def read_segment(segment: Segment) -> list[tuple[float, np.ndarray, str, int]]:
+    """``(t_frame_ms, profile, picture, rotation_deg)`` of every frame of the segment, presentation order
     (:func:`~flashsync.profiles.read_profiles`)."""
     _, profiles = read_profiles(segment.path, segment.start_pts, segment.stop_pts)
     return list(profiles)

@@ -98,8 +98,8 @@ def test_segments_start_at_key_frames_and_decode_as_the_whole_video(clips):
         assert all(part[0][2] == "I" for part in parts)  # each starts at a key frame
         joined = [frame for part in parts for frame in part]
         assert len(joined) == len(whole) == 300
-        for (t_a, p_a, k_a), (t_b, p_b, k_b) in zip(joined, whole):
-            assert t_a == t_b and k_a == k_b and np.array_equal(p_a, p_b)
+        for (t_a, p_a, k_a, r_a), (t_b, p_b, k_b, r_b) in zip(joined, whole):
+            assert t_a == t_b and k_a == k_b and r_a == r_b and np.array_equal(p_a, p_b)
     assert plan_segments(clips[0])[1] == [plan_segments(clips[0])[1][0]]  # 10 s: one segment of SEGMENT_MS
     assert SEGMENT_S * 1000.0 == SEGMENT_MS
 

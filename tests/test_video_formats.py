@@ -14,8 +14,10 @@ import pytest
 
 from flashsync import detect_videos, synchronize
 from flashsync.cli import main
+from flashsync.detect import VideoDetection
 from flashsync.evaluate import sync_errors
 from flashsync.io import load_ground_truth
+from flashsync.segments import plan_segments, read_segment
 
 #: name: file suffix, encoder, pixel format, encoder options.
 FORMATS = {
@@ -105,3 +107,9 @@ def test_a_video_stored_turned_for_display_is_named(synced_scenario, others, tmp
     assert len(turned) == 1 and turned[0].startswith(f"{tmp_path / 'r.mp4'}: ") and "-90 degrees" in turned[0], turned
     _, plain = synchronize(detect_videos([synced_scenario / "r.mp4"], estimate_readout=True) + others)
     assert not [warning for warning in plain.warnings if "stored turned" in warning]
+    info, segments = plan_segments(tmp_path / "r.mp4")  # as a cluster reads it
+    state = VideoDetection(info, False)
+    for segment in segments:
+        for frame in read_segment(segment):
+            state.push(*frame)
+    assert state.finish().display_rotation_deg == -90
