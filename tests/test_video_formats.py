@@ -5,7 +5,6 @@ closely as the original; an AVI that lists its dropped frames as empty index ent
 cameras, capture cards) is read whole, not called cut short; a video stored turned for
 display (a phone held upright) is named."""
 
-from fractions import Fraction
 from pathlib import Path
 
 import av
@@ -18,6 +17,7 @@ from flashsync.detect import VideoDetection
 from flashsync.evaluate import sync_errors
 from flashsync.io import load_ground_truth
 from flashsync.segments import plan_segments, read_segment
+from flashsync.simulation.encode import reencode
 
 #: name: file suffix, encoder, pixel format, encoder options.
 FORMATS = {
@@ -31,34 +31,6 @@ FORMATS = {
         {"crf": "10", "b:v": "0"},
     ),  # at crf 20 a second lossy pass erases the ramps: 0.045 ms
 }
-
-
-def reencode(
-    source: Path, target: Path, codec: str, pixel_format: str, options: dict, drop=frozenset(), turn_deg: int = 0
-) -> int:
-    """``source``'s frames into ``target`` at 25 fps, frame k at k / 25 s, but those in
-    ``drop``, with a display matrix turning them ``turn_deg`` counterclockwise; returns the
-    frames written."""
-    written = 0
-    with av.open(str(source)) as video, av.open(str(target), "w") as out:
-        stream = out.add_stream(codec, rate=25, options=options)
-        if turn_deg:
-            stream.set_display_rotation(turn_deg)
-        stream.width, stream.height, stream.pix_fmt = (
-            video.streams.video[0].width,
-            video.streams.video[0].height,
-            pixel_format,
-        )
-        stream.time_base = Fraction(1, 25)
-        for index, frame in enumerate(video.decode(video=0)):
-            if index in drop:
-                continue
-            image = frame.reformat(format=pixel_format)
-            image.pts, image.time_base = index, Fraction(1, 25)
-            out.mux(stream.encode(image))
-            written += 1
-        out.mux(stream.encode())
-    return written
 
 
 @pytest.fixture(scope="module")
@@ -85,7 +57,7 @@ def test_a_reencoded_reference_is_synchronised_as_closely_as_the_original(name, 
 
 def test_an_avi_listing_its_dropped_frames_is_read_whole(synced_scenario, tmp_path, capsys):
     drop = {5, 17, 18, 40, 61}  # 5 of 80 frames: over the 1 % a cut-short index may miss
-    written = reencode(synced_scenario / "r.mp4", tmp_path / "r.avi", "mjpeg", "yuvj420p", {"q:v": "3"}, drop)
+    written = reencode(synced_scenario / "r.mp4", tmp_path / "r.avi", "mjpeg", "yuvj420p", {"q:v": "3"}, drop=drop)
     with av.open(str(tmp_path / "r.avi")) as video:
         assert video.streams.video[0].frames == written + len(drop)  # the premise: drops listed
     assert main(["detect", str(tmp_path / "r.avi"), "-o", str(tmp_path / "e.csv")]) == 0
@@ -101,7 +73,7 @@ def test_a_video_stored_turned_for_display_is_named(synced_scenario, others, tmp
     """A phone held upright stores its frames on their side and a display matrix to turn
     them: `sync` warns that rows (a detection's ``y``) are the stored frame's, for that
     video only."""
-    reencode(synced_scenario / "r.mp4", tmp_path / "r.mp4", "libx264", "yuv420p", {"crf": "18"}, turn_deg=-90)
+    reencode(synced_scenario / "r.mp4", tmp_path / "r.mp4", "libx264", "yuv420p", {"crf": "18"}, rotation_deg=-90)
     _, report = synchronize(detect_videos([tmp_path / "r.mp4"], estimate_readout=True) + others)
     turned = [warning for warning in report.warnings if "stored turned" in warning]
     assert len(turned) == 1 and turned[0].startswith(f"{tmp_path / 'r.mp4'}: ") and "-90 degrees" in turned[0], turned

@@ -1,4 +1,5 @@
-"""Writing simulated frames as H.264 video with chosen container stamps, atomically."""
+"""Writing simulated frames as H.264 video with chosen container stamps, atomically, and a
+rendered video again in another camera's codec, pixel format and container."""
 
 from __future__ import annotations
 
@@ -180,3 +181,43 @@ def write_video(
                 raise FlashsyncError(f"{path}: no frames to write")
             container.mux(stream.encode())
     return count
+
+
+def reencode(
+    source: str | Path,
+    target: str | Path,
+    codec: str,
+    pixel_format: str,
+    options: dict[str, str] | None = None,
+    rate: int = 25,
+    drop: Iterable[int] = (),
+    rotation_deg: int = 0,
+) -> int:
+    """A rendered video written again as another camera would write it: any FFmpeg encoder
+    ``codec`` (``libx265``, ``prores``, ``mjpeg``, ...) and ``pixel_format`` (10-bit,
+    4:2:2, RGB, ...), the container of ``target``'s suffix (``.mov``, ``.avi``, ``.webm``,
+    ...), written through a temporary file.
+
+    Frame k keeps its time, stamped in units of 1 / ``rate`` s (``source`` runs at
+    ``rate`` fps); the frames in ``drop`` are left out (an AVI lists their slots empty); a
+    display matrix turns the frames ``rotation_deg`` counterclockwise for showing (as a
+    phone held upright writes them). Returns the frames written.
+    """
+    target, drop = Path(target), set(drop)
+    written = 0
+    with atomic_output(target) as tmp, av.open(str(source)) as video, av.open(str(tmp), "w") as out:
+        decoded = video.streams.video[0]
+        stream = out.add_stream(codec, rate=rate, options=options or {})
+        stream.width, stream.height, stream.pix_fmt = decoded.width, decoded.height, pixel_format
+        stream.time_base = time_base = Fraction(1, rate)  # the muxer may change the stream's
+        if rotation_deg:
+            stream.set_display_rotation(rotation_deg)
+        for index, frame in enumerate(video.decode(decoded)):
+            if index in drop:
+                continue
+            image = frame.reformat(format=pixel_format)
+            image.pts, image.time_base = round(frame.time * rate), time_base
+            out.mux(stream.encode(image))
+            written += 1
+        out.mux(stream.encode())
+    return written
