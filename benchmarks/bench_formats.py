@@ -32,6 +32,8 @@ FORMATS = {
     "HEVC 10-bit (phones)": ("mov", "libx265", "yuv420p10le", {"crf": "18", "x265-params": "log-level=none"}),
     "ProRes 4:2:2 10-bit": ("mov", "prores", "yuv422p10le", {}),
     "MJPEG full range, AVI": ("avi", "mjpeg", "yuvj420p", {"q:v": "2"}),
+    "MPEG-2, MPEG-TS": ("ts", "mpeg2video", "yuv420p", {"q:v": "2"}),
+    "MPEG-4 Part 2, AVI": ("avi", "mpeg4", "yuv420p", {"q:v": "2"}),
     "PNG RGB, MOV": ("mov", "png", "rgb24", {}),
     "VP9, WebM": ("webm", "libvpx-vp9", "yuv420p", {"crf": "10", "b:v": "0"}),
     "AV1, Matroska": ("mkv", "libsvtav1", "yuv420p", {"crf": "15"}),
