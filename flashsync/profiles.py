@@ -163,7 +163,7 @@ def _profiles(
         stream.thread_type = "AUTO"
         if start_pts is not None:
             container.seek(start_pts, stream=stream, backward=True)
-        decoded, times = 0, []
+        decoded, times, size = 0, [], (stream.width, stream.height)  # the decoder updates the stream's
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
@@ -173,6 +173,12 @@ def _profiles(
                 if stop_pts is not None and frame.pts >= stop_pts:
                     break
                 time_ms = float(frame.pts * frame.time_base) * 1000.0
+                if (frame.width, frame.height) != size:
+                    raise InputError(
+                        f"{path}: its frames change size at {time_ms / 1000.0:.3f} s ({size[0]}x{size[1]} "
+                        f"-> {frame.width}x{frame.height}); give each part as a video of its own "
+                        f"(ffmpeg -i IN -ss {time_ms / 1000.0:.3f} -c copy PART.mkv, and -to for the part before)"
+                    )
                 decoded += 1
                 times = [*times[-1:], time_ms]
                 profile = row_profile(luma_plane(frame), *luma_range(frame))

@@ -86,6 +86,17 @@ def _fast_start_cut(tmp: Path) -> Path:
     return tmp / "cut.mp4"
 
 
+def _size_change(tmp: Path) -> Path:
+    """r.mp4 (320x180, 3.2 s) and then f.mkv (256x144) in one MPEG-TS file, its stamps going
+    on (TS concatenates: a camera that changed resolution, an NVR's export)."""
+    from flashsync.simulation.encode import reencode
+
+    reencode(SYNCED / "r.mp4", tmp / "a.ts", "libx264", "yuv420p", rate=25)
+    reencode(SYNCED / "f.mkv", tmp / "b.ts", "libx264", "yuv420p", rate=30, start_s=3.2)
+    (tmp / "sizes.ts").write_bytes((tmp / "a.ts").read_bytes() + (tmp / "b.ts").read_bytes())
+    return tmp / "sizes.ts"
+
+
 def _homographies(tmp: Path, change) -> Path:
     document = json.loads((SYNCED / "homographies.json").read_text())
     change(document)
@@ -457,6 +468,12 @@ CASES = [
         lambda t: ["detect", _fast_start_cut(t), "-o", t / "out" / "e.csv"],
         1,
         ["cut.mp4: cut short", "its index lists"],
+    ),
+    (
+        "frames change size mid-video",
+        lambda t: ["detect", _size_change(t), "-o", t / "out" / "e.csv"],
+        1,
+        ["sizes.ts: its frames change size at 3.200 s", "(320x180 -> 256x144)", "give each part as a video of its own"],
     ),
 ]
 

@@ -192,14 +192,16 @@ def reencode(
     rate: int = 25,
     drop: Iterable[int] = (),
     rotation_deg: int = 0,
+    start_s: float | None = None,
 ) -> int:
     """A rendered video written again as another camera would write it: any FFmpeg encoder
     ``codec`` (``libx265``, ``prores``, ``mjpeg``, ...) and ``pixel_format`` (10-bit,
     4:2:2, RGB, ...), the container of ``target``'s suffix (``.mov``, ``.avi``, ``.webm``,
     ...), written through a temporary file.
 
-    Frame k keeps its time, stamped in units of 1 / ``rate`` s (``source`` runs at
-    ``rate`` fps); the frames in ``drop`` are left out (an AVI lists their slots empty); a
+    Frame k keeps its time (or its time since the first frame after ``start_s``), stamped
+    in units of 1 / ``rate`` s (``source`` runs at ``rate`` fps); the frames in ``drop`` are
+    left out (an AVI lists their slots empty); a
     display matrix turns the frames ``rotation_deg`` counterclockwise for showing (as a
     phone held upright writes them). Returns the frames written.
     """
@@ -212,11 +214,14 @@ def reencode(
         stream.time_base = time_base = Fraction(1, rate)  # the muxer may change the stream's
         if rotation_deg:
             stream.set_display_rotation(rotation_deg)
+        shift = None
         for index, frame in enumerate(video.decode(decoded)):
+            if shift is None:
+                shift = 0.0 if start_s is None else start_s - frame.time
             if index in drop:
                 continue
             image = frame.reformat(format=pixel_format)
-            image.pts, image.time_base = round(frame.time * rate), time_base
+            image.pts, image.time_base = round((frame.time + shift) * rate), time_base
             out.mux(stream.encode(image))
             written += 1
         out.mux(stream.encode())
