@@ -31,7 +31,7 @@ from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.io.files import existing_file
 from flashsync.model import CameraClock, SyncModel
 from flashsync.ticks import AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms, tick_period_ms
-from flashsync.timestamps import median_step_ms, open_video, video_timestamps
+from flashsync.timestamps import median_step_ms, open_video, video_stream, video_timestamps
 
 #: Output containers by file extension.
 CONTAINERS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov"}
@@ -285,7 +285,7 @@ class _TileReader:
     def __init__(self, path: Path, tile: Tile) -> None:
         self.path, self.tile = path, tile
         self._container = open_video(path)
-        stream = self._container.streams.video[0]
+        stream = video_stream(self._container)
         stream.thread_type = "AUTO"
         self._frames: Iterator[av.VideoFrame] = self._container.decode(stream)
         self._scaler = VideoReformatter()  # keeps its scaling context: 3-5x faster

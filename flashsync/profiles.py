@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError, InputError
-from flashsync.timestamps import open_video
+from flashsync.timestamps import open_video, video_stream
 
 #: Column blocks of a row profile.
 DEFAULT_BLOCKS = 8
@@ -40,7 +40,7 @@ class VideoInfo:
 
 def video_info(container: av.container.InputContainer, path: Path) -> VideoInfo:
     """Size and approximate frame count of an open video, or a one-line error."""
-    stream = container.streams.video[0]
+    stream = video_stream(container)
     if not stream.width or not stream.height:
         raise InputError(f"{path}: video stream has no frame size; is the file complete?")
     hint = stream.frames or int((container.duration or 0) / 1e6 * float(stream.average_rate or 0))
@@ -159,7 +159,7 @@ def _profiles(
 ) -> Iterator[tuple[float, np.ndarray, str, int]]:
     whole = start_pts is None and stop_pts is None
     with container:
-        stream = container.streams.video[0]
+        stream = video_stream(container)
         stream.thread_type = "AUTO"
         if start_pts is not None:
             container.seek(start_pts, stream=stream, backward=True)
@@ -204,7 +204,7 @@ def cut_short(container: av.container.InputContainer, decoded: int, last_times_m
     that duration or it states none: an AVI lists a dropped frame as an empty entry of its
     index, and one with drops ends where its header says. ``last_times_ms``: the last one
     or two frame times."""
-    stream = container.streams.video[0]
+    stream = video_stream(container)
     if stream.duration and stream.time_base:
         duration_ms = float(stream.duration * stream.time_base) * 1000.0
     elif container.duration:

@@ -18,7 +18,7 @@ import numpy as np
 
 from flashsync.errors import InputError
 from flashsync.profiles import RECOPY, VideoInfo, cut_short, read_profiles, video_info
-from flashsync.timestamps import open_video
+from flashsync.timestamps import open_video, video_stream
 
 #: Default length of a segment, ms: a minute is long against the cost of starting one
 #: (seeking, the decoder's first frames, a task on the cluster: 0.04-0.4 s measured by
@@ -49,7 +49,7 @@ def plan_segments(path: str | Path, segment_ms: float = SEGMENT_MS) -> tuple[Vid
     container = open_video(path)
     with container:
         info = video_info(container, path)
-        stream = container.streams.video[0]
+        stream = video_stream(container)
         keys = sorted(p.pts for p in container.demux(stream) if p.is_keyframe and p.pts is not None)
         step = float(stream.time_base or 0) * 1000.0  # ms per time-base unit
     bounds = []

@@ -65,7 +65,7 @@ def video_timestamps(path: str | Path) -> np.ndarray:
     """
     path = Path(path)
     with open_video(path) as container:
-        stream = container.streams.video[0]
+        stream = video_stream(container)
         pts = [packet.pts for packet in container.demux(stream) if packet.size > 0]
         time_base = stream.time_base
     if any(p is None for p in pts):
@@ -99,6 +99,13 @@ def open_video(path: Path) -> av.container.InputContainer:
         container.close()
         raise InputError(f"{path}: has no video stream; give a video file")
     return container
+
+
+def video_stream(container: av.container.InputContainer) -> av.video.stream.VideoStream:
+    """The video stream flashsync reads, the one a player shows: FFmpeg's best (not a cover
+    picture or a thumbnail track beside the video; the one with more frames where there
+    are two). Every reader of a video takes this one."""
+    return container.streams.best("video") or container.streams.video[0]
 
 
 def median_step_ms(times_ms: np.ndarray) -> float:

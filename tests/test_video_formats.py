@@ -5,6 +5,7 @@ closely as the original; an AVI that lists its dropped frames as empty index ent
 cameras, capture cards) is read whole, not called cut short; a video stored turned for
 display (a phone held upright) is named."""
 
+from fractions import Fraction
 from pathlib import Path
 
 import av
@@ -85,3 +86,26 @@ def test_a_video_stored_turned_for_display_is_named(synced_scenario, others, tmp
         for frame in read_segment(segment):
             state.push(*frame)
     assert state.finish().display_rotation_deg == -90
+
+
+def test_a_still_picture_stream_before_the_video_is_passed_over(synced_scenario, others, tmp_path):
+    """A file whose first video stream is a still picture (a cover, a thumbnail track) is
+    read by the stream a player shows: the same errors as the video alone."""
+    truth = load_ground_truth(synced_scenario / "truth.json")
+    with av.open(str(synced_scenario / "r.mp4")) as source, av.open(str(tmp_path / "r.mkv"), "w") as out:
+        cover = out.add_stream("mjpeg", rate=1)
+        cover.width, cover.height, cover.pix_fmt = 64, 64, "yuvj420p"
+        video = out.add_stream_from_template(source.streams.video[0])
+        black = np.zeros((64, 64, 3), np.uint8)
+        picture = av.VideoFrame.from_ndarray(black, format="rgb24").reformat(format="yuvj420p")
+        picture.pts, picture.time_base = 0, Fraction(1, 1)
+        out.mux(cover.encode(picture))
+        out.mux(cover.encode())
+        for packet in source.demux(source.streams.video[0]):
+            if packet.dts is not None:
+                packet.stream = video
+                out.mux(packet)
+    with av.open(str(tmp_path / "r.mkv")) as check:
+        assert check.streams.video[0].codec_context.name == "mjpeg"  # the premise
+    alone = errors_ms(synced_scenario / "r.mp4", others, truth)
+    assert np.allclose(errors_ms(tmp_path / "r.mkv", others, truth), alone, atol=1e-6)

@@ -26,7 +26,7 @@ import rerun as rr
 
 from flashsync.errors import FlashsyncError
 from flashsync.model import CameraClock, SyncModel
-from flashsync.timestamps import open_video
+from flashsync.timestamps import open_video, video_stream
 from viz.palette import NOW_COLOR, STATUS_COLORS
 from viz.timeline import Timeline, readout_end_ms, readout_start_ms
 
@@ -121,10 +121,11 @@ def viewer_mp4(path: Path, workdir: Path) -> Path:
     -------
     Path
         ``path`` itself if it is an ``.mp4`` file, else ``workdir / (stem + ".mp4")``
-        with the packets of its first video stream copied (same timestamps).
+        with the packets of its video stream copied (same timestamps; the one flashsync
+        reads, :func:`~flashsync.timestamps.video_stream`).
     """
     with open_video(path) as container:
-        stream = container.streams.video[0]
+        stream = video_stream(container)
         codec = stream.codec_context.name
         if codec not in VIEWER_CODECS:
             raise FlashsyncError(
