@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from flashsync.errors import FlashsyncError, InputError
-from flashsync.timestamps import open_video, video_stream
+from flashsync.timestamps import NO_STAMPS, open_video, video_stream
 
 #: Column blocks of a row profile.
 DEFAULT_BLOCKS = 8
@@ -167,7 +167,7 @@ def _profiles(
         try:
             for frame in container.decode(stream):
                 if frame.pts is None:
-                    raise InputError(f"{path}: a frame has no timestamp; remux the file (ffmpeg -i IN -c copy OUT.mkv)")
+                    raise InputError(f"{path}: a frame has no timestamp; {NO_STAMPS}")
                 if start_pts is not None and frame.pts < start_pts:
                     continue
                 if stop_pts is not None and frame.pts >= stop_pts:

@@ -69,12 +69,16 @@ def video_timestamps(path: str | Path) -> np.ndarray:
         pts = [packet.pts for packet in container.demux(stream) if packet.size > 0]
         time_base = stream.time_base
     if any(p is None for p in pts):
-        raise InputError(
-            f"{path}: {sum(p is None for p in pts)} frames have no timestamp; remux the file "
-            "(ffmpeg -i IN -c copy OUT.mkv) or give the timestamps as CSV"
-        )
+        raise InputError(f"{path}: {sum(p is None for p in pts)} frames have no timestamp; {NO_STAMPS}")
     times = np.sort(np.asarray(pts, dtype=np.float64)) * float(time_base) * 1000.0
     return check_timestamps(times, str(path))
+
+
+#: What to do about a video whose frames have no timestamps.
+NO_STAMPS = (
+    "a raw H.264 or HEVC stream keeps none: remux it at the camera's frame rate (ffmpeg -r FPS -i IN -c copy "
+    "OUT.mkv; without -r FFmpeg takes 25 fps), or remux it and give its frames' times with --timestamps"
+)
 
 
 def open_video(path: Path) -> av.container.InputContainer:

@@ -86,6 +86,14 @@ def _fast_start_cut(tmp: Path) -> Path:
     return tmp / "cut.mp4"
 
 
+def _raw_stream(tmp: Path) -> Path:
+    """r.mp4 as a raw H.264 stream (Annex B, as some IP cameras and recorders export it)."""
+    from flashsync.simulation.encode import reencode
+
+    reencode(SYNCED / "r.mp4", tmp / "r.h264", "libx264", "yuv420p", rate=25)
+    return tmp / "r.h264"
+
+
 def _size_change(tmp: Path) -> Path:
     """r.mp4 (320x180, 3.2 s) and then f.mkv (256x144) in one MPEG-TS file, its stamps going
     on (TS concatenates: a camera that changed resolution, an NVR's export)."""
@@ -468,6 +476,12 @@ CASES = [
         lambda t: ["detect", _fast_start_cut(t), "-o", t / "out" / "e.csv"],
         1,
         ["cut.mp4: cut short", "its index lists"],
+    ),
+    (
+        "a raw H.264 stream: no timestamps",
+        lambda t: ["detect", _raw_stream(t), "-o", t / "out" / "e.csv"],
+        1,
+        ["r.h264: a frame has no timestamp", "ffmpeg -r FPS -i IN -c copy OUT.mkv", "--timestamps"],
     ),
     (
         "frames change size mid-video",
