@@ -61,8 +61,8 @@ def plan_segments(path: str | Path, segment_ms: float = SEGMENT_MS) -> tuple[Vid
 
 
 def read_segment(segment: Segment) -> list[tuple[float, np.ndarray, str, int]]:
-    """``(t_frame_ms, profile, picture, rotation_deg)`` of every frame of the segment, presentation order
-    (:func:`~flashsync.profiles.read_profiles`)."""
+    """``(t_frame_ms, profile, picture, rotation_deg)`` of every frame of the segment,
+    presentation order (:func:`~flashsync.profiles.read_profiles`)."""
     _, profiles = read_profiles(segment.path, segment.start_pts, segment.stop_pts)
     return list(profiles)
 

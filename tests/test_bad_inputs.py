@@ -16,6 +16,7 @@ import pytest
 from cli_run import one_error_line
 
 from flashsync.cli import main
+from flashsync.simulation.encode import reencode
 
 
 def _model(folder: Path, change=None, name: str = "bad.json") -> Path:
@@ -88,8 +89,6 @@ def _fast_start_cut(tmp: Path) -> Path:
 
 def _raw_stream(tmp: Path) -> Path:
     """r.mp4 as a raw H.264 stream (Annex B, as some IP cameras and recorders export it)."""
-    from flashsync.simulation.encode import reencode
-
     reencode(SYNCED / "r.mp4", tmp / "r.h264", "libx264", "yuv420p", rate=25)
     return tmp / "r.h264"
 
@@ -97,8 +96,6 @@ def _raw_stream(tmp: Path) -> Path:
 def _size_change(tmp: Path) -> Path:
     """r.mp4 (320x180, 3.2 s) and then f.mkv (256x144) in one MPEG-TS file, its stamps going
     on (TS concatenates: a camera that changed resolution, an NVR's export)."""
-    from flashsync.simulation.encode import reencode
-
     reencode(SYNCED / "r.mp4", tmp / "a.ts", "libx264", "yuv420p", rate=25)
     reencode(SYNCED / "f.mkv", tmp / "b.ts", "libx264", "yuv420p", rate=30, start_s=3.2)
     (tmp / "sizes.ts").write_bytes((tmp / "a.ts").read_bytes() + (tmp / "b.ts").read_bytes())

@@ -3,7 +3,8 @@ reference camera by re-encoding its decoded frames at their own times: 10-bit HE
 action cameras), 10-bit 4:2:2 ProRes (cinema cameras), RGB and VP9 are synchronised as
 closely as the original; an AVI that lists its dropped frames as empty index entries (IP
 cameras, capture cards) is read whole, not called cut short; a video stored turned for
-display (a phone held upright) is named."""
+display (a phone held upright) is named; a still picture stream before the video is passed
+over."""
 
 from fractions import Fraction
 from pathlib import Path

@@ -201,9 +201,9 @@ def reencode(
 
     Frame k keeps its time (or its time since the first frame after ``start_s``), stamped
     in units of 1 / ``rate`` s (``source`` runs at ``rate`` fps); the frames in ``drop`` are
-    left out (an AVI lists their slots empty); a
-    display matrix turns the frames ``rotation_deg`` counterclockwise for showing (as a
-    phone held upright writes them). Returns the frames written.
+    left out (an AVI lists their slots empty); a display matrix turns the frames
+    ``rotation_deg`` counterclockwise for showing (as a phone held upright writes them).
+    Returns the frames written.
     """
     target, drop = Path(target), set(drop)
     written = 0
