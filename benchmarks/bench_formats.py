@@ -1,7 +1,8 @@
 """The shipped sample's cam1 written again as other cameras write video (codec, bit depth,
 chroma subsampling, RGB, container), then synchronised with the sample's other three
-cameras as `flashsync sync` does: every camera's error against the sample's truth, and
-cam1's exposure and time per row.
+cameras as `flashsync sync` does: every camera's error against the sample's truth, cam1's
+exposure and time per row, and the largest error/sigma (RMS over a camera's probes,
+against the reference; and a time per row's).
 
     python benchmarks/bench_formats.py [--samples DIR]
 
@@ -47,7 +48,7 @@ def main() -> None:
     truth = load_ground_truth(args.samples / "truth.json")
     others = detect_videos([args.samples / name for name in ("cam2.mkv", "cam3.mp4", "cam4.mp4")])
     header = " ".join(f"{camera:>7s}" for camera in ("cam1", "cam2", "cam3", "cam4"))
-    print(f"{'cam1 as':26s} {header}  (RMS ms)   cam1: exposure, T_row errors (ms, %)")
+    print(f"{'cam1 as':26s} {header}  (RMS ms)  cam1: exposure, T_row errors (ms, %)  error/sigma max: time, T_row")
     with tempfile.TemporaryDirectory() as folder:
         runs = [("as shipped (H.264, MP4)", args.samples / "cam1.mp4")]
         for name, (suffix, codec, pixel_format, options) in FORMATS.items():
@@ -57,11 +58,13 @@ def main() -> None:
         for name, path in runs:
             model, _ = synchronize(detect_videos([path]) + others)
             errors = sync_errors(model, truth).set_index("camera")["rms_ms"]
-            cam1 = camera_accuracy(model, truth).set_index("camera").loc["cam1"]
+            accuracy = camera_accuracy(model, truth).set_index("camera")
+            cam1 = accuracy.loc["cam1"]
             print(
                 f"{name:26s} "
                 + " ".join(f"{errors[camera]:7.4f}" for camera in ("cam1", "cam2", "cam3", "cam4"))
-                + f"             {cam1['exposure_error_ms']:+.3f}, {cam1['row_time_error_pct']:+.3f}"
+                + f"            {cam1['exposure_error_ms']:+.3f}, {cam1['row_time_error_pct']:+.3f}"
+                + f"                      {accuracy['z_rms'].max():.2f}, {accuracy['row_time_z'].abs().max():.2f}"
             )
 
 
