@@ -27,7 +27,7 @@ from flashsync.errors import InputError
 from flashsync.events import Events
 from flashsync.model import readout_rows
 from flashsync.partners import occupied_bins, planned_pairs, shared_flash_estimate
-from flashsync.timestamps import median_step_ms
+from flashsync.timestamps import shortest_step_ms
 
 #: Largest clock drift considered, as a fraction (100 ppm).
 MAX_DRIFT = 100e-6
@@ -57,7 +57,7 @@ NOMINAL_HIDDEN_ROWS = 1.05
 
 def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
     """Times of the camera's ``events`` on its own clock, ms, with a nominal time per row: frame
-    time + readout row x median frame step / (:data:`NOMINAL_HIDDEN_ROWS` x height) (a few per
+    time + readout row x shortest frame step / (:data:`NOMINAL_HIDDEN_ROWS` x height) (a few per
     cent off: good to a few ms; the closer, the tighter true matches sit and the stronger
     their evidence)."""
     row_time = nominal_row_time_ms(detection)
@@ -65,9 +65,11 @@ def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarr
 
 
 def nominal_row_time_ms(detection: CameraDetection) -> float:
-    """The camera's time per row were its rows read evenly over a frame period with
-    :data:`NOMINAL_HIDDEN_ROWS` of hidden rows, ms: median frame step / (1.05 x height)."""
-    return median_step_ms(detection.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * detection.height)
+    """The camera's time per row were its rows read evenly over its shortest frame period
+    (:func:`~flashsync.timestamps.shortest_step_ms`: a camera whose frame rate drops part-way
+    reads its rows as fast as before) with :data:`NOMINAL_HIDDEN_ROWS` of hidden rows, ms:
+    shortest frame step / (1.05 x height)."""
+    return shortest_step_ms(detection.frame_times_ms) / (NOMINAL_HIDDEN_ROWS * detection.height)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ import pytest
 from flashsync.errors import FlashsyncError
 from flashsync.io.timestamps import load_timestamps
 from flashsync.simulation.encode import write_video
-from flashsync.timestamps import rtp_timestamps, video_timestamps
+from flashsync.timestamps import rtp_timestamps, shortest_step_ms, video_timestamps
 
 
 def frames(n):
@@ -95,3 +95,14 @@ def test_frame_clock_behind_quantised_stamps_with_drops_and_its_parts():
     assert not index_only.steady and index_only.missing == 0
     median_step = fit_frame_clock(np.round(true_ms), least_squares=False, smoothing=False)
     assert median_step.period_ms == median_step.median_step_ms == 33.0 and not median_step.steady
+
+
+def test_the_shortest_step_is_the_fast_rates_whatever_the_drops_and_rounding():
+    """The frame period a camera's rows are read within: 20 ms for a 50 fps camera that
+    halves its rate for most of the recording; drops and 1 ms rounding do not move it."""
+    fast, slow = np.arange(100) * 20.0, 2000.0 + np.arange(150) * 40.0
+    assert shortest_step_ms(np.concatenate([fast, slow])) == 20.0
+    steady = np.delete(np.arange(300) * 1000.0 / 29.97, [40, 41, 90])
+    assert shortest_step_ms(np.round(steady)) == 33.0  # 1 ms stamps: steps of 33 and 34
+    assert shortest_step_ms(steady) == pytest.approx(1000.0 / 29.97)
+    assert shortest_step_ms(np.array([5.0])) == 0.0

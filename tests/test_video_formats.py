@@ -4,8 +4,9 @@ action cameras), 10-bit 4:2:2 ProRes (cinema cameras), RGB and VP9 are synchroni
 closely as the original; an AVI that lists its dropped frames as empty index entries (IP
 cameras, capture cards) is read whole, not called cut short; a video stored turned for
 display (a phone held upright) is named; a still picture stream before the video is passed
-over."""
+over; a camera whose frame rate halves part-way (a phone in dim light) is tied."""
 
+import json
 from fractions import Fraction
 from pathlib import Path
 
@@ -110,3 +111,27 @@ def test_a_still_picture_stream_before_the_video_is_passed_over(synced_scenario,
         assert check.streams.video[0].codec_context.name == "mjpeg"  # the premise
     alone = errors_ms(synced_scenario / "r.mp4", others, truth)
     assert np.allclose(errors_ms(tmp_path / "r.mkv", others, truth), alone, atol=1e-6)
+
+
+def test_a_camera_whose_frame_rate_halves_part_way_is_tied(tmp_path):
+    """A phone in dim light halves its frame rate part-way: its stamps tell the truth, and it
+    reads its rows as fast as before. The sample's cam3 (50 fps) keeps every other frame
+    from frame 100 on; its two bands before the change must be placed with the fast rate's
+    time per row, not the median step's (twice as long: 8-17 ms off, outside the matching's
+    tolerance, and cam3 was left out)."""
+    samples = Path(__file__).resolve().parents[1] / "samples"
+    drop = set(range(101, 400, 2))
+    reencode(samples / "cam3.mp4", tmp_path / "cam3.mp4", "libx264", "yuv420p", {"crf": "18"}, rate=50, drop=drop)
+    truth = json.loads((samples / "truth.json").read_text())
+    camera = truth["cameras"]["cam3"]
+    keep = [k for k in range(len(camera["frame_index"])) if k not in drop]
+    for key in ("frame_index", "frame_times_ms", "stamps_ms"):
+        camera[key] = [camera[key][k] for k in keep]
+    seen = camera["flashes_seen"]
+    camera["flashes_seen"] = {flash: [keep.index(k) for k in frames if k in keep] for flash, frames in seen.items()}
+    (tmp_path / "truth.json").write_text(json.dumps(truth))
+    videos = [samples / "cam1.mp4", samples / "cam2.mkv", tmp_path / "cam3.mp4", samples / "cam4.mp4"]
+    model, _ = synchronize(detect_videos(videos))
+    assert "cam3" in model.cameras
+    errors = sync_errors(model, load_ground_truth(tmp_path / "truth.json")).set_index("camera")
+    assert errors.loc["cam3", "rms_ms"] <= 0.15, errors
