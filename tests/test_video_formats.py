@@ -117,7 +117,7 @@ def test_a_camera_whose_frame_rate_halves_part_way_is_tied(tmp_path):
     """A phone in dim light halves its frame rate part-way: its stamps tell the truth, and it
     reads its rows as fast as before. The sample's cam3 (50 fps) keeps every other frame
     from frame 100 on; its two bands before the change must be placed with the fast rate's
-    time per row, not the median step's (twice as long: 8-17 ms off, outside the matching's
+    time per row, not the median step's (twice as long: 4-17 ms off, outside the matching's
     tolerance, and cam3 was left out)."""
     samples = Path(__file__).resolve().parents[1] / "samples"
     drop = set(range(101, 400, 2))
