@@ -11,7 +11,7 @@ is measured:
   with a 0.5 ms exposure (the pattern rolls a third of a period a frame), one at 25 fps
   with 1 ms (it stands still), 12 flashes in 30 s. Target: sync error <= 0.1 ms RMS;
 - ``ripple-300hz``: the same cameras and flashes under 3 % 300 Hz ripple (lamps on three-phase
-  rectified supplies, as arenas are lit): a period of a third of mains', 38-45 rows here.
+  rectified supplies, as arenas are lit): a period of a third of mains', 32-39 rows here.
   Target: as ``rolling-flicker``;
 - ``flash-free``: two 320x240 cameras (25 and 30 fps, 8 ms) over the ice seen from close
   by, 20 players 8-16 px in radius, 5 % flicker, no flash, 30 s. Target: 0 events;
@@ -164,7 +164,8 @@ def render(name: str, minutes: float, folder: Path) -> None:
 
 
 def run(folder: Path, sync: bool) -> dict:
-    """:func:`measure` in a fresh process (its peak memory is its own); errors come back here."""
+    """:func:`measure` in a fresh process; errors come back here. Its peak memory starts at
+    this process's size (:func:`render`)."""
     with multiprocessing.get_context("spawn").Pool(1) as pool:
         return pool.apply(measure, (folder, sync))
 
