@@ -298,6 +298,7 @@ def _parser() -> argparse.ArgumentParser:
         help="exposure time of a camera in ms: adds t_center_ms; repeatable",
     )
     restamp.add_argument("--std", action="store_true", help="add t_global_std_ms from the solve")
+    _as_shown_option(restamp)
     restamp.add_argument("--strict", action="store_true", help="exit with code 1 if any row could not be stamped")
 
     validate = command(
@@ -321,6 +322,7 @@ def _parser() -> argparse.ArgumentParser:
         help="exposure time of a camera in ms; repeatable",
     )
     validate.add_argument("--json", type=Path, metavar="OUT.json", help="also write the report as JSON")
+    _as_shown_option(validate)
 
     view = command(
         "view",
@@ -432,6 +434,7 @@ def _parser() -> argparse.ArgumentParser:
     resample.add_argument(
         "-o", "--output", type=Path, default=Path("tracks.csv"), help="table, .csv or .parquet (default: tracks.csv)"
     )
+    _as_shown_option(resample)
 
     montage = command(
         "montage",
@@ -517,6 +520,15 @@ def _view_inputs(parser: argparse.ArgumentParser) -> None:
         "replaces one in --homographies. Without either, no outline is drawn",
     )
     parser.add_argument("--validation", type=Path, help="validate --json output (interpolation errors)")
+
+
+def _as_shown_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--as-shown",
+        action="store_true",
+        help="x and y are in the picture as a player shows it: a video stored turned (a phone held upright) "
+        "turned upright by its display matrix, as OpenCV reads it by default (default: the stored frame's pixels)",
+    )
 
 
 def _detection_options(parser: argparse.ArgumentParser) -> None:
@@ -745,7 +757,8 @@ def _run_restamp(args) -> int:
         raise InputError(f"--camera {args.camera}: names the camera of a MOTChallenge file, not of a folder")
     _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output}, ["-o"] if folder else [])
     model = _load_model(args.model)
-    options = {"exposure_ms": exposures, "with_std": args.std}
+    _note_turned("restamp", model, args.as_shown)
+    options = {"exposure_ms": exposures, "with_std": args.std, "as_shown": args.as_shown}
     if folder:
         summary = restamp_folder(args.detections, output, model, scheduler=args.scheduler, **options)
     else:
@@ -763,6 +776,19 @@ def _run_restamp(args) -> int:
     return 1 if args.strict and summary.stamped < summary.rows else 0
 
 
+def _note_turned(command: str, model, as_shown: bool) -> None:
+    """A warning per camera whose video is stored turned for display, where detections are
+    read in stored pixels (without ``--as-shown``)."""
+    for clock in model.cameras.values():
+        if clock.display_rotation_deg and not as_shown:
+            print(
+                f"flashsync {command}: warning: {clock.name}: its video is stored turned "
+                f"({clock.display_rotation_deg} degrees counterclockwise for display); x and y are read as the stored "
+                "frame's pixels - give --as-shown if they come from the picture as shown (OpenCV's by default)",
+                file=sys.stderr,
+            )
+
+
 def _run_validate(args) -> None:
     import pandas as pd
 
@@ -774,12 +800,15 @@ def _run_validate(args) -> None:
     inputs = {"DETECTIONS": args.detections, "--model": [args.model], "--homographies": [args.homographies]}
     _files(inputs, {"--json": args.json})
     detections = pd.concat([load_detections(path) for path in args.detections], ignore_index=True)
+    model = _load_model(args.model)
+    _note_turned("validate", model, args.as_shown)
     report = validate(
         detections,
-        _load_model(args.model),
+        model,
         load_homographies(args.homographies),
         max_gap_ms=max_gap_ms,
         exposure_ms=exposures,
+        as_shown=args.as_shown,
         source=", ".join(map(str, args.detections)),
     )
     print(format_report(report), flush=True)
@@ -943,6 +972,7 @@ def _run_resample(args) -> None:
     max_gap_ms = _positive_ms("--max-gap-ms", args.max_gap_ms)
     _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": args.output})
     model = _load_model(args.model)
+    _note_turned("resample", model, args.as_shown)
     ticks = model_ticks_ms(model, args.rate, args.start_ms, args.end_ms)
     result = resample(
         load_detections(args.detections, camera=args.camera),
@@ -950,6 +980,7 @@ def _run_resample(args) -> None:
         ticks,
         max_gap_ms=max_gap_ms,
         exposure_ms=exposures,
+        as_shown=args.as_shown,
         source=str(args.detections),
     )
     write_table(result.tracks, args.output)

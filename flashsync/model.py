@@ -55,6 +55,9 @@ class CameraClock:
         Standard deviation of each frame time beyond the map's (the frame clock's: stamps
         kept as they are, a clock's wander, segments of a clock that changed rate), ms;
         zeros where the frame times are exact up to the map (the default).
+    display_rotation_deg : int
+        Degrees counterclockwise a player turns the stored frames for showing (-90, 0, 90 or
+        180: the display matrix of a phone held upright); rows are always the stored frame's.
     """
 
     name: str
@@ -71,6 +74,7 @@ class CameraClock:
     drift_knots_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     drift_warp_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     frame_std_ms: np.ndarray | None = None
+    display_rotation_deg: int = 0
 
     def __post_init__(self):
         if self.frame_std_ms is None:
@@ -83,6 +87,15 @@ class CameraClock:
     def readout_row(self, row: np.ndarray) -> np.ndarray:
         """Readout index (0 = first row read) of stored-image rows."""
         return readout_rows(np.asarray(row, dtype=np.float64), self.height, self.flipped)
+
+    def stored_row(self, x_shown: np.ndarray, y_shown: np.ndarray) -> np.ndarray:
+        """Stored-image row (px) of points given in the picture a player shows: the stored
+        frame turned :attr:`display_rotation_deg` counterclockwise (as OpenCV reads it by
+        default); pixel-centre coordinates, arrays of one shape (``x_shown`` unused at 0 and
+        180 degrees)."""
+        x, y = np.asarray(x_shown, dtype=np.float64), np.asarray(y_shown, dtype=np.float64)
+        last = self.height - 1.0
+        return {0: y, 90: x, 180: last - y, -90: last - x}[self.display_rotation_deg]
 
     def t_global_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
         """Global time (ms) of the end of exposure of ``row`` in ``frame``.

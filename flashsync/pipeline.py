@@ -616,9 +616,9 @@ def _turned_for_display(cameras: dict[str, CameraDetection]) -> list[str]:
     and a detection's ``y``, are the stored frame's, not the picture's a player shows."""
     return [
         f"{d.video}: its frames are stored turned ({d.display_rotation_deg} degrees counterclockwise for display, "
-        "as a phone held upright records); rows here are the stored frame's, so give detections in its pixels "
-        "(OpenCV turns frames upright unless CAP_PROP_ORIENTATION_AUTO is 0), or their times are off by up to "
-        "a frame's readout"
+        "as a phone held upright records); rows here are the stored frame's: give restamp, validate and resample "
+        "detections from the picture as shown (OpenCV turns frames upright unless CAP_PROP_ORIENTATION_AUTO is 0) "
+        "with --as-shown, or their times are off by up to a frame's readout"
         for d in cameras.values()
         if d.display_rotation_deg
     ]
@@ -913,6 +913,7 @@ class _Attempt:
                 str(d.video),
                 s.knots_ms,
                 s.warp_ms,
+                display_rotation_deg=d.display_rotation_deg,
             )
         return SyncModel(reference, clocks, self.matches.table(self.solution))
 

@@ -269,6 +269,18 @@ CASES = [
         ['"covariance"', "3 rows of 3"],
     ),
     ("model frame std NaN", _restamp_with_model(_nonfinite_std), 1, ['"frame_std_ms" [0]']),
+    (
+        "model display turn of 45 degrees",
+        _restamp_with_model(_set("display_rotation_deg", 45)),
+        1,
+        ['"display_rotation_deg"', "is 45", "-90, 0, 90, 180"],
+    ),
+    (
+        "restamp --as-shown without x",
+        lambda t: ["restamp", _parquet(t), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv", "--as-shown"],
+        1,
+        ["d.parquet", "missing column x"],
+    ),
     ("model event of an unknown camera", _restamp_with_model(_event_camera), 1, ["events[0]", "nobody"]),
     (
         "model a folder",

@@ -107,6 +107,26 @@ def test_unusable_detections_are_counted(two_cameras):
     assert report.pairs == []
 
 
+def test_points_as_shown_of_a_turned_camera_are_timed_by_their_stored_rows(two_cameras):
+    """b's video is stored turned -90 degrees for display; its detections and homography in
+    the picture as shown (x' = H - 1 - y, y' = x) give, with ``as_shown``, the report of the
+    stored pixels (b's homography has a horizon far above the image: the shown picture's
+    bottom is its ground side)."""
+    detections, homographies = straight_track(two_cameras, {"a": 90.0, "b": 10.0})
+    homographies["b"][2] = [0.0, 1e-4, 1.0]
+    turned = replace(two_cameras, cameras={**two_cameras.cameras})
+    turned.cameras["b"] = replace(two_cameras.camera("b"), display_rotation_deg=-90)
+    height = turned.camera("b").height
+    is_b = detections.camera == "b"
+    shown = detections.copy()
+    shown.loc[is_b, "x"], shown.loc[is_b, "y"] = height - 1 - detections.y[is_b], detections.x[is_b]
+    shown_to_stored = np.array([[0.0, 1, 0], [-1, 0, height - 1], [0, 0, 1]])
+    shown_homographies = {**homographies, "b": homographies["b"] @ shown_to_stored}
+    expected = format_report(validate(detections, turned, homographies))
+    assert format_report(validate(shown, turned, shown_homographies, as_shown=True)) == expected
+    assert format_report(validate(shown, turned, shown_homographies)) != expected
+
+
 def test_image_to_plane():
     homography = np.array([[2.0, 0, 1], [0, 3, 0], [0, 0, 0.5]])
     np.testing.assert_allclose(image_to_plane(np.array([1.0, 0]), np.array([1.0, 2]), homography), [[6, 6], [2, 12]])

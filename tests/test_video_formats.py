@@ -12,9 +12,10 @@ from pathlib import Path
 
 import av
 import numpy as np
+import pandas as pd
 import pytest
 
-from flashsync import detect_videos, synchronize
+from flashsync import detect_videos, save_model, synchronize
 from flashsync.cli import main
 from flashsync.detect import VideoDetection
 from flashsync.evaluate import sync_errors
@@ -95,6 +96,54 @@ def test_a_video_stored_turned_for_display_is_named(synced_scenario, others, tmp
         for frame in read_segment(segment):
             state.push(*frame)
     assert state.finish().display_rotation_deg == -90
+
+
+@pytest.mark.parametrize("rotation_deg", [-90, 90, 180])
+def test_detections_in_the_picture_as_shown_are_restamped_with_as_shown(
+    rotation_deg, synced_scenario, others, truth, tmp_path, capsys
+):
+    """A tracker that reads a phone's video with OpenCV gets its frames turned upright (the
+    display matrix) and gives x, y in that picture. The model file keeps the turn, and
+    `restamp --as-shown` times such detections as their stored rows: to the digit as the
+    same points given in stored pixels, within 0.1 ms of the truth; read as stored rows they
+    are off by up to a frame's readout, and `restamp` without ``--as-shown`` warns."""
+    import cv2
+
+    video = tmp_path / "r.mp4"
+    reencode(synced_scenario / "r.mp4", video, "libx264", "yuv420p", {"crf": "18"}, rotation_deg=rotation_deg)
+    with av.open(str(video)) as container:
+        stored = next(container.decode(video=0)).to_ndarray(format="gray")
+    capture = cv2.VideoCapture(str(video))
+    shown = cv2.cvtColor(capture.read()[1], cv2.COLOR_BGR2GRAY)
+    capture.release()
+    quarter_turns = rotation_deg // 90  # counterclockwise, as np.rot90 turns
+    assert shown.shape == np.rot90(stored, quarter_turns).shape  # the premise: OpenCV shows it so turned
+    assert np.abs(shown.astype(int) - np.rot90(stored, quarter_turns)).mean() < 3
+
+    model, _ = synchronize(detect_videos([video], estimate_readout=True) + others)
+    save_model(model, tmp_path / "sync.json")
+    height, width = stored.shape
+    frame, row, column = (a.ravel() for a in np.meshgrid([3, 40, 70], [0, 45, 90, 179], [0, 100, 319]))
+    position = np.rot90(np.arange(height * width).reshape(height, width), quarter_turns)  # stored pixel shown where
+    y_of, x_of = np.empty(height * width), np.empty(height * width)
+    y_of[position.ravel()], x_of[position.ravel()] = np.indices(position.shape).reshape(2, -1)
+    pixel = row * width + column
+    for name, x, y in (("stored", column, row), ("shown", x_of[pixel], y_of[pixel])):
+        table = pd.DataFrame({"camera": "r", "frame": frame, "x": x, "y": y})
+        table.to_csv(tmp_path / f"{name}.csv", index=False)
+    model_file = str(tmp_path / "sync.json")
+
+    def restamped(name: str, *options: str) -> np.ndarray:
+        out = tmp_path / f"{name}{len(options)}.out.csv"
+        assert main(["restamp", str(tmp_path / f"{name}.csv"), "--model", model_file, "-o", str(out), *options]) == 0
+        return pd.read_csv(out)["t_global_ms"].to_numpy()
+
+    expected = restamped("stored")
+    assert "stored turned" in capsys.readouterr().err  # without --as-shown: a warning
+    assert np.array_equal(restamped("shown", "--as-shown"), expected)
+    assert "stored turned" not in capsys.readouterr().err
+    assert np.abs(expected - truth.global_time_ms("r", frame, row)).max() < 0.1
+    assert np.nanmax(np.abs(restamped("shown") - expected)) > 2.0
 
 
 def test_a_still_picture_stream_before_the_video_is_passed_over(synced_scenario, others, truth, original, tmp_path):

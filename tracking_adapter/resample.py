@@ -64,6 +64,7 @@ def resample(
     *,
     max_gap_ms: float | None = None,
     exposure_ms: Mapping[str, float] | None = None,
+    as_shown: bool = False,
     source: str = "detections",
 ) -> Resampled:
     """Interpolate every (camera, object) track at common instants.
@@ -71,8 +72,9 @@ def resample(
     Parameters
     ----------
     detections : DataFrame
-        ``camera``, ``frame`` (0-based), ``x``, ``y`` (stored-image px) and optionally an
-        object id ``object`` (or ``id``); without one each camera has one track.
+        ``camera``, ``frame`` (0-based), ``x``, ``y`` (stored-image px, or as shown with
+        ``as_shown``) and optionally an object id ``object`` (or ``id``); without one each
+        camera has one track.
     model : SyncModel
         The synchronisation model.
     ticks_ms : array of shape (n_ticks,)
@@ -83,6 +85,8 @@ def resample(
         default 2.5 frame periods of the track's camera.
     exposure_ms : mapping of str to float, optional
         Exposure per camera, ms, overriding the model's.
+    as_shown : bool
+        ``x`` and ``y`` are in the picture a player shows (:func:`tracking_adapter.restamp.restamp`).
     source : str
         Name of the detections file, for messages.
 
@@ -99,7 +103,9 @@ def resample(
     require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
     if max_gap_ms is not None and not (np.isfinite(max_gap_ms) and max_gap_ms > 0):
         raise InputError(f"{max_gap_ms}: the longest gap must be a positive time in ms", parameter="max_gap_ms")
-    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms, source=source)
+    stamped = restamp(
+        detections[["camera", "frame", "x", "y"]], model, exposure_ms=exposure_ms, as_shown=as_shown, source=source
+    )
     unknown = stamped.loc[stamped["restamp_error"] == "unknown camera", "camera"].unique()
     if len(unknown):
         raise InputError(

@@ -16,7 +16,11 @@ Every input row and column is kept, in order and unchanged, and new columns foll
 
 A row is stamped when its camera is in the model, its frame is an integer in
 ``[0, n_frames)`` and its ``y`` (stored-image row, px) lies in ``[-0.5, height - 0.5]``,
-the image's extent in pixel-centre coordinates.
+the image's extent in pixel-centre coordinates. With ``as_shown``, ``x`` and ``y`` are in
+the picture a player shows (the stored frame turned upright by the video's display matrix,
+as OpenCV reads it by default; :meth:`~flashsync.model.CameraClock.stored_row`): a camera
+turned a quarter either way takes its stored row from ``x``, which then lies in
+``[-0.5, height - 0.5]``.
 """
 
 from __future__ import annotations
@@ -61,11 +65,20 @@ REASONS = (
     "y missing",
     "y not a number",
     "y outside the image rows",
+    "x missing",
+    "x not a number",
+    "x outside the shown image",
     "no finite time from the model",
 )
 NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "restamp_error")
 _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
 _BATCH_ROWS = 1 << 20
+
+
+def coordinate_columns(as_shown: bool) -> tuple[str, ...]:
+    """The columns a detection is stamped from: :data:`REQUIRED_COLUMNS`, and ``x`` for
+    points given as shown."""
+    return REQUIRED_COLUMNS + ("x",) * as_shown
 
 
 @dataclass
@@ -97,6 +110,7 @@ def restamp(
     *,
     exposure_ms: Mapping[str, float] | None = None,
     with_std: bool = False,
+    as_shown: bool = False,
     source: str = "detections",
 ) -> pd.DataFrame:
     """Add global times to a detections table.
@@ -112,6 +126,9 @@ def restamp(
         Exposure time per camera, ms; overrides the model's value for those cameras.
     with_std : bool
         Add ``t_global_std_ms``.
+    as_shown : bool
+        ``x`` and ``y`` are in the picture a player shows, not the stored frame's pixels
+        (module docstring); ``x`` is then required too.
     source : str
         Name of the table's file, used in error messages.
 
@@ -127,11 +144,11 @@ def restamp(
     >>> stamped = restamp(pd.read_csv("detections.csv"), load_model("sync.json"))  # doctest: +SKIP
     >>> stamped.loc[stamped.restamp_error.isna(), "t_global_ms"]                    # doctest: +SKIP
     """
-    names = list(detections.columns)
-    require_columns(names, REQUIRED_COLUMNS, source)
+    names, needed = list(detections.columns), coordinate_columns(as_shown)
+    require_columns(names, needed, source)
     _check_free(names, source)
     exposures = _exposures(model, exposure_ms)
-    arrays = [_series_to_arrow(detections[name]) for name in REQUIRED_COLUMNS]
+    arrays = [_series_to_arrow(detections[name]) for name in needed]
     check_required_types({"camera": arrays[0].type}, source)
     columns, reasons = _stamp(arrays, model, exposures, with_std)
     columns["restamp_error"] = pd.array(np.array([None, *REASONS], dtype=object)[reasons], dtype="str")
@@ -147,6 +164,7 @@ def restamp_file(
     input_format: str | None = None,
     exposure_ms: Mapping[str, float] | None = None,
     with_std: bool = False,
+    as_shown: bool = False,
     block_bytes: int = 1 << 24,
 ) -> RestampSummary:
     """Re-stamp a detections file into another, streaming, with bounded memory.
@@ -173,6 +191,8 @@ def restamp_file(
         Exposure time per camera, ms; overrides the model's value.
     with_std : bool
         Add ``t_global_std_ms``.
+    as_shown : bool
+        ``x`` and ``y`` are in the picture a player shows (:func:`restamp`).
     block_bytes : int
         Size of the CSV blocks read at a time, bytes; memory use is a small multiple.
 
@@ -194,11 +214,22 @@ def restamp_file(
         )
     exposures = _exposures(model, exposure_ms)
     summary = RestampSummary(source=str(in_path), output=str(out_path))
+    needed = coordinate_columns(as_shown)
     if kind == "csv" and out_kind == "csv":
-        _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std, block_bytes, summary)
+        _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std, needed, block_bytes, summary)
     else:
         _restamp_batches(
-            Path(in_path), kind, camera, Path(out_path), out_kind, model, exposures, with_std, block_bytes, summary
+            Path(in_path),
+            kind,
+            camera,
+            Path(out_path),
+            out_kind,
+            model,
+            exposures,
+            with_std,
+            needed,
+            block_bytes,
+            summary,
         )
     return summary
 
@@ -214,6 +245,7 @@ def restamp_folder(
     *,
     exposure_ms: Mapping[str, float] | None = None,
     with_std: bool = False,
+    as_shown: bool = False,
     scheduler: str | None = None,
 ) -> RestampSummary:
     """Re-stamp a folder of detections tables (a partitioned dataset) partition by partition.
@@ -228,7 +260,7 @@ def restamp_folder(
     Parameters
     ----------
     in_folder, out_folder : str or Path
-    model, exposure_ms, with_std : as for :func:`restamp_file`.
+    model, exposure_ms, with_std, as_shown : as for :func:`restamp_file`.
     scheduler : ``tcp://HOST:PORT`` or ``local:N``: the partitions are re-stamped on that Dask
         cluster (:mod:`flashsync.cluster`), whose workers see both folders under the same paths.
 
@@ -245,7 +277,7 @@ def restamp_folder(
         raise InputError(f"{out_folder}: exists and is not an empty folder; give a new folder for the output")
     out_folder.parent.mkdir(parents=True, exist_ok=True)
     scratch = Path(tempfile.mkdtemp(prefix=f".{out_folder.name}.", dir=out_folder.parent))
-    options = {"exposure_ms": exposure_ms, "with_std": with_std}
+    options = {"exposure_ms": exposure_ms, "with_std": with_std, "as_shown": as_shown}
     try:
         sources, targets = [in_folder / f for f in files], [scratch / f for f in files]
         if scheduler is None:
@@ -286,19 +318,20 @@ def _restamp_csv_text(
     model: SyncModel,
     exposures: dict[str, float | None],
     with_std: bool,
+    needed: tuple[str, ...],
     block_bytes: int,
     summary: RestampSummary,
 ) -> None:
     header = read_csv_header(in_path)
-    require_columns(header.names, REQUIRED_COLUMNS, in_path)
+    require_columns(header.names, needed, in_path)
     _check_free(header.names, in_path)
     options = dict(
         read_options=pacsv.ReadOptions(column_names=header.names),
         parse_options=pacsv.ParseOptions(newlines_in_values=False),
         convert_options=pacsv.ConvertOptions(
-            include_columns=list(REQUIRED_COLUMNS),
+            include_columns=list(needed),
             strings_can_be_null=True,
-            column_types={name: pa.string() for name in REQUIRED_COLUMNS},
+            column_types={name: pa.string() for name in needed},
         ),
     )
     names = _new_columns(exposures, with_std)
@@ -321,7 +354,7 @@ def _restamp_csv_text(
                 ) from None
             if table.num_rows != int(filled.sum()):
                 raise InputError(f"{in_path}: a quoted value spans several lines; remove the line breaks inside values")
-            columns, reasons = _stamp([table.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std)
+            columns, reasons = _stamp([table.column(name) for name in needed], model, exposures, with_std)
             _count(reasons, summary)
             texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string()) for name in names[:-1]]
             texts.append(_reason_texts(reasons))
@@ -377,11 +410,12 @@ def _restamp_batches(
     model: SyncModel,
     exposures: dict[str, float | None],
     with_std: bool,
+    needed: tuple[str, ...],
     block_bytes: int,
     summary: RestampSummary,
 ) -> None:
     schema, batches = _read_batches(in_path, kind, camera, block_bytes)
-    require_columns(schema.names, REQUIRED_COLUMNS, in_path)
+    require_columns(schema.names, needed, in_path)
     check_required_types(dict(zip(schema.names, schema.types)), in_path)
     _check_free(schema.names, in_path)
     nested = [i for i, kind in enumerate(schema.types) if out_kind == "csv" and pa.types.is_nested(kind)]
@@ -395,9 +429,7 @@ def _restamp_batches(
         with writer:
             try:
                 for batch in batches:
-                    columns, reasons = _stamp(
-                        [batch.column(name) for name in REQUIRED_COLUMNS], model, exposures, with_std
-                    )
+                    columns, reasons = _stamp([batch.column(name) for name in needed], model, exposures, with_std)
                     _count(reasons, summary)
                     new = [pa.array(columns[name], from_pandas=True) for name in names[:-1]]
                     old = [_json_texts(column) if i in nested else column for i, column in enumerate(batch.columns)]
@@ -431,7 +463,8 @@ def _read_batches(
 def _stamp(
     arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None], with_std: bool
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays.
+    """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays, and an ``x``
+    array where the points are given as shown (:func:`coordinate_columns`).
 
     Returns
     -------
@@ -444,11 +477,15 @@ def _stamp(
     codes, names = _camera_codes(arrays[0])
     frame, frame_text = _to_float(arrays[1])
     y, y_text = _to_float(arrays[2])
+    as_shown = len(arrays) == 4
+    x, x_text = _to_float(arrays[3]) if as_shown else (np.full(len(y), np.nan), np.zeros(len(y), dtype=bool))
     clocks = [model.cameras.get(name) for name in names]
     codes = np.where(codes < 0, len(clocks), codes)  # missing camera -> last entry
     known = np.array([clock is not None for clock in clocks] + [True])
     n_frames = np.array([clock.n_frames if clock else 0 for clock in clocks] + [0])
     height = np.array([clock.height if clock else 0 for clock in clocks] + [0])
+    sideways = np.array([as_shown and clock is not None and abs(clock.display_rotation_deg) == 90 for clock in clocks])
+    from_x = np.append(sideways, False)[codes]  # the stored row comes from x
     with np.errstate(invalid="ignore"):
         checks = [
             codes == len(clocks),
@@ -458,9 +495,12 @@ def _stamp(
             np.floor(frame) != frame,
             frame < 0,
             frame >= n_frames[codes],
-            np.isnan(y) & ~y_text,
-            y_text,
-            (y < -0.5) | (y > height[codes] - 0.5),
+            np.isnan(y) & ~y_text & ~from_x,
+            y_text & ~from_x,
+            ((y < -0.5) | (y > height[codes] - 0.5)) & ~from_x,
+            np.isnan(x) & ~x_text & from_x,
+            x_text & from_x,
+            ((x < -0.5) | (x > height[codes] - 0.5)) & from_x,
         ]
     reasons = np.zeros(len(frame), dtype=np.int8)
     for code, failed in enumerate(checks, start=1):
@@ -471,10 +511,11 @@ def _stamp(
         if clock is None or not len(rows):
             continue
         frames = frame[rows].astype(np.int64)
+        stored = clock.stored_row(x[rows], y[rows]) if as_shown else y[rows]
         with np.errstate(over="ignore", invalid="ignore"):  # a time that overflows gets a reason below
-            columns["t_global_ms"][rows] = clock.t_global_ms(frames, y[rows])
+            columns["t_global_ms"][rows] = clock.t_global_ms(frames, stored)
             if "t_global_std_ms" in columns:
-                columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, y[rows])
+                columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, stored)
         if "t_center_ms" in columns and exposures[clock.name] is not None:
             columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposures[clock.name] / 2
     computed = [columns[name] for name in ("t_global_ms", "t_global_std_ms") if name in columns]

@@ -182,6 +182,7 @@ def validate(
     *,
     max_gap_ms: float | None = None,
     exposure_ms: Mapping[str, float] | None = None,
+    as_shown: bool = False,
     source: str = "detections",
 ) -> ValidationReport:
     """Cross-camera interpolation errors of fast objects, per ordered camera pair.
@@ -189,8 +190,9 @@ def validate(
     Parameters
     ----------
     detections : DataFrame
-        ``camera``, ``frame`` (0-based), ``x``, ``y`` (stored-image px) and optionally an
-        object id ``object`` (or ``id``); without one, all detections are one object.
+        ``camera``, ``frame`` (0-based), ``x``, ``y`` (stored-image px, or as shown with
+        ``as_shown``) and optionally an object id ``object`` (or ``id``); without one, all
+        detections are one object.
     model : SyncModel
         The synchronisation model.
     homographies : mapping of str to array of shape (3, 3)
@@ -200,6 +202,9 @@ def validate(
         periods of camera A.
     exposure_ms : mapping of str to float, optional
         Exposure per camera, ms, overriding the model's.
+    as_shown : bool
+        ``x`` and ``y`` are in the picture a player shows, as the homographies then are
+        (:func:`tracking_adapter.restamp.restamp`).
     source : str
         Name of the detections file, for error messages.
 
@@ -215,7 +220,9 @@ def validate(
     >>> print(format_report(report))                                  # doctest: +SKIP
     """
     require_columns(detections.columns, ("camera", "frame", "x", "y"), source)
-    stamped = restamp(detections[["camera", "frame", "y"]], model, exposure_ms=exposure_ms, source=source)
+    stamped = restamp(
+        detections[["camera", "frame", "x", "y"]], model, exposure_ms=exposure_ms, as_shown=as_shown, source=source
+    )
     not_used = stamped["restamp_error"].value_counts().to_dict()
     usable = stamped["restamp_error"].isna().to_numpy().copy()
     id_column = next((name for name in OBJECT_COLUMNS if name in detections.columns), None)
@@ -234,7 +241,9 @@ def validate(
     for name in set(cameras[usable]):
         mine = usable & (cameras == name)
         clock = model.camera(name)
-        beyond[mine] = beyond_horizon(x[mine], y_all[mine], np.asarray(homographies[name]), clock.width, clock.height)
+        size = (clock.width, clock.height)
+        width, height = size[::-1] if as_shown and abs(clock.display_rotation_deg) == 90 else size
+        beyond[mine] = beyond_horizon(x[mine], y_all[mine], np.asarray(homographies[name]), width, height)
     _add(not_used, "beyond the horizon of its camera's homography", int(np.count_nonzero(beyond)))
     usable &= ~beyond
 
@@ -254,8 +263,10 @@ def validate(
     for name in used:
         mine = names == name
         plane[mine] = image_to_plane(x[mine], y[mine], np.asarray(homographies[name]))
+        clock = model.camera(name)
+        row = clock.stored_row(x[mine], y[mine]) if as_shown else y[mine]
         for time_model in TIME_MODELS:
-            times[time_model][mine] = _times(model.camera(name), time_model, frames[mine], y[mine]) - shift[mine]
+            times[time_model][mine] = _times(clock, time_model, frames[mine], row) - shift[mine]
 
     report = ValidationReport(pairs=[], instant=instant, not_used=not_used)
     object_names = pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"])
@@ -328,14 +339,14 @@ def format_report(report: ValidationReport) -> str:
     return "\n".join(lines)
 
 
-def _times(clock: CameraClock, time_model: str, frames: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """End-of-exposure times (ms) of detections under one time model."""
+def _times(clock: CameraClock, time_model: str, frames: np.ndarray, row: np.ndarray) -> np.ndarray:
+    """End-of-exposure times (ms) of detections in stored rows ``row`` under one time model."""
     if time_model == "frame":
         return clock.t_global_ms(frames, np.full(len(frames), (clock.height - 1) / 2))
     if time_model == "no_drift":
         mean_ms = float(np.mean(clock.frame_times_ms))
         clock = replace(clock, alpha=1.0, beta_ms=clock.beta_ms + (clock.alpha - 1) * mean_ms)
-    return clock.t_global_ms(frames, y)
+    return clock.t_global_ms(frames, row)
 
 
 def _pair_stats(

@@ -244,6 +244,7 @@ class Candidate:
                 drift_knots_ms=knots,
                 drift_warp_ms=warp,
                 frame_std_ms=clock.std_ms,
+                display_rotation_deg=camera.display_rotation_deg,
             )
         edges = measurement.edges
         leading = ~self.features.trailing

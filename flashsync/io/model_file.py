@@ -15,6 +15,8 @@ from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
 
 FORMAT = "flashsync.sync"
 VERSION = 1
+#: A camera's ``display_rotation_deg`` (optional; 0 where absent, as in files before it).
+ROTATIONS_DEG = (-90, 0, 90, 180)
 TIME_CONVENTION = (
     "t_global_ms = alpha * t_frame_ms + beta_ms + warp(t_frame_ms) + q * row_time_ms, the "
     "end-of-exposure instant of stored row r (q = r, or height - 1 - r when flipped) on the "
@@ -113,6 +115,7 @@ def _camera_to_dict(camera: CameraClock) -> dict:
         "exposure_ms": camera.exposure_ms,
         "frame_times_ms": camera.frame_times_ms.tolist(),
         "frame_std_ms": float(std[0]) if std.size and np.all(std == std[0]) else std.tolist(),
+        "display_rotation_deg": camera.display_rotation_deg,
     }
 
 
@@ -133,6 +136,9 @@ def _camera_from_fields(entry: Fields) -> CameraClock:
             frame_std = entry.numbers("frame_std_ms", length=len(frame_times), minimum=0.0)
         else:
             frame_std = np.full(len(frame_times), entry.number("frame_std_ms", minimum=0.0))
+    rotation = entry.integer("display_rotation_deg") if entry.has("display_rotation_deg") else 0
+    if rotation not in ROTATIONS_DEG:
+        entry.fail("display_rotation_deg", f"is {rotation}, expected one of {', '.join(map(str, ROTATIONS_DEG))}")
     return CameraClock(
         name=name,
         video=entry.text("video", nonempty=False),
@@ -148,6 +154,7 @@ def _camera_from_fields(entry: Fields) -> CameraClock:
         exposure_ms=entry.number("exposure_ms", minimum=0.0, optional=True),
         frame_times_ms=frame_times,
         frame_std_ms=frame_std,
+        display_rotation_deg=rotation,
     )
 
 
