@@ -1,6 +1,7 @@
 """flashsync resample: tracks interpolated at common ticks, against the simulated puck path."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -44,6 +45,26 @@ def resampled(synced_scenario):
     model = load_model(synced_scenario / "sync.json")
     detections = load_detections(synced_scenario / "detections.csv")
     return model, detections, resample(detections, model, model_ticks_ms(model, 100.0))
+
+
+def test_points_as_shown_of_a_turned_camera_resample_as_their_stored_pixels(resampled):
+    """Camera r stored upside down for display: its detections in the picture as shown
+    (x' = W - 1 - x, y' = H - 1 - y) resample with ``as_shown`` to the stored ones' ticks
+    and gaps, at the shown positions."""
+    model, detections, result = resampled
+    turned = replace(model, cameras={**model.cameras, "r": replace(model.camera("r"), display_rotation_deg=180)})
+    clock, mine = turned.camera("r"), detections["camera"] == "r"
+    shown = detections.copy()
+    shown.loc[mine, "x"] = clock.width - 1 - detections.loc[mine, "x"]
+    shown.loc[mine, "y"] = clock.height - 1 - detections.loc[mine, "y"]
+    ticks = model_ticks_ms(model, 100.0)
+    again = resample(shown, turned, ticks, as_shown=True).tracks
+    expected = result.tracks.copy()
+    on_r = expected["camera"] == "r"
+    expected.loc[on_r, "x"] = clock.width - 1 - expected.loc[on_r, "x"]
+    expected.loc[on_r, "y"] = clock.height - 1 - expected.loc[on_r, "y"]
+    pd.testing.assert_frame_equal(again, expected)
+    assert not resample(shown, turned, ticks).tracks["gap_ms"].equals(expected["gap_ms"])
 
 
 def test_resampled_positions_follow_the_simulated_puck(synced_scenario, resampled):
