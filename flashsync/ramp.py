@@ -194,7 +194,7 @@ class BandFit:
         """The cost per degree of freedom (about the variance of a row's change)."""
         return _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)
 
-    def with_width(self, width: float, longer: bool = False) -> tuple[BandFit, float] | None:
+    def with_width(self, width: float, longer: bool = False, unsettled: bool = False) -> tuple[BandFit, float] | None:
         """This band fitted again with its exposure fixed at ``width`` rows, and the fit's
         cost; None where it does not converge. Where the pulse may be ``longer`` than the
         exposure (a rectangular pulse and the exposure trade places, :func:`_clamp`), the
@@ -206,7 +206,8 @@ class BandFit:
         fit that has not settled still counts with the cost it reached: hold, blur and decay
         trade along flat valleys there, and each band counted as failed put a spike of
         :data:`BAND_COST_CAP` into :func:`common_width`'s costs (on the 40 kept random rigs a
-        reference's 6.9-row exposure read as 2.7 rows)."""
+        reference's 6.9-row exposure read as 2.7 rows). ``unsettled`` counts such fits where
+        the pulse may not be longer too: the plain reading scored as the other one is."""
         f_scale = _f_scale(self.p)
         own = self.free.copy()
         own[4] = False
@@ -221,7 +222,7 @@ class BandFit:
         best = None
         for p, free in tries:
             fitted, converged = _fit(self.x, self.y, p, free, f_scale, BAND, longer)
-            if not (converged or longer) or (fitted[1] > width and fitted[2] > RECTANGLE_TAIL * fitted[1]):
+            if not (converged or longer or unsettled) or (fitted[1] > width and fitted[2] > RECTANGLE_TAIL * fitted[1]):
                 continue
             cost = _data_cost(self.x, self.y, fitted, f_scale, BAND)
             if not np.isfinite(cost):
@@ -358,7 +359,12 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     :data:`SWAP_EVIDENCE` of the least, the longest (:func:`_longest_minimum`), refined to
     :data:`WIDTH_TOLERANCE` rows, then the longest width from there that costs at most
     :data:`FLAT_EVIDENCE` more (:func:`_upper_end`). That reading is taken only where it
-    explains the bands better (:func:`_explains_better`) and the pulses it finds longer
+    explains the bands better (:func:`_explains_better`) than the plain one scored alike
+    (each band's fit that has not settled counted with the cost it reached, as the longer
+    pulses' are, :meth:`BandFit.with_width`; the plain exposure itself is read from settled
+    fits, which place it better: counted alike there too, a reference's exposure moved
+    0.37 ms; compared with spikes of failed fits, slow-rising pulses shorter than a 52-row
+    exposure were read as 19-row exposures of 1.6 ms rectangles) and the pulses it finds longer
     than the exposure differ (:func:`_pulses_differ`: one pulse length for every flash
     tells the two readings apart no better than one band does; a random rig's 98-row
     camera, whose two false bands 23 and 7 rows long made its bands' widths differ, was
@@ -376,12 +382,13 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     own = np.array([_data_cost(fit.x, fit.y, fit.p, _f_scale(fit.p), BAND) for fit in fits])
     scales = np.array([max(fit.variance, 1e-12) for fit in fits])
 
-    def total(width: float, longer: bool, limit: float = np.inf) -> tuple[float, np.ndarray]:
+    def total(width: float, longer: bool, limit: float = np.inf, unsettled: bool = False) -> tuple[float, np.ndarray]:
         """The bands' summed cost at ``width`` (as soon as it reaches ``limit``, that far),
-        and which bands' pulses are then the longer, shape (n_bands,)."""
+        and which bands' pulses are then the longer, shape (n_bands,)
+        (:meth:`BandFit.with_width`)."""
         cost, outlasted = 0.0, np.zeros(len(fits), dtype=bool)
         for k, (fit, least, scale) in enumerate(zip(fits, own, scales)):
-            refit = fit.with_width(width, longer)
+            refit = fit.with_width(width, longer, unsettled)
             cost += BAND_COST_CAP if refit is None else min(max(refit[1] - least, 0.0) / scale, BAND_COST_CAP)
             outlasted[k] = refit is not None and refit[0].p[1] > width
             if cost >= limit:
@@ -394,6 +401,8 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     longest = max(SHORTER_SHARE * float(np.median(widths)), plain[0])
     if plain[1] < SWAP_EVIDENCE or not _pulses_differ(widths) or longest <= SHORTEST_ROWS:
         return plain[0], False
+    alike = _plain_width(widths, lambda width: total(width, False, unsettled=True)[0])
+    plain = (plain[0], min(plain[1], alike[1]))  # the plain reading's cost scored as the other's
     step = 1 + REFINED_SHARE
     grid = SHORTEST_ROWS * step ** np.arange(math.ceil(math.log(longest / SHORTEST_ROWS, step)) + 1)
     paired = (np.abs(widths[:, None] - widths) <= PINNED_SHARE * widths[:, None]).sum(axis=1) >= 2
