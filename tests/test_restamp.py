@@ -1,6 +1,7 @@
 """restamp: the detections contract (rows, columns, order, values kept), formats, bad rows."""
 
 import io
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -181,6 +182,33 @@ def test_bad_row_is_kept_with_a_reason(tmp_path, model, case, route):
         assert summary.failed == {reason: 1} and summary.rows == 3
         out = pd.read_parquet(target) if target.suffix == ".parquet" else pd.read_csv(target, dtype={"id": str})
     assert list(out["id"]) == ["a", "b", "c"]
+    assert pd.isna(out.t_global_ms.iloc[1]) and out.restamp_error.iloc[1] == reason
+    assert out.t_global_ms.iloc[0] == pytest.approx(expected_time("cam1", 1, 2.5))
+    assert out.t_global_ms.iloc[2] == pytest.approx(expected_time("cam2", 4, 7.0))
+    assert out.restamp_error.iloc[[0, 2]].isna().all()
+
+
+AS_SHOWN_BAD_ROWS = {
+    "nan x": ("NaN", "x missing"),
+    "text x": ("left", "x not a number"),
+    "x past the shown picture": ("80", "x outside the shown image"),
+}
+
+
+@pytest.mark.parametrize("route", ["dataframe", "csv"])
+@pytest.mark.parametrize("case", list(AS_SHOWN_BAD_ROWS))
+def test_as_shown_a_camera_turned_sideways_takes_its_row_from_x(tmp_path, model, case, route):
+    """cam2 stored turned 90 degrees counterclockwise for display: given as shown, a point's
+    stored row is its x (its y, here text, is not needed); cam1, not turned, needs no x."""
+    x, reason = AS_SHOWN_BAD_ROWS[case]
+    turned = SyncModel("cam1", {**model.cameras, "cam2": replace(model.camera("cam2"), display_rotation_deg=90)})
+    text = f"camera,frame,x,y,id\ncam1,1,,2.5,a\ncam2,4,{x},left,b\ncam2,4,7,left,c\n"
+    if route == "dataframe":
+        out = restamp(pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False), turned, as_shown=True)
+    else:
+        summary = restamp_file(write(tmp_path / "in.csv", text), tmp_path / "out.csv", turned, as_shown=True)
+        assert summary.failed == {reason: 1}
+        out = pd.read_csv(tmp_path / "out.csv")
     assert pd.isna(out.t_global_ms.iloc[1]) and out.restamp_error.iloc[1] == reason
     assert out.t_global_ms.iloc[0] == pytest.approx(expected_time("cam1", 1, 2.5))
     assert out.t_global_ms.iloc[2] == pytest.approx(expected_time("cam2", 4, 7.0))
