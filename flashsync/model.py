@@ -88,6 +88,12 @@ class CameraClock:
         """Readout index (0 = first row read) of stored-image rows."""
         return readout_rows(np.asarray(row, dtype=np.float64), self.height, self.flipped)
 
+    @property
+    def sideways(self) -> bool:
+        """A player shows the stored frames turned a quarter either way (width and height
+        swap places)."""
+        return abs(self.display_rotation_deg) == 90
+
     def stored_row(self, x_shown: np.ndarray, y_shown: np.ndarray) -> np.ndarray:
         """Stored-image row (px) of points given in the picture a player shows: the stored
         frame turned :attr:`display_rotation_deg` counterclockwise (as OpenCV reads it by

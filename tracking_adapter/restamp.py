@@ -75,7 +75,7 @@ _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
 _BATCH_ROWS = 1 << 20
 
 
-def coordinate_columns(as_shown: bool) -> tuple[str, ...]:
+def _coordinate_columns(as_shown: bool) -> tuple[str, ...]:
     """The columns a detection is stamped from: :data:`REQUIRED_COLUMNS`, and ``x`` for
     points given as shown."""
     return REQUIRED_COLUMNS + ("x",) * as_shown
@@ -144,7 +144,7 @@ def restamp(
     >>> stamped = restamp(pd.read_csv("detections.csv"), load_model("sync.json"))  # doctest: +SKIP
     >>> stamped.loc[stamped.restamp_error.isna(), "t_global_ms"]                    # doctest: +SKIP
     """
-    names, needed = list(detections.columns), coordinate_columns(as_shown)
+    names, needed = list(detections.columns), _coordinate_columns(as_shown)
     require_columns(names, needed, source)
     _check_free(names, source)
     exposures = _exposures(model, exposure_ms)
@@ -214,7 +214,7 @@ def restamp_file(
         )
     exposures = _exposures(model, exposure_ms)
     summary = RestampSummary(source=str(in_path), output=str(out_path))
-    needed = coordinate_columns(as_shown)
+    needed = _coordinate_columns(as_shown)
     if kind == "csv" and out_kind == "csv":
         _restamp_csv_text(Path(in_path), Path(out_path), model, exposures, with_std, needed, block_bytes, summary)
     else:
@@ -464,7 +464,7 @@ def _stamp(
     arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None], with_std: bool
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays, and an ``x``
-    array where the points are given as shown (:func:`coordinate_columns`).
+    array where the points are given as shown (:func:`_coordinate_columns`).
 
     Returns
     -------
@@ -484,7 +484,7 @@ def _stamp(
     known = np.array([clock is not None for clock in clocks] + [True])
     n_frames = np.array([clock.n_frames if clock else 0 for clock in clocks] + [0])
     height = np.array([clock.height if clock else 0 for clock in clocks] + [0])
-    sideways = np.array([as_shown and clock is not None and abs(clock.display_rotation_deg) == 90 for clock in clocks])
+    sideways = np.array([as_shown and clock is not None and clock.sideways for clock in clocks])
     from_x = np.append(sideways, False)[codes]  # the stored row comes from x
     with np.errstate(invalid="ignore"):
         checks = [

@@ -241,8 +241,7 @@ def validate(
     for name in set(cameras[usable]):
         mine = usable & (cameras == name)
         clock = model.camera(name)
-        size = (clock.width, clock.height)
-        width, height = size[::-1] if as_shown and abs(clock.display_rotation_deg) == 90 else size
+        width, height = (clock.height, clock.width) if as_shown and clock.sideways else (clock.width, clock.height)
         beyond[mine] = beyond_horizon(x[mine], y_all[mine], np.asarray(homographies[name]), width, height)
     _add(not_used, "beyond the horizon of its camera's homography", int(np.count_nonzero(beyond)))
     usable &= ~beyond
