@@ -973,26 +973,49 @@ def _attempt(
         for index, name in enumerate(connected)
     }
 
-    def priors(given: dict[str, float]) -> Priors:
-        return Priors(_row_time_priors(chosen, given), wider_drift_std=wider)
+    def priors(given: dict[str, float], flicker: dict[str, Flicker]) -> Priors:
+        return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider)
 
-    def solve(given: dict[str, float]) -> Solution:
-        return solve_with_drift_model(observations, len(connected), connected.index(reference), priors=priors(given))
+    def solve(given: dict[str, float], flicker: dict[str, Flicker]) -> Solution:
+        return solve_with_drift_model(
+            observations, len(connected), connected.index(reference), priors=priors(given, flicker)
+        )
 
     given = {name: value for name, value in (row_times or {}).items() if name in connected}
-    solution = solve(given)
-    if given:
-        contradicted = _contradicted_row_times(solve({}), connected, given, chosen)
+    flicker = {
+        name: seen for name, seen in zip(connected, mains_flicker(chosen)) if seen is not None and name not in given
+    }
+    solution = solve(given, flicker)
+    if given or flicker:
+        free = solve({}, {})
+        contradicted = _contradicted_row_times(free, connected, given, chosen)
         for name, (value, std) in contradicted.items():
             warnings.append(
                 f"{cameras[name].video}: the datasheet time per row {given[name]:g} ms contradicts the events, "
                 f"which give {value:.5f} ± {std:.5f} ms; the events' value is used"
             )
+        distrusted = _contradicted_flicker(free, connected, flicker)
+        for name, (value, std) in distrusted.items():
+            row_time, spread = flicker_row_time_ms(flicker[name])
+            warnings.append(
+                f"{cameras[name].video}: the time per row its rolling mains flicker tells, {row_time:.5f} ± "
+                f"{spread:.5f} ms, contradicts the events, which give {value:.5f} ± {std:.5f} ms (the flicker's "
+                "period or mains frequency misread through the codec); the events' value is used"
+            )
         given = {name: value for name, value in given.items() if name not in contradicted}
-        if contradicted:
-            solution = solve(given)
+        flicker = {name: seen for name, seen in flicker.items() if name not in distrusted}
+        if contradicted or distrusted:
+            solution = solve(given, flicker)
     return _Attempt(
-        cameras, connected, matching.alignments, warnings, matches, observations, solution, priors(given), reference
+        cameras,
+        connected,
+        matching.alignments,
+        warnings,
+        matches,
+        observations,
+        solution,
+        priors(given, flicker),
+        reference,
     )
 
 
@@ -1023,6 +1046,24 @@ DRIFT_PRIOR_WIDENING = 3.0
 #: standard deviations and this fraction of itself away from their own estimate.
 ROW_TIME_SIGMAS = 5.0
 ROW_TIME_TOLERANCE = 0.01
+
+
+def _contradicted_flicker(
+    free: Solution, connected: list[str], flicker: dict[str, Flicker]
+) -> dict[str, tuple[float, float]]:
+    """The cameras whose mains flicker's time per row (:func:`flicker_row_time_ms`) the events
+    alone (``free``: solved with the weak nominal prior) contradict: more than
+    :data:`ROW_TIME_SIGMAS` standard deviations of the two together apart. Through the codec
+    a flicker's period came out up to 12 % off, and a 100 Hz flicker was named 120 Hz (20 %):
+    camera -> (the events' value, its std), ms."""
+    contradicted = {}
+    for name, seen in flicker.items():
+        camera = free.cameras[connected.index(name)]
+        std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
+        row_time, spread = flicker_row_time_ms(seen)
+        if abs(camera.row_time_ms - row_time) > ROW_TIME_SIGMAS * np.hypot(std, spread):
+            contradicted[name] = (camera.row_time_ms, std)
+    return contradicted
 
 
 def _contradicted_row_times(
@@ -1071,15 +1112,20 @@ def flicker_row_time_ms(flicker: Flicker) -> tuple[float, float]:
     return row_time, row_time * max(spread if np.isfinite(spread) else 0.0, FLICKER_ROW_TIME_STD)
 
 
-def _row_time_priors(cameras: list[CameraDetection], row_times: dict[str, float]) -> dict[int, tuple[float, float]]:
-    """Per camera index: a datasheet T_row (std 0.01 %), else the mains flicker's
-    (:func:`mains_flicker`, :func:`flicker_row_time_ms`), else the weak nominal prior."""
+def _row_time_priors(
+    cameras: list[CameraDetection], row_times: dict[str, float], flicker: dict[str, Flicker] | None = None
+) -> dict[int, tuple[float, float]]:
+    """Per camera index: a datasheet T_row (std 0.01 %), else its mains flicker's (``flicker``
+    by camera name, :func:`flicker_row_time_ms`; None: :func:`mains_flicker`), else the
+    weak nominal prior."""
+    if flicker is None:
+        flicker = {c.camera: seen for c, seen in zip(cameras, mains_flicker(cameras)) if seen is not None}
     priors = {}
-    for index, (camera, flicker) in enumerate(zip(cameras, mains_flicker(cameras))):
+    for index, camera in enumerate(cameras):
         if camera.camera in row_times:
             priors[index] = (row_times[camera.camera], 1e-4 * row_times[camera.camera])
-        elif flicker is not None:
-            priors[index] = flicker_row_time_ms(flicker)
+        elif camera.camera in flicker:
+            priors[index] = flicker_row_time_ms(flicker[camera.camera])
         else:
             nominal = nominal_row_time_ms(camera)
             priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
