@@ -144,6 +144,9 @@ LEARNING_STEPS = 4
 #: peak must reach for the Gauss-Newton steps to be taken (most videos have no flicker: one
 #: round of fits tells, at a quarter of the cost).
 PRETEST_MARGIN = 0.5
+#: Largest share of the fundamentals' spread (about their mean, and of what the other
+#: frequency leaves) that a mains frequency's roll may leave unexplained to be named.
+MAX_UNEXPLAINED = 1.0 / 3.0
 
 
 class FlickerRemover:
@@ -340,19 +343,20 @@ class FlickerRemover:
         The fundamentals are measured against a running mean that holds part of the pattern
         itself (its share is added back as it builds up, but not what it held at the start):
         the points lie on a circle about an unknown centre whose radius is the depth and along
-        which the phase advances; :func:`_circle` finds both."""
+        which the phase advances. Where a mains frequency's roll explains them
+        (:func:`_identify_hz`), its fit gives both; else :func:`_circle`."""
         if self._lock is None or len(self._fits) < 2:
             return None
         nu, nu_std = self._evidence.frequency()
         frames = np.array([f for f, _, _ in self._fits])
         times = np.array([t for _, t, _ in self._fits])
         points = np.array([z for _, _, z in self._fits])
-        centre, radius = _circle(points)
+        hz, centre, radius = _identify_hz(points, frames, times)
+        if hz is None:
+            centre, radius = _circle(points)
         phase = np.full(self._n_out, np.nan)
-        hz = None
         if np.isfinite(radius):
             phase[frames] = np.angle(points - centre)
-            hz = _identify_hz(phase[frames], times)
         return Flicker(hz, float(1.0 / nu), float(nu_std / nu**2), float(radius), len(frames), phase)
 
 
@@ -587,21 +591,57 @@ def _circle(points: np.ndarray) -> tuple[complex, float]:
     return centre, radius
 
 
-def _identify_hz(phase: np.ndarray, times: np.ndarray) -> float | None:
-    """100 or 120 Hz: the one whose advance over each frame step (``hz`` times the step,
-    in either readout direction, mod one period) the measured phases follow; None where both
-    do (a frame period that holds whole periods of both) or neither (not mains)."""
-    steps = np.diff(phase)
-    dt = np.diff(times)
-    if len(steps) < 3:
-        return None
-    scores = {}
+def _identify_hz(points: np.ndarray, frames: np.ndarray, times: np.ndarray) -> tuple[float | None, complex, float]:
+    """100 or 120 Hz: the mains flicker whose roll explains the frames' fundamentals best,
+    with the centre and radius of the circle its fit gives; (None, 0, NaN) where neither
+    explains them (a frame period that holds whole periods of both, a light not on mains, a
+    pattern the codec froze).
+
+    ``points`` (complex), ``frames`` (decoded frame numbers) and ``times`` (ms), one per
+    fitted frame. Each frequency, in either readout direction, is fitted as
+    ``c + a exp(±2 pi i hz t / 1000)`` by least squares on a steady clock through the stamps
+    (:func:`_steady_times`); it must leave at most :data:`MAX_UNEXPLAINED` of the points'
+    spread about their mean, and of what the other frequency leaves. (The phase steps about
+    :func:`_circle`'s centre, compared with each frequency's, named a cloud of fundamentals
+    120 Hz flicker: the circle through a cloud is a large one, on which it barely turns.)"""
+    none = (None, 0j, float("nan"))
+    if len(points) < 4:
+        return none
+    t = _steady_times(frames, times)
+    centred = points - points.mean()
+    spread = float(np.sum(np.abs(centred) ** 2))
+    fits = {}
     for hz in MAINS_FLICKER_HZ:
         for sign in (1.0, -1.0):
-            scores[(hz, sign)] = float(np.mean(np.cos(steps - sign * 2 * np.pi * hz * dt / 1000.0)))
-    best = max(scores, key=scores.get)
-    other = max(v for (hz, _), v in scores.items() if hz != best[0])
-    return best[0] if scores[best] >= 0.8 and other < 0.5 else None
+            phasor = np.exp(sign * 2j * np.pi * hz * t / 1000.0)
+            roll = phasor - phasor.mean()
+            weight = float(np.sum(np.abs(roll) ** 2))
+            if not weight > 1e-6 * len(t):  # standing: a roll of whole periods a frame
+                continue
+            a = np.sum(np.conj(roll) * centred) / weight
+            fits[(hz, sign)] = (float(np.sum(np.abs(centred - a * roll) ** 2)), a, phasor.mean())
+    if not fits or not spread > 0:
+        return none
+    best = min(fits, key=lambda key: fits[key][0])
+    left, a, mean_phasor = fits[best]
+    other = min((fits[key][0] for key in fits if key[0] != best[0]), default=spread)
+    if left > MAX_UNEXPLAINED * min(spread, other):
+        return none
+    return best[0], complex(points.mean() - a * mean_phasor), float(abs(a))
+
+
+def _steady_times(frames: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """The stamps ``times`` (ms) of decoded frames ``frames`` on a steady clock: each gap
+    counted in frame steps (the decoded frames it spans, more where its length holds more
+    steps: dropped frames), a line through the stamps over the count, and the count again at
+    the line's step. Stamps as they are (a 1 ms grid, a muxer's jitter) turn a 100 Hz phase
+    0.6 rad for each ms they are off."""
+    gaps, spans = np.diff(times), np.diff(frames)
+    step = float(np.median(gaps / spans))
+    for _ in range(2):
+        slots = np.concatenate([[0.0], np.cumsum(np.maximum(np.round(gaps / step), spans))])
+        step, start = np.polyfit(slots, times, 1)
+    return start + step * slots
 
 
 @njit
