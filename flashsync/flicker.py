@@ -557,7 +557,7 @@ def _rotation_per_ms(fundamentals: np.ndarray, times: np.ndarray) -> float:
     """How fast the pattern rolls, radians per ms, from consecutive frames' fundamentals:
     the angle between successive differences (the differences cancel any pattern frozen in
     the reference), over the median frame step; aliased to one frame step, which is all a
-    prediction of the next frame needs. None (0) where that roll predicts each next
+    prediction of the next frame needs. No roll (0) where that roll predicts each next
     fundamental worse than the one before it does: a slow roll (59.94 fps under 120 Hz
     flicker: 0.013 rad a frame) moves the fundamental less than the codec and the noise do,
     and the angle between the steps is theirs (-1.45 rad a frame on ``tests/clips/slow_roll.mp4``)."""

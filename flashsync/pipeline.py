@@ -999,8 +999,8 @@ def _attempt(
             row_time, spread = flicker_row_time_ms(flicker[name])
             warnings.append(
                 f"{cameras[name].video}: the time per row its rolling mains flicker tells, {row_time:.5f} ± "
-                f"{spread:.5f} ms, contradicts the events, which give {value:.5f} ± {std:.5f} ms (the flicker's "
-                "period or mains frequency misread through the codec); the events' value is used"
+                f"{spread:.5f} ms, contradicts the events, which give {value:.5f} ± {std:.5f} ms (through the "
+                "codec a flicker's period or mains frequency can be misread); the events' value is used"
             )
         given = {name: value for name, value in given.items() if name not in contradicted}
         flicker = {name: seen for name, seen in flicker.items() if name not in distrusted}
