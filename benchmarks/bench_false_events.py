@@ -15,12 +15,12 @@ a flash, and counts the detected events (the target is 0 in every case):
   30 fps, or 120 Hz, rolling at 25 fps), auto-exposure steps, and one at 29.97 fps under 5 %
   120 Hz flicker, which rolls slowly (0.004 of a period a frame: American footage under
   American mains);
-- ``rink-0.7ms-7%-59.94fps``: rig-307's cam7 of ``bench_rigs.py`` without its flashes: the
+- ``rink-0.7ms-7%-59.94fps``: after rig-307's cam7 of ``bench_rigs.py``, no flashes: the
   whole rink at 640x360, 59.94 fps, 0.73 ms under 7 % 120 Hz flicker rolling 0.002 of a
-  period a frame, crf 30, stamps on a 1 ms grid (the detector found 35 false events in its
-  8 s, 88 in 20 s of this clip).
+  period a frame, crf 30, stamps on a 1 ms grid (the detector found 35 false events in
+  rig-307's 8 s, 131 in 20 s of this case).
 
-All H.264 (crf 23-26, a key frame every 250 frames), sensor noise. Prints per case the
+All H.264 (crf 23-30, a key frame every 250 frames), sensor noise. Prints per case the
 frames, the false events and the detection throughput; the events themselves if any. With
 ``--keep DIR`` the clips are rendered into ``DIR/<case>`` and a clip kept there of exactly
 the same scenario is reused (ten minutes of the first seven cases took ~45 min to render, seconds

@@ -167,9 +167,9 @@ def test_b_frames_take_the_correction_of_the_reference_frame_they_copy():
 
 
 def test_a_slow_roll_through_the_codec_is_no_flash():
-    """4 s of ``bench_false_events``' ``rink-0.7ms-7%-59.94fps`` as rendered (rig-307's cam7
-    of the random rigs without its flashes: 59.94 fps, 0.73 ms, 7 % 120 Hz flicker, which
-    rolls 0.002 of a period a frame; crf 30, two B-frames, stamps on a 1 ms grid). From frame
+    """4 s of ``bench_false_events``' ``rink-0.7ms-7%-59.94fps`` as rendered (after rig-307's
+    cam7 of the random rigs, no flashes: 59.94 fps, 0.73 ms, 7 % 120 Hz flicker, which rolls
+    0.002 of a period a frame; crf 30, x264's default B-frames, stamps on a 1 ms grid). From frame
     to frame the fundamental moves less than the codec and the noise move it, and the angle
     between its successive steps came out -1.45 rad a frame: each frame's pattern was
     predicted turned by that, the fits followed the prediction off, and 13 false bands were

@@ -233,7 +233,7 @@ def test_equal_rate_cameras_without_split_bands_keep_an_honest_time_per_row():
 
 def test_a_mains_flicker_that_contradicts_the_flashes_is_not_a_prior():
     """rig-318 of the random rigs: two 59.94 fps cameras named their 100 Hz flicker 120 Hz,
-    and its period then told a time per row 20 % short, at 1.1-1.3 % standard deviation;
+    and its period then told a time per row 20 % short, at 1 % standard deviation;
     as the prior it took every 59.94 fps camera 20 % off (error/σ up to 22), 6.9 ms RMS.
     Three synthetic cameras at different rates, 30 flashes: cam2's flicker is a 100 Hz
     period named 120 Hz, cam1's is right. cam2's is dropped with a warning and its time per
