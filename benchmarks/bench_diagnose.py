@@ -5,10 +5,11 @@ Run: python benchmarks/bench_diagnose.py [--folder DIR] [--cases all|NAME,...]
 
 Renders each rig once (kept in --folder for the next run, each in its own sub-folder, with
 ``truth.json``), detects its events as each command does, runs ``synchronize`` (what
-``flashsync sync`` writes) and ``diagnose`` (whose final model ``flashsync diagnose -o``
-writes), and prints per rig and model the error against truth over every frame and every
-8th row (RMS over all cameras, then each camera's RMS, ms), the effects diagnose named and
-its verdict and how its model compares with sync's (a command that fails: its error). Rigs:
+``flashsync sync`` writes) and ``diagnose`` (whose model ``flashsync diagnose -o`` writes,
+:mod:`flashsync.diagnose.adopt`), and prints per rig and model the error against truth over
+every frame and every 8th row (RMS over all cameras, then each camera's RMS, ms), the
+effects diagnose named, its verdict, what it wrote and how that compares with sync's model
+(a command that fails: its error). Rigs:
 
 =====================  ===================================================================
 ``jittered-stamps``    the second world's recipe, its 25 fps camera and the 30 fps one whose
@@ -157,6 +158,7 @@ def run(scenario: Scenario, folder: Path) -> dict | None:
     steps = [("out: " if step.removed else "") + f"{step.effect} {step.camera}" for step in d.steps]
     print(f"  steps        {', '.join(steps)}")
     print(f"  verdict      {d.verdict}")
+    print(f"  written      {d.written}")
     print(f"  vs sync      {d.agreement}")
     if synced is None:
         return None

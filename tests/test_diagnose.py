@@ -13,6 +13,7 @@ import pandas as pd
 import pytest
 
 from flashsync.diagnose import diagnose, format_diagnosis
+from flashsync.diagnose.adopt import written_model
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
 from flashsync.diagnose.effects import DRIFT_RATE
@@ -177,6 +178,7 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     measurement = measure(cameras)
     plain = in_sync_shape(measurement, fit_candidate(measurement, frozenset()))
     assert pooled_error_ms(d.sync_model, truth) < 0.7 * pooled_error_ms(plain.sync_model(), truth)
+    assert d.written == f"the workflow's own model: sync's solve has no term for saturation on {step.camera}"
 
 
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
@@ -305,11 +307,11 @@ def test_sync_adopts_the_drift_rate_change_diagnose_names_and_the_two_agree(chan
 
 
 def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(changing_drift, tmp_path, capsys, monkeypatch):
-    """``flashsync diagnose -o`` on the same rig, with ``sync``'s model for it moved 1 ms on
-    cam1 (as if ``sync`` had missed the effect): it writes its own model, and its ``model ->``
-    line names the camera on which it and ``sync``'s disagree; the JSON holds the gaps."""
+    """``flashsync diagnose -o`` on the same rig, with ``sync``'s own model for it moved 1 ms on
+    cam1 (as if ``sync`` had missed the effect) and the written one solved anew: its ``model
+    ->`` line names the camera on which it and ``sync``'s disagree; the JSON holds the gaps."""
     from flashsync.cli import main
-    from flashsync.diagnose import workflow
+    from flashsync.diagnose import adopt, workflow
 
     def missed(*args, **kwargs):
         model, report = synchronize(*args, **kwargs)
@@ -317,6 +319,7 @@ def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(changing_d
         return replace(model, cameras={**model.cameras, "cam1": replace(clock, beta_ms=clock.beta_ms + 1.0)}), report
 
     monkeypatch.setattr(workflow, "synchronize", missed)
+    monkeypatch.setattr(adopt, "_same_choices", lambda *args: False)
     _, videos = changing_drift
     out = ["-o", str(tmp_path / "sync.json"), "--json", str(tmp_path / "d.json")]
     assert main(["diagnose", *map(str, videos), *out]) == 0
@@ -325,6 +328,43 @@ def test_cli_diagnose_o_names_the_cameras_its_model_and_syncs_part_on(changing_d
     assert "they disagree beyond 3 sigma" in shown.out
     gaps = {g["camera"]: g for g in json.loads((tmp_path / "d.json").read_text())["sync_gaps"]}
     assert [name for name, gap in gaps.items() if gap["rms_ms"] > 3 * gap["sigma_ms"]] == ["cam1"]
+
+
+def test_diagnose_o_writes_syncs_solve_on_the_readouts_and_frame_times_found(changing_drift):
+    """What ``diagnose -o`` writes (:func:`~flashsync.diagnose.adopt.written_model`): where the
+    final model reads and times every camera as ``sync`` chose, ``sync``'s own model; where it
+    names a stamp rate change on cam1, ``sync``'s solve on the frame times it found (with
+    that clock's frame uncertainty; here cam1's clock moved 0.5 ms, its stamps change no
+    rate); where its frame clock or dropped frames (``sync``'s clock has both), ``sync``'s
+    own model; where it reads
+    cam1 the other way up (``sync`` then ties no flash: cam1's clock runs 300-900 ppm fast),
+    the final model itself, and it says why (saturation, which ``sync``'s solve has no term
+    for: :func:`test_hidden_saturation_is_named_first_and_the_gap_closes`)."""
+    truth, videos = changing_drift
+    detections = detect_videos(videos)
+    synced = synchronize(detections)
+    d = diagnose(detections)
+    assert d.written.endswith("(the same as sync's own)"), d.written
+    assert d.sync_model is synced[0] or all(gap.rms_ms == 0 for gap in d.sync_gaps), d.agreement
+    measurement = measure(detections)
+    found = fit_candidate(measurement, frozenset(Term(e, c) for c, m in enumerate(d.model) for e in m["effects"]))
+    upside_down = replace(found, flipped=[found.flipped[0], not found.flipped[1]])
+    model, words = written_model(detections, None, upside_down, synced)
+    assert words.startswith("the workflow's own model: sync cannot solve the detections with its choices (no camera")
+    where = probes(model.cameras["cam1"])
+    own = upside_down.sync_model().cameras["cam1"]
+    assert model.cameras["cam1"].flipped and np.array_equal(
+        model.cameras["cam1"].t_global_ms(*where), own.t_global_ms(*where)
+    )
+    clocked = fit_candidate(measurement, found.terms | {Term("frame_clock", 1), Term("dropped_frames", 1)})
+    later = replace(clocked.timing[1], times_ms=clocked.timing[1].times_ms + 0.5)
+    assert written_model(detections, None, replace(clocked, timing=[clocked.timing[0], later]), synced)[0] is synced[0]
+    clocked = replace(clocked, terms=clocked.terms | {Term("stamp_rate", 1)}, timing=[clocked.timing[0], later])
+    model, words = written_model(detections, None, clocked, synced)
+    assert words == "sync's solve on the readouts found and the one-rate frame times found on cam1", words
+    assert np.array_equal(model.cameras["cam1"].frame_times_ms, clocked.timing[1].times_ms)
+    assert np.array_equal(model.cameras["cam1"].frame_std_ms, clocked.clocks[1].std_ms)
+    assert pooled_error_ms(model, truth) < 0.1
 
 
 def test_a_changing_rate_is_offered_only_to_a_camera_of_eight_flashes_or_more(changing_drift):

@@ -39,7 +39,7 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
             f"{d.final_rms_ms:>9.4f}  the effects above with every camera's time per row, exposure and drift "
             "free under sync's priors (time per row nominal ± 8 % or its flicker's, drift 0 ± 50 ppm)"
         )
-    lines += [d.verdict, d.agreement]
+    lines += [d.verdict, f"model written (-o): {d.written}", d.agreement]
     lines.append(
         f"{'camera':<11} {'readout':<9} {'period ms':>10} {'missing':>7} {'drift ppm':>9} "
         f"{'ppm/s':>7} {'T_row ms':>9} {'exposure ms':>11} {'RMS ms':>7}"

@@ -18,12 +18,14 @@ are then tested against the edge noise the band lengths show
 (:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is). The data never
 say which effect is there: the workflow sees frame stamps and band edges.
 
-The model it ends with, and ``flashsync diagnose -o`` writes, is the effects found in
-``sync``'s shape (:func:`in_sync_shape`): every camera's time per row, exposure and drift
-free under the priors ``sync``'s solve gives them. An effect too small to pass the threshold
-on its own still moves the times between and beyond the flashes: on the second world's
-random rigs (hidden rows and clock drifts of tens of ppm on every camera) the last step's
-model was a median 0.34 ms off the truth, the same effects in ``sync``'s shape 0.087 ms."""
+The model it ends with is the effects found in ``sync``'s shape (:func:`in_sync_shape`):
+every camera's time per row, exposure and drift free under the priors ``sync``'s solve gives
+them. An effect too small to pass the threshold on its own still moves the times between and
+beyond the flashes: on the second world's random rigs (hidden rows and clock drifts of tens
+of ppm on every camera) the last step's model was a median 0.34 ms off the truth, the same
+effects in ``sync``'s shape 0.087 ms. What ``flashsync diagnose -o`` writes is ``sync``'s
+solve with the readouts and frame times that model found (:mod:`flashsync.diagnose.adopt`):
+one solver for both commands."""
 
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ from itertools import combinations
 import numpy as np
 
 from flashsync.detect import CameraDetection
+from flashsync.diagnose.adopt import written_model
 from flashsync.diagnose.agreement import Gap, agreement, model_gaps
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
 from flashsync.diagnose.effects import CATALOGUE, DRIFT, DRIFT_RATE, EXPOSURE, FLICKER, OTHER_CAMERAS, ROW_TIME
@@ -141,8 +144,11 @@ class Diagnosis:
         detections (:func:`~flashsync.diagnose.agreement.model_gaps`); empty where ``sync``
         cannot solve them.
     sync_model : SyncModel or None
-        The final model as the pipeline's model (:meth:`Candidate.sync_model`): what
-        ``flashsync diagnose -o`` writes and ``restamp`` uses. Not in :meth:`to_dict`.
+        What ``flashsync diagnose -o`` writes and ``restamp`` uses: ``sync``'s solve with the
+        readouts and frame times the final model found, else the final model itself
+        (:func:`~flashsync.diagnose.adopt.written_model`). Not in :meth:`to_dict`.
+    written : str
+        What :attr:`sync_model` is, in words (and why, where it is the final model itself).
     """
 
     cameras: list[str]
@@ -162,6 +168,7 @@ class Diagnosis:
     warnings: list[str] = field(default_factory=list)
     sync_gaps: list[Gap] = field(default_factory=list)
     sync_model: SyncModel | None = field(default=None, repr=False, compare=False)
+    written: str = ""
 
     @property
     def consistent(self) -> bool:
@@ -262,8 +269,14 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
             fits.append(current)
     synced = _synchronized(detections, reference)
     shaped = in_sync_shape(measurement, current, synced[1].free_drift if synced else ())
-    diagnosis = _diagnosis(measurement, fits + [shaped] * (shaped is not None), steps)
-    return replace(diagnosis, sync_gaps=model_gaps(diagnosis.sync_model, synced[0]) if synced else [])
+    fits += [shaped] * (shaped is not None)
+    model, written = written_model(detections, reference, fits[-1], synced)
+    return replace(
+        _diagnosis(measurement, fits, steps),
+        sync_model=model,
+        written=written,
+        sync_gaps=model_gaps(model, synced[0]) if synced else [],
+    )
 
 
 def in_sync_shape(measurement: Measurement, found: Candidate, free_drift: Sequence[str] = ()) -> Candidate | None:
@@ -431,7 +444,6 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
         residuals={"initial": residual_structure(plain), "final": residual_structure(final)},
         edge_residuals=_edge_residuals(measurement, fits),
         warnings=warnings,
-        sync_model=final.sync_model(),
     )
 
 
