@@ -177,6 +177,8 @@ class SyncReport:
     flipped_found : cameras found to read bottom-up (upside down).
     free_drift : cameras whose clock drift was solved without the drift prior: their events
         contradict it (:func:`~flashsync.solve.solve_with_drift_model`).
+    distrusted_flicker : cameras whose rolling mains flicker's time per row the events
+        contradict: no prior is taken from it (:func:`_contradicted_flicker`).
     warnings : cameras left out and why; stamps that follow no steady clock or change rate;
         datasheet times per row the events contradict.
     sigma_ms : robust residual scale of the solve, ms.
@@ -187,6 +189,7 @@ class SyncReport:
     frame_times: dict[str, str] = field(default_factory=dict)
     flipped_found: list[str] = field(default_factory=list)
     free_drift: list[str] = field(default_factory=list)
+    distrusted_flicker: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
 
@@ -267,6 +270,7 @@ def synchronize(
     )
     report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
     report.free_drift = [best.connected[c] for c in best.solution.free_drift]
+    report.distrusted_flicker = list(best.distrusted_flicker)
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
     for name, clock in model.cameras.items():
@@ -835,6 +839,7 @@ class _Attempt:
     solution: Solution
     priors: Priors
     reference: str
+    distrusted_flicker: tuple[str, ...] = ()
 
     @cached_property
     def implausible(self) -> list[str]:
@@ -986,6 +991,7 @@ def _attempt(
         name: seen for name, seen in zip(connected, mains_flicker(chosen)) if seen is not None and name not in given
     }
     solution = solve(given, flicker)
+    distrusted = {}
     if given or _flicker_in_doubt(solution, connected, flicker):
         free = solve({}, {})
         contradicted = _contradicted_row_times(free, connected, given, chosen)
@@ -1016,6 +1022,7 @@ def _attempt(
         solution,
         priors(given, flicker),
         reference,
+        tuple(distrusted),
     )
 
 

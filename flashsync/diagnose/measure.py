@@ -129,7 +129,9 @@ class Measurement:
         Cameras left out and why.
     flicker : tuple of (Flicker or None)
         Per camera, the rolling mains flicker whose period in rows times its rows
-        (:func:`~flashsync.pipeline.mains_flicker`); None where it saw none to trust.
+        (:func:`~flashsync.pipeline.mains_flicker`); None where it saw none to trust (the
+        workflow also sets None where ``sync`` finds the events contradict it:
+        :attr:`~flashsync.pipeline.SyncReport.distrusted_flicker`).
     free_drift : frozenset of int
         Cameras whose drift is fitted without ``sync``'s drift prior, as ``sync`` solved them
         (:func:`~flashsync.diagnose.workflow.in_sync_shape`).

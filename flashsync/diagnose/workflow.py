@@ -248,7 +248,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     >>> d = diagnose(detect_videos(["cam1.mp4", "cam2.mkv"]))   # doctest: +SKIP
     >>> print(format_diagnosis(d))                               # doctest: +SKIP
     """
-    measurement = measure(detections, reference)
+    synced = _synchronized(detections, reference)
+    measurement = _flicker_sync_trusts(measure(detections, reference), synced[1] if synced else None)
     plain = fit_candidate(measurement, frozenset())
     if plain is None:
         raise NotEnoughDataError(
@@ -267,7 +268,6 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
             removed.add(term)
             current = without
             fits.append(current)
-    synced = _synchronized(detections, reference)
     shaped = in_sync_shape(measurement, current, synced[1].free_drift if synced else ())
     fits += [shaped] * (shaped is not None)
     model, written = written_model(detections, reference, fits[-1], synced)
@@ -312,6 +312,28 @@ def _synchronized(detections: Sequence[CameraDetection], reference: str | None) 
         return synchronize(detections, reference)
     except FlashsyncError:
         return None
+
+
+def _flicker_sync_trusts(measurement: Measurement, report: SyncReport | None) -> Measurement:
+    """The measurement without the rolling flicker of the cameras whose flicker ``sync`` takes
+    no prior from, the events contradicting it (:attr:`SyncReport.distrusted_flicker`: one
+    decision, ``sync``'s), with a warning each."""
+    distrusted = set(report.distrusted_flicker) if report else set()
+    dropped = [
+        c for c, camera in enumerate(measurement.cameras) if camera.camera in distrusted and measurement.flicker[c]
+    ]
+    if not dropped:
+        return measurement
+    return replace(
+        measurement,
+        flicker=tuple(None if c in dropped else seen for c, seen in enumerate(measurement.flicker)),
+        warnings=measurement.warnings
+        + tuple(
+            f"{measurement.cameras[c].video}: sync takes no prior from its rolling flicker (the events contradict "
+            "it), and the workflow takes no evidence from it"
+            for c in dropped
+        ),
+    )
 
 
 def _best_addition(
