@@ -376,7 +376,7 @@ def _parser() -> argparse.ArgumentParser:
         type=Path,
         metavar="sync.json",
         help="also write a sync model file (the format sync writes; restamp uses it): sync's solve on the "
-        "readouts and frame times found, or the final model where it holds an effect sync has no term for",
+        "readouts and stamp-rate choices found, or the final model where it holds an effect sync has no term for",
     )
     diagnose.add_argument("--json", type=Path, metavar="OUT.json", help="also write the steps as JSON")
     diagnose.add_argument(

@@ -72,7 +72,7 @@ def written_model(
         if reading is None:
             way = "bottom-up" if flipped[detection.camera] else "top-down"
             return found.sync_model(), (
-                f"the workflow's own model: it reads {detection.camera} {way}, which the detection was not read "
+                f"the workflow's own model: it reads {detection.camera} {way}, a way its video was not read "
                 "(sync cannot solve it so)"
             )
         detection = replace(

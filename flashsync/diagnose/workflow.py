@@ -24,8 +24,8 @@ them. An effect too small to pass the threshold on its own still moves the times
 beyond the flashes: on the second world's random rigs (hidden rows and clock drifts of tens
 of ppm on every camera) the last step's model was a median 0.34 ms off the truth, the same
 effects in ``sync``'s shape 0.087 ms. What ``flashsync diagnose -o`` writes is ``sync``'s
-solve with the readouts and frame times that model found (:mod:`flashsync.diagnose.adopt`):
-one solver for both commands."""
+solve with the readouts and stamp-rate choices that model found
+(:mod:`flashsync.diagnose.adopt`): one solver for both commands."""
 
 from __future__ import annotations
 
@@ -145,7 +145,7 @@ class Diagnosis:
         cannot solve them.
     sync_model : SyncModel or None
         What ``flashsync diagnose -o`` writes and ``restamp`` uses: ``sync``'s solve with the
-        readouts and frame times the final model found, else the final model itself
+        readouts and stamp-rate choices the final model found, else the final model itself
         (:func:`~flashsync.diagnose.adopt.written_model`). Not in :meth:`to_dict`.
     written : str
         What :attr:`sync_model` is, in words (and why, where it is the final model itself).
