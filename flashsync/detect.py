@@ -680,6 +680,21 @@ class CameraDetection:
             raise ValueError(f"{self.video} was not read {'bottom-up' if flipped else 'top-down'}")
         return replace(self, flipped=flipped)
 
+    def read_only(self, flipped: bool) -> CameraDetection:
+        """This detection read bottom-up (``flipped``) or top-down only: the readout direction
+        decided."""
+        reading = self.read_flipped(flipped)
+        return replace(
+            reading, top_down=None if flipped else self.top_down, bottom_up=self.bottom_up if flipped else None
+        )
+
+    def read_as_rolled(self) -> CameraDetection:
+        """Where it was read both ways up and its rolling mains flicker's roll tells the
+        readout direction (:attr:`~flashsync.flicker.Flicker.bottom_up`), read that way only;
+        else this detection."""
+        roll = self.flicker.bottom_up if self.flicker is not None else None
+        return self.read_only(roll) if self.undecided and roll is not None else self
+
     def retimed(self, frame_times_ms: np.ndarray) -> CameraDetection:
         """This detection with other frame times (ms, one per decoded frame), its events' too."""
         return replace(

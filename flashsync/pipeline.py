@@ -174,7 +174,8 @@ class SyncReport:
     frame_clocks : per camera, the frame clock found behind its stamps.
     frame_times : per camera whose stamps change rate, which frame times the flashes chose
         (:func:`_best_frame_times`).
-    flipped_found : cameras found to read bottom-up (upside down).
+    flipped_found : cameras found to read bottom-up (upside down), by the flashes or by their
+        rolling flicker's roll.
     free_drift : cameras whose clock drift was solved without the drift prior: their events
         contradict it (:func:`~flashsync.solve.solve_with_drift_model`).
     distrusted_flicker : cameras whose rolling mains flicker's time per row the events
@@ -205,7 +206,9 @@ def synchronize(
     Parameters
     ----------
     detections : one per camera (from :func:`detect_videos`); a detection read both ways
-        up has its readout direction chosen here.
+        up has its readout direction chosen here: the way its rolling mains flicker rolls
+        where that tells (:meth:`~flashsync.detect.CameraDetection.read_as_rolled`), else the
+        way that explains the flashes best.
     reference : camera whose clock is the global clock; default the first.
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
@@ -220,6 +223,8 @@ def synchronize(
         )
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
+    rolled = [d.camera for d in detections if d.read_as_rolled() is not d]  # its flicker's roll tells its readout
+    detections = [d.read_as_rolled() for d in detections]
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
@@ -268,7 +273,9 @@ def synchronize(
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
-    report.flipped_found = [name for name in undecided if name in best.connected and best.cameras[name].flipped]
+    report.flipped_found = [
+        name for name in names if name in undecided + rolled and name in best.connected and best.cameras[name].flipped
+    ]
     report.free_drift = [best.connected[c] for c in best.solution.free_drift]
     report.distrusted_flicker = list(best.distrusted_flicker)
     report.sigma_ms = best.solution.sigma_ms

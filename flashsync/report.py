@@ -19,10 +19,15 @@ def detection_notes(detection) -> list[str]:
     if flicker is not None:
         hz = f"{flicker.hz:.0f} Hz" if flicker.hz else "frequency not told (not mains, or too few frames)"
         depth = f"depth {100 * flicker.depth:.1f} %, " if np.isfinite(flicker.depth) else ""
+        rolls = (
+            f", rolling as a sensor reading {'bottom-up' if flicker.bottom_up else 'top-down'} makes it"
+            if flicker.bottom_up is not None
+            else ""
+        )
         notes.append(
             f"{detection.camera}: rolling flicker {hz}, period {flicker.period_rows:.2f} "
             f"± {flicker.period_rows_std:.2f} readout rows, {depth}measured on "
-            f"{flicker.n_frames} frames and removed before detection"
+            f"{flicker.n_frames} frames and removed before detection{rolls}"
         )
     dropped = [
         f"{n} {what}"

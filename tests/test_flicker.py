@@ -194,6 +194,7 @@ def test_fundamentals_that_no_mains_roll_explains_are_not_named_mains_flicker():
         None,
         0j,
         pytest.approx(np.nan, nan_ok=True),
+        None,
     )
 
 
@@ -203,7 +204,9 @@ def test_a_roll_through_jittered_stamps_is_named_with_its_circle(hz, sign):
     rounded to 1 ms, a frame dropped and a third of the frames not fitted: fundamentals
     rolling at ``hz`` (0.668 or 2.002 periods a frame) on a circle of radius 0.02 about a
     centre the reference holds, 0.001 noise. The roll is named on the frames' steady clock
-    (the stamps as they are turn a 100 Hz phase by 0.9 rad) and the circle is its fit's."""
+    (the stamps as they are turn a 100 Hz phase by 0.9 rad) and the circle is its fit's.
+    The 100 Hz roll, turning against time, tells a sensor reading bottom-up; the 120 Hz one,
+    0.002 of a period a frame from standing, tells no direction."""
     rng = np.random.default_rng(2)
     frames = np.sort(rng.choice(480, 320, replace=False))
     slots = frames + (frames > 200)  # the camera dropped the frame after frame 200
@@ -211,8 +214,8 @@ def test_a_roll_through_jittered_stamps_is_named_with_its_circle(hz, sign):
     centre = 0.01 - 0.004j
     roll = sign * 2 * np.pi * hz * 1001 / 60000 * slots  # radians: 0.668 or 2.002 periods a frame
     points = centre + 0.02 * np.exp(1j * (0.7 + roll)) + 0.001 * rng.standard_normal((320, 2)) @ [1, 1j]
-    named, fitted_centre, radius = _identify_hz(points, frames, times)
-    assert named == hz
+    named, fitted_centre, radius, bottom_up = _identify_hz(points, frames, times)
+    assert named == hz and bottom_up is {100.0: True, 120.0: None}[hz]
     assert abs(fitted_centre - centre) < 0.002 and radius == pytest.approx(0.02, rel=0.1)
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from flashsync import detect_videos, synchronize
+from flashsync.detect import CameraDetection
 from flashsync.evaluate import camera_accuracy
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import random_rig
@@ -103,3 +104,23 @@ def test_a_flip_the_evidence_does_not_decide_is_not_taken_silently(equal_rates):
         warned = [w for w in report.warnings if f"{spec.name}." in w and "fit the other way about as well" in w]
         assert warned, (spec.name, report.warnings)
         assert table.loc[spec.name, "rms_ms"] <= 2.0 * table.loc[spec.name, "sigma_rms_ms"], table
+
+
+def test_a_flickers_roll_tells_the_readout_the_flashes_leave_mirrored(tmp_path, monkeypatch):
+    """The second world's rig-366 (``random_rig(366, max_height=360, duration_ms=8000)``) at
+    half its size: two 25 fps cameras under 9.4 % 120 Hz flicker, cam2 upside down. At one
+    frame rate the flashes fit both cameras read the other way about as well, and they chose
+    that mirror: 41.6 and 39.7 ms RMS off the truth. cam2's flicker rolls as a sensor reading
+    bottom-up makes it (4.8 periods a frame), so it is read that way only; the flashes then
+    read cam1 upright: 0.02 and 0.07 ms."""
+    scenario = random_rig(366, max_height=360, duration_ms=8000.0)
+    cameras = tuple(replace(c, width=c.width // 4 * 2, height=c.height // 4 * 2) for c in scenario.cameras)
+    truth = render_scenario(replace(scenario, cameras=cameras), tmp_path)
+    detections = detect_videos([tmp_path / f"{c.name}.{c.container}" for c in cameras])
+    assert detections[1].flicker.bottom_up is True and all(d.undecided for d in detections)
+    model, report = synchronize(detections)
+    assert report.flipped_found == ["cam2"]
+    assert (camera_accuracy(model, truth).rms_ms < 0.15).all()
+    monkeypatch.setattr(CameraDetection, "read_as_rolled", lambda self: self)
+    model, report = synchronize(detections)
+    assert report.flipped_found == ["cam1"]  # the mirror, without the roll

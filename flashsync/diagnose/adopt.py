@@ -26,7 +26,6 @@ rig-38 0.025 -> 0.034 ms off.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numpy as np
 
@@ -75,12 +74,7 @@ def written_model(
                 f"the workflow's own model: it reads {detection.camera} {way}, a way its video was not read "
                 "(sync cannot solve it so)"
             )
-        detection = replace(
-            detection,
-            flipped=flipped[detection.camera],
-            top_down=None if flipped[detection.camera] else reading,
-            bottom_up=reading if flipped[detection.camera] else None,
-        )
+        detection = detection.read_only(flipped[detection.camera])
         chosen.append(detection.retimed(timed[detection.camera][0]) if detection.camera in timed else detection)
     words = "sync's solve on the readouts found" + (
         f" and the one-rate frame times found on {', '.join(timed)}" if timed else ""

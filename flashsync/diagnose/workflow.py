@@ -248,6 +248,7 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     >>> d = diagnose(detect_videos(["cam1.mp4", "cam2.mkv"]))   # doctest: +SKIP
     >>> print(format_diagnosis(d))                               # doctest: +SKIP
     """
+    detections = [d.read_as_rolled() for d in detections]  # as sync reads them
     synced = _synchronized(detections, reference)
     measurement = _flicker_sync_trusts(measure(detections, reference), synced[1] if synced else None)
     plain = fit_candidate(measurement, frozenset())
