@@ -19,11 +19,16 @@ def detection_notes(detection) -> list[str]:
     if flicker is not None:
         hz = f"{flicker.hz:.0f} Hz" if flicker.hz else "frequency not told (not mains, or too few frames)"
         depth = f"depth {100 * flicker.depth:.1f} %, " if np.isfinite(flicker.depth) else ""
-        rolls = (
-            f", rolling as a sensor reading {'bottom-up' if flicker.bottom_up else 'top-down'} makes it"
-            if flicker.bottom_up is not None
-            else ""
-        )
+        rolls = ""
+        if flicker.bottom_up is not None:
+            way = "bottom-up" if flicker.bottom_up else "top-down"
+            rolls = f", rolling as a sensor reading {way} makes it"
+            if not detection.undecided and detection.flipped != flicker.bottom_up:
+                rolls += (
+                    f" (read top-down as told: give --flipped {detection.camera} if it is mounted upside down)"
+                    if flicker.bottom_up
+                    else " (read bottom-up as told by --flipped: check its mounting)"
+                )
         notes.append(
             f"{detection.camera}: rolling flicker {hz}, period {flicker.period_rows:.2f} "
             f"± {flicker.period_rows_std:.2f} readout rows, {depth}measured on "

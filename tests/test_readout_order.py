@@ -17,6 +17,7 @@ import pytest
 from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.evaluate import camera_accuracy
+from flashsync.report import detection_notes
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import random_rig
 
@@ -112,7 +113,8 @@ def test_a_flickers_roll_tells_the_readout_the_flashes_leave_mirrored(tmp_path, 
     frame rate the flashes fit both cameras read the other way about as well, and they chose
     that mirror: 41.6 and 39.7 ms RMS off the truth. cam2's flicker rolls as a sensor reading
     bottom-up makes it (4.8 periods a frame), so it is read that way only; the flashes then
-    read cam1 upright: 0.02 and 0.07 ms."""
+    read cam1 upright: 0.02 and 0.07 ms. ``flashsync detect``, which reads a camera as told,
+    says that cam2's flicker rolls the other way."""
     scenario = random_rig(366, max_height=360, duration_ms=8000.0)
     cameras = tuple(replace(c, width=c.width // 4 * 2, height=c.height // 4 * 2) for c in scenario.cameras)
     truth = render_scenario(replace(scenario, cameras=cameras), tmp_path)
@@ -124,3 +126,9 @@ def test_a_flickers_roll_tells_the_readout_the_flashes_leave_mirrored(tmp_path, 
     monkeypatch.setattr(CameraDetection, "read_as_rolled", lambda self: self)
     model, report = synchronize(detections)
     assert report.flipped_found == ["cam1"]  # the mirror, without the roll
+    told = detections[1].read_only(False)  # as `flashsync detect` reads it: upright unless told
+    (note,) = [n for n in detection_notes(told) if "rolling flicker" in n]
+    assert note.endswith(
+        "rolling as a sensor reading bottom-up makes it (read top-down as told: give --flipped cam2 if it is "
+        "mounted upside down)"
+    )
