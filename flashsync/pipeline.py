@@ -223,8 +223,9 @@ def synchronize(
         )
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
-    rolled = [d.camera for d in detections if d.read_as_rolled() is not d]  # its flicker's roll tells its readout
-    detections = [d.read_as_rolled() for d in detections]
+    as_rolled = [d.read_as_rolled() for d in detections]  # where its flicker's roll tells its readout
+    rolled = [d.camera for d, read in zip(detections, as_rolled) if read is not d]
+    detections = as_rolled
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
     cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
