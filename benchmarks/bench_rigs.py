@@ -1,6 +1,6 @@
 """flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
 
-Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12]
+Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12] [--preflash MS]
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
@@ -27,6 +27,7 @@ import json
 import tempfile
 import time
 import traceback
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +41,7 @@ from flashsync.io.truth import load_ground_truth
 from flashsync.pipeline import edge_noise_rows
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.simulation import render_scenario
-from flashsync.simulation.rigs import RECIPES, random_rig, recipe
+from flashsync.simulation.rigs import RECIPES, random_rig, recipe, with_preflashes
 from flashsync.simulation.truth import CameraTruth, GroundTruth
 
 #: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
@@ -378,6 +379,16 @@ def main() -> None:
     )
     parser.add_argument("--max-height", type=int, default=540, help="largest image height of random rigs")
     parser.add_argument("--duration-s", type=float, default=12.0, help="length of random rigs, s")
+    parser.add_argument(
+        "--preflash",
+        type=float,
+        metavar="MS",
+        help="fire the random rigs' flashes as TTL flashes: a pre-flash at 0.3 of each flash's strength MS ms "
+        "before it (rigs named rig-N-ttlMS; each camera blind to the pre-flashes p 1/2; with_preflashes)",
+    )
+    parser.add_argument(
+        "--preflash-jitter-ms", type=float, default=1.0, help="std of the pre-flashes' delay, ms (default 1)"
+    )
     parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
     parser.add_argument(
         "--recipe-duration-s",
@@ -412,10 +423,19 @@ def main() -> None:
         duration_ms = args.recipe_duration_s * 1000.0 if args.recipe_duration_s else None
         scenarios += [recipe(n, args.recipe_seed, duration_ms) for n in names]
     if args.seeds or not args.recipes:
-        scenarios += [
+        rigs = [
             random_rig(s, max_height=args.max_height, duration_ms=args.duration_s * 1000.0)
             for s in parse_seeds(args.seeds or "0:20")
         ]
+        if args.preflash is not None:
+            rigs = [
+                replace(
+                    with_preflashes(rig, args.preflash, jitter_ms=args.preflash_jitter_ms, seed=rig.seed),
+                    name=f"{rig.name}-ttl{args.preflash:g}",
+                )
+                for rig in rigs
+            ]
+        scenarios += rigs
     infos, tables = [], []
     for scenario in scenarios:
         info, table = run_rig(scenario, args.keep)

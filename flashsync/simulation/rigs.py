@@ -43,6 +43,9 @@ pose               looks at a point of the ice from 15-35 m away and 10-18 m up,
                    view 50-80 degrees (redrawn until the image stays below the horizon).
 =================  ==========================================================================
 
+`with_preflashes` fires a rig's flashes as TTL flashes do: a weak pre-flash a few tens of ms
+before each, which some cameras do not see.
+
 `RECIPES` names fixed rigs: the independent-footage rigs of the honest-numbers issue's
 table and the real-light issue's cases, re-created with second-world settings (xenon or
 LED pulses, a tone curve, crf 18-30, exposures 2-6 ms); their seed draws only those
@@ -521,6 +524,53 @@ def second_world(scenario: Scenario, seed: int = 0, pulses: tuple[str, ...] | No
     dressed = dataclasses.replace(scenario, cameras=cameras, flashes=flashes)
     check_scenario(dressed, f"{scenario.name} in the second world")
     return dressed
+
+
+def with_preflashes(
+    scenario: Scenario,
+    delay_ms: float = 60.0,
+    share: float = 0.3,
+    jitter_ms: float = 1.0,
+    blind: tuple[str, ...] | None = None,
+    seed: int = 0,
+) -> Scenario:
+    """`scenario` fired by TTL flashes: before each flash a pre-flash of its pulse at
+    ``share`` of its strength, ``delay_ms`` earlier (less a normal delay of std
+    ``jitter_ms``, per flash); the cameras of ``blind`` do not see the pre-flashes (by
+    default each camera p 1/2, drawn from ``seed``). Every camera's missed flashes are
+    kept (and it sees a pre-flash whatever it does with its flash).
+
+    Examples
+    --------
+    >>> from flashsync.simulation import preset
+    >>> tiny = preset("tiny")
+    >>> len(with_preflashes(tiny, blind=("cam2",)).flashes) == 2 * len(tiny.flashes)
+    True
+    """
+    rng = np.random.default_rng([seed, zlib.crc32(b"pre-flashes")])
+    if blind is None:
+        blind = tuple(camera.name for camera in scenario.cameras if rng.random() < 0.5)
+    early = [
+        dataclasses.replace(
+            flash,
+            world_ms=round(flash.world_ms - delay_ms - float(rng.normal(0.0, jitter_ms)), 3),
+            strength=round(share * flash.strength, 3),
+        )
+        for flash in scenario.flashes
+    ]
+    # flash i is now 2 i + 1, its pre-flash 2 i
+    flashes = tuple(f for pair in zip(early, scenario.flashes) for f in pair)
+    cameras = tuple(
+        dataclasses.replace(
+            camera,
+            missed_flashes=tuple(2 * i + 1 for i in camera.missed_flashes)
+            + (tuple(range(0, len(flashes), 2)) if camera.name in blind else ()),
+        )
+        for camera in scenario.cameras
+    )
+    fired = dataclasses.replace(scenario, cameras=cameras, flashes=flashes)
+    check_scenario(fired, f"{scenario.name} with pre-flashes")
+    return fired
 
 
 def recipe(name: str, seed: int = 0, duration_ms: float | None = None) -> Scenario:
