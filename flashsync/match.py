@@ -10,13 +10,16 @@ them up); each leading candidate is refined into an affine map (shift and drift)
 alternating one-to-one matching and fitting. Pairs sharing at least
 :data:`MIN_SHARED_FLASHES` events without a rival shift are then merged, strongest first,
 into flashes: groups of at most one event per camera (:func:`match_events`). Cameras are
-tied together through chains of shared flashes (:meth:`Matching.tied_to`).
+tied together through chains of shared flashes (:meth:`Matching.tied_to`). A pair that
+lines up at a few shifts about as well (a flash that fires a pre-flash) is kept aside as
+undecided, with the other shifts of every pair, for the solve's fit to decide
+(:func:`flashsync.pipeline.synchronize`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -34,6 +37,9 @@ MAX_DRIFT = 100e-6
 #: Another shift that explains this fraction of the best one's matches makes a pair
 #: ambiguous (a periodic strobe fits at every multiple of its period).
 RIVAL_FRACTION = 0.7
+#: Most rival shifts of a pair that the solve's fit may decide between (a flash with a
+#: pre-flash lines up a camera that saw the pre-flashes with one that did not at two).
+MAX_RIVALS = 2
 #: Fewest flashes two cameras must share for their pair alignment to count.
 MIN_SHARED_FLASHES = 3
 #: Largest expected number of chance alignments as good for a pair alignment to count. The
@@ -80,7 +86,11 @@ class PairAlignment:
     ``ambiguous`` is True when another shift explained nearly as many events; ``chance`` is
     the expected number of shifts and drifts under which unrelated events would match as
     well (:func:`flashsync.coincidence.chance_alignments`): the evidence is strong where it
-    is far below one.
+    is far below one. ``others``: the other shifts (more than the tolerance away) that line
+    up events as convincingly on their own, most matches first: a flash that fires a weaker
+    pre-flash a few tens of ms before it (TTL metering) lines up a camera that saw the
+    pre-flashes with one that did not at two shifts, and the counts alone need not tell
+    which (the solve's fit can: :func:`flashsync.pipeline.synchronize`).
     """
 
     alpha: float
@@ -89,12 +99,30 @@ class PairAlignment:
     rms_ms: float
     ambiguous: bool
     chance: float = float("nan")
+    others: tuple[PairAlignment, ...] = ()
 
     @property
     def convincing(self) -> bool:
         """Enough shared events (:data:`MIN_SHARED_FLASHES`), no rival shift, and a chance
         alignment this good less likely than :data:`MAX_CHANCE`."""
         return len(self.matches) >= MIN_SHARED_FLASHES and not self.ambiguous and self.chance <= MAX_CHANCE
+
+    @property
+    def rivals(self) -> tuple[PairAlignment, ...]:
+        """The :attr:`others` that line up nearly as many events (:data:`RIVAL_FRACTION`)."""
+        return tuple(o for o in self.others if len(o.matches) >= RIVAL_FRACTION * len(self.matches))
+
+    @property
+    def undecided(self) -> bool:
+        """Convincing but for a few rival shifts (at most :data:`MAX_RIVALS`), each convincing
+        on its own: a fit of the edges may tell them apart (a periodic strobe lines up at
+        many shifts, and nothing does)."""
+        return (
+            self.ambiguous
+            and len(self.matches) >= MIN_SHARED_FLASHES
+            and self.chance <= MAX_CHANCE
+            and 0 < len(self.rivals) <= MAX_RIVALS
+        )
 
 
 def align_pair(
@@ -134,20 +162,23 @@ def align_pair(
     if not results:
         return None
     best = results[0]
-    rivals = [
-        r
-        for r in results[1:]
-        if len(r.matches) >= max(3, RIVAL_FRACTION * len(best.matches)) and abs(r.beta - best.beta) > tolerance_ms
-    ]
-    residuals = times_a[best.matches[:, 0]] - (best.alpha * times_b[best.matches[:, 1]] + best.beta)
-    chance = (
-        0.0
-        if anchor is not None
-        else chance_alignments(
-            residuals, len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b), tolerance_ms, MAX_DRIFT
-        )
-    )
-    return PairAlignment(best.alpha, best.beta, best.matches, best.rms_ms, bool(rivals), chance)
+    distinct = [best]
+    for r in results[1:]:
+        if len(r.matches) >= MIN_SHARED_FLASHES and all(abs(r.beta - d.beta) > tolerance_ms for d in distinct):
+            distinct.append(r)
+    ambiguous = any(len(r.matches) >= RIVAL_FRACTION * len(best.matches) for r in distinct[1:])
+    if anchor is not None:
+        return replace(best, ambiguous=ambiguous, chance=0.0)
+    sizes = (len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b), tolerance_ms, MAX_DRIFT)
+    chance = [chance_alignments(_residuals_ms(r, times_a, times_b), *sizes) for r in distinct]
+    others = tuple(replace(r, chance=c) for r, c in zip(distinct[1:], chance[1:]) if c <= MAX_CHANCE)
+    return replace(best, ambiguous=ambiguous, chance=chance[0], others=others)
+
+
+def _residuals_ms(alignment: PairAlignment, times_a: np.ndarray, times_b: np.ndarray) -> np.ndarray:
+    """Camera a's matched times less the alignment's map of camera b's, ms."""
+    a, b = alignment.matches.T
+    return times_a[a] - (alignment.alpha * times_b[b] + alignment.beta)
 
 
 def _candidate_shifts(times_a: np.ndarray, times_b: np.ndarray, tolerance_ms: float, n_candidates: int) -> np.ndarray:
@@ -380,10 +411,19 @@ class Matching:
     flashes : dict
         ``(camera, event index) -> flash number`` of every event in a flash of two or more
         cameras (:func:`group_flashes`).
+    undecided : dict
+        ``(camera a, camera b) -> PairAlignment`` of the pairs aligned but left out as
+        :attr:`~PairAlignment.undecided` (their rival shifts in it), for a fit to decide.
     """
 
     alignments: dict[tuple[str, str], PairAlignment]
     flashes: dict[tuple[str, int], int]
+    undecided: dict[tuple[str, str], PairAlignment] = field(default_factory=dict)
+
+    def with_alignments(self, alignments: dict[tuple[str, str], PairAlignment], n_events: dict[str, int]) -> Matching:
+        """This matching with ``alignments`` instead (flashes grouped again; ``n_events``: per
+        camera, its number of events)."""
+        return replace(self, alignments=alignments, flashes=group_flashes(n_events, alignments))
 
     def tied_to(self, reference: str) -> set[str]:
         """The cameras linked to ``reference`` through chains of shared flashes (it included)."""
@@ -451,13 +491,18 @@ def match_events(
         anchor = (anchors[a], anchors[b]) if a in anchors and b in anchors else None
         key = ("alignment", keys[a], keys[b], tolerance_ms, anchor)
         if key not in memo:
-            alignment = align_pair(times_ms[a], times_ms[b], tolerance_ms, anchor)
-            memo[key] = alignment if alignment is not None and alignment.convincing else None
+            memo[key] = align_pair(times_ms[a], times_ms[b], tolerance_ms, anchor)
         return memo[key]
 
-    pairs = planned_pairs(names, estimate, lambda a, b: aligned(a, b) is not None, MIN_SHARED_FLASHES)
-    alignments = {pair: aligned(*pair) for pair in pairs if aligned(*pair) is not None}
-    return Matching(alignments, group_flashes({name: len(times) for name, times in times_ms.items()}, alignments))
+    def convincing(a: str, b: str) -> bool:
+        alignment = aligned(a, b)
+        return alignment is not None and alignment.convincing
+
+    pairs = planned_pairs(names, estimate, convincing, MIN_SHARED_FLASHES)
+    alignments = {pair: aligned(*pair) for pair in pairs if convincing(*pair)}
+    undecided = {pair: aligned(*pair) for pair in pairs if aligned(*pair) is not None and aligned(*pair).undecided}
+    n_events = {name: len(times) for name, times in times_ms.items()}
+    return Matching(alignments, group_flashes(n_events, alignments), undecided)
 
 
 def shared_flashes(camera: np.ndarray, flash: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

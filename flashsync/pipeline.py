@@ -44,6 +44,7 @@ from flashsync.likelihood import (
     ReadingEdges,
     edge_log_likelihood,
     held_log_likelihood,
+    residual_log_likelihood,
 )
 from flashsync.match import (
     MIN_SHARED_FLASHES,
@@ -260,7 +261,9 @@ def synchronize(
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
-    for name, spread in spreads.items():
+    if any(alignment.others for alignment in best.alignments.values()):
+        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
+    for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     best = best.with_flash_scatter()
     report.alignments = best.alignments
@@ -589,6 +592,13 @@ def _search_reference(
     return max(sorted(counts), key=lambda name: counts[name])
 
 
+#: The lead of log-likelihood that decides between two shifts of a pair (:func:`_decided`). Of
+#: 31 pre-flashed rigs (random rigs 401-445, pre-flashes 60 ms early, one camera blind to
+#: them) the right shift led by 46-260 mostly where the delay varied (1 ms std) and by
+#: 12-88 where it did not, and the wrong one led by 14 (a camera's clipped flashes fit
+#: worse than its unclipped pre-flashes) and by 67 (the first camera missed four flashes
+#: whose pre-flashes it saw): a constant delay can favour either, and the margin is wide.
+SHIFT_DECIDED_LOG_LIKELIHOOD = 20.0
 #: Log prior odds of a camera mounted upright against upside down: a reading costs this
 #: much of its log-likelihood per camera read the other way than detected (top-down, the
 #: usual mounting). On random rig 18 (three 59.94 fps cameras) one wrong flip led the
@@ -848,6 +858,9 @@ class _Attempt:
     priors: Priors
     reference: str
     distrusted_flicker: tuple[str, ...] = ()
+    #: per camera, how far a pair's other shift that explains the edges about as well moves
+    #: its frames' times (ms, largest over its rows; :func:`_shift_doubts`)
+    shift_spreads: dict[str, np.ndarray] = field(default_factory=dict)
 
     @cached_property
     def implausible(self) -> list[str]:
@@ -938,10 +951,12 @@ def _attempt(
     anchors: Sequence[str],
     rate_std: dict[str, float] | None = None,
     memo: dict | None = None,
+    other_shifts: bool = False,
 ) -> _Attempt:
     """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
     the relative standard error of its frame clock's rate (it and the reference's widen the
-    prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`)."""
+    prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`);
+    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
     warnings = [
@@ -957,9 +972,155 @@ def _attempt(
         )
     anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
-    matching = match_events(
-        {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}, tolerance, anchor_events, memo
-    )
+    times = {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}
+    matching = match_events(times, tolerance, anchor_events, memo)
+
+    def solved(matching: Matching) -> _Attempt:
+        return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)
+
+    return _shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts)
+
+
+def _shifts_by_fit(
+    matching: Matching, n_events: dict[str, int], solved: Callable[[Matching], _Attempt], other_shifts: bool
+) -> _Attempt:
+    """The solve of ``matching`` with the shifts of its pairs that the edges' fit decides: of
+    a pair's shifts, the one whose solve explains the edges best at one noise for all
+    (:func:`_shift_evidence`) where it leads the others by :data:`SHIFT_DECIDED_LOG_LIKELIHOOD`.
+    An undecided pair (:attr:`Matching.undecided`) is left out where its cameras are tied
+    through other pairs; else it counts at the shift so decided, or where none is at the
+    shift with most events, the others its doubts (:func:`_shift_doubts`). A pair's
+    other shift (:attr:`~flashsync.match.PairAlignment.others`) that matches at least
+    :data:`MIN_SHARED_FLASHES` events the chosen one leaves unmatched replaces it where it
+    is so decided, where ``other_shifts`` asks (a solve per such shift: once, on the readouts
+    chosen; the decisions hang on the other cameras' readouts, and kept from one attempt of
+    the readout search to the next they put rigs 406 and 408 tens of ms off).
+
+    A TTL flash fires a weak pre-flash a few tens of ms before it: a camera that saw the
+    pre-flashes lines up with one that did not at two shifts, the wrong one with as many
+    events, or more where the first missed a few flashes (random rig 414 with pre-flashes
+    60 ms early: 60 ms off, its sigma 1 ms). Where the pre-flash's delay varies by more than
+    the edges' noise the wrong shift fits loosely (0.29 ms against 0.02, or bent over fewer
+    edges); a constant delay leaves little to tell them apart by but an anchor."""
+    alignments = dict(matching.alignments)
+
+    def trial(pair: tuple[str, str], shift: PairAlignment) -> _Attempt | None:
+        return _solved_or_none(solved, matching.with_alignments({**alignments, pair: shift}, n_events))
+
+    chosen = _solved_or_none(solved, matching.with_alignments(alignments, n_events)) if matching.undecided else None
+    needed = []
+    for pair, alignment in matching.undecided.items():
+        if chosen is not None and set(pair) <= set(chosen.connected):
+            continue  # tied through other pairs: left out
+        shifts = (alignment, *alignment.rivals)
+        decided = _decided([trial(pair, s) for s in shifts])
+        alignments[pair] = shifts[0 if decided is None else decided]
+        if decided is None:
+            needed.append((pair, shifts))
+    if chosen is None or len(alignments) > len(matching.alignments):
+        chosen = solved(matching.with_alignments(alignments, n_events))
+    if needed:
+        return _shift_doubts(chosen, [(pair, [trial(pair, s) for s in shifts[1:]]) for pair, shifts in needed])
+    for pair, alignment in alignments.items() if other_shifts else ():
+        for other in alignment.others:
+            if _unmatched_in_chosen(alignment, other) >= MIN_SHARED_FLASHES:
+                swapped = trial(pair, other)
+                if _decided([chosen, swapped]) == 1:
+                    return swapped
+    return chosen
+
+
+def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Attempt | None]]]) -> _Attempt:
+    """``chosen`` with the doubt of each pair's other shifts (``pairs``: the pair and the
+    solves at its other shifts): per camera whose times another shift moves
+    by more than half the largest move, how far (ms, each frame's largest over its rows;
+    :attr:`_Attempt.shift_spreads`, into its sigma) and a warning line."""
+    model = chosen.model(chosen.reference)
+    spreads, warnings = {}, []
+    for (a, b), trials in pairs:
+        for trial in trials:
+            if trial is None:
+                continue
+            other = trial.model(chosen.reference)
+            gaps = {}
+            for name in set(model.cameras) & set(other.cameras):
+                mine, theirs = model.cameras[name], other.cameras[name]
+                frames = np.arange(mine.n_frames)[:, None]
+                rows = np.array([0.0, mine.height - 1.0])
+                gaps[name] = np.abs(mine.t_global_ms(frames, rows) - theirs.t_global_ms(frames, rows)).max(axis=1)
+            largest = max((gap.max() for gap in gaps.values()), default=0.0)
+            for name, gap in gaps.items():
+                if gap.max() <= largest / 2.0:
+                    continue
+                spreads[name] = np.maximum(spreads.get(name, gap), gap)
+                warnings.append(
+                    f"{chosen.cameras[name].video}: the flashes of {a} and {b} also line up at another shift that "
+                    "explains the edges about as well (a flash with a weaker pre-flash before it, as TTL flashes fire, "
+                    f"makes two); its times may be off by up to {float(gap.max()):.1f} ms (in its sigma); name one "
+                    "flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+                )
+    return replace(chosen, warnings=chosen.warnings + warnings, shift_spreads=spreads)
+
+
+def _decided(trials: list[_Attempt | None]) -> int | None:
+    """The index of the trial (solves of one set of edges matched differently; None: not
+    solved) whose :func:`_shift_evidence` leads every other's by
+    :data:`SHIFT_DECIDED_LOG_LIKELIHOOD`, or None."""
+    solved = [t for t in trials if t is not None]
+    if not solved:
+        return None
+    names = {name for t in solved for name in t.connected}
+    noise = {name: np.nanmin([_camera_noise(t, name) for t in solved if name in t.connected], axis=0) for name in names}
+    evidence = np.array([-np.inf if t is None else _shift_evidence(t, noise) for t in trials])
+    best = int(np.argmax(evidence))
+    return best if np.all(evidence[best] >= np.delete(evidence, best) + SHIFT_DECIDED_LOG_LIKELIHOOD) else None
+
+
+def _camera_noise(attempt: _Attempt, name: str) -> np.ndarray:
+    """The camera's leading and trailing edges' noise in ``attempt``'s solve (ms, shape (2,);
+    a kind without edges its leading edges'; at least :data:`SCORE_MIN_SIGMA_MS`)."""
+    camera = attempt.solution.cameras[attempt.connected.index(name)]
+    leading = camera.edge_sigma_ms
+    return np.maximum([leading, np.nan_to_num(camera.trailing_sigma_ms, nan=leading)], SCORE_MIN_SIGMA_MS)
+
+
+def _shift_evidence(attempt: _Attempt, noise: dict[str, np.ndarray]) -> float:
+    """Log-likelihood of every camera's band edges under ``attempt``'s solve at the noise
+    ``noise`` gives each camera's edges of each kind (:func:`~flashsync.likelihood.residual_log_likelihood`:
+    the solves of rival shifts compared at the tightest noise any of them reaches)."""
+    observations = attempt.observations
+    names = np.array(attempt.connected)[observations.camera]
+    kinds = observations.trailing.astype(np.int64)
+    sigma = np.array([noise[name][kind] for name, kind in zip(names, kinds)]) * attempt.solution.sigma_factor
+    n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in attempt.cameras.values())
+    return residual_log_likelihood(attempt.solution.residual_ms, sigma, n_edges, _uniform_ms(attempt.cameras))
+
+
+def _solved_or_none(solved: Callable[[Matching], _Attempt], matching: Matching) -> _Attempt | None:
+    """``solved(matching)``, or None where it cannot be solved."""
+    try:
+        return solved(matching)
+    except FlashsyncError:
+        return None
+
+
+def _unmatched_in_chosen(chosen: PairAlignment, other: PairAlignment) -> int:
+    """The most events of one of the pair's cameras that ``other`` matches and ``chosen`` does not."""
+    return max(len(np.setdiff1d(other.matches[:, i], chosen.matches[:, i])) for i in (0, 1))
+
+
+def _solved(
+    cameras: dict[str, CameraDetection],
+    sync_events: dict[str, Events],
+    usable: list[str],
+    matching: Matching,
+    reference: str,
+    row_times: dict[str, float] | None,
+    rate_std: dict[str, float],
+    warnings: list[str],
+) -> _Attempt:
+    """The solve of the ``usable`` cameras' events matched as ``matching`` (see :func:`_attempt`)."""
+    warnings = list(warnings)
     matching = _with_a_leading_edge(matching, sync_events)
     tied = matching.tied_to(reference)
     connected = [name for name in usable if name in tied]
@@ -980,7 +1141,6 @@ def _attempt(
     chosen = [cameras[name] for name in connected]
     observations = _observations(chosen, matches)
 
-    rate_std = rate_std or {}
     wider = {
         index: float(np.hypot(rate_std.get(name, 0.0), rate_std.get(reference, 0.0)) * DRIFT_PRIOR_WIDENING)
         for index, name in enumerate(connected)
