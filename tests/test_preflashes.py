@@ -69,7 +69,7 @@ def test_a_constant_pre_flash_delay_is_said_in_sigma_and_an_anchor_settles_it(tm
     """Pre-flashes at exactly 60 ms and bright enough (0.6 of the flash) for cam1 to see
     every one: both shifts line up 12 events and explain the edges about as well (a lead of
     18, short of the 20 a choice needs; at 0.3 cam1 misses three pre-flashes and the right
-    shift leads by 114). ``flashsync sync`` takes one, says in a warning that cam2 may be
+    shift leads by 53). ``flashsync sync`` takes one, says in a warning that cam2 may be
     60 ms off and names ``--anchor``, and cam2's sigma holds the gap (error/sigma at most 1;
     leaving the pair out instead read cam2 upside down, 5.4 ms off with no word); with one
     flash named in both cameras the rig is solved right, with no such warning."""
