@@ -535,10 +535,11 @@ def with_preflashes(
     seed: int = 0,
 ) -> Scenario:
     """`scenario` fired by TTL flashes: before each flash a pre-flash of its pulse at
-    ``share`` of its strength, ``delay_ms`` earlier (less a normal delay of std
-    ``jitter_ms``, per flash); the cameras of ``blind`` do not see the pre-flashes (by
-    default each camera p 1/2, drawn from ``seed``). Every camera's missed flashes are
-    kept (and it sees a pre-flash whatever it does with its flash).
+    ``share`` of its strength, ``delay_ms`` earlier give or take a normal deviate of std
+    ``jitter_ms`` (per flash); the cameras of ``blind`` do not see the pre-flashes (by
+    default each camera p 1/2, drawn from ``seed``). A camera's ``missed_flashes`` stay
+    missed (their pre-flashes are not); its ``miss_probability`` applies to the pre-flashes
+    too.
 
     Examples
     --------
