@@ -55,8 +55,9 @@ def test_a_pair_that_lines_up_at_a_few_shifts_is_undecided_not_dropped():
 def test_the_edges_fit_decides_the_shift_a_pre_flash_makes(tmp_path, missed):
     """A pre-flash delay that varies (1 ms std) leaves the wrong shift a loose fit: the
     solve takes the right one. With cam1 missing four flashes whose pre-flashes it saw, the
-    wrong shift lines up 12 events against 8 (not a rival: it was taken, 60 ms off with a
-    sigma of 0.1 ms); the fit takes the other."""
+    wrong shift lines up 12 events against 8 (not a rival: the other shift is one of the
+    pair's others); the fit takes the other. Before, both were a 'chance coincidence'
+    error (random rig 414 so, with 8 against 5, was taken 60 ms off)."""
     scenario = ttl_rig(1.0, missed)
     truth, videos = rendered(scenario, tmp_path)
     model, report = synchronize(detect_videos(videos))
