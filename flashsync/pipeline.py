@@ -728,11 +728,8 @@ def _readout_doubts(
         if best.evidence >= other.evidence + DECIDED_LOG_LIKELIHOOD:
             continue
         margin = best.score - other.score
-        chosen, alternative = best.model(reference).cameras[name], other.model(reference).cameras[name]
-        frames = np.arange(chosen.n_frames)
-        rows = np.array([0.0, chosen.height - 1.0])
-        gap = np.abs(chosen.t_global_ms(frames[:, None], rows) - alternative.t_global_ms(frames[:, None], rows))
-        spreads[name] = gap.max(axis=1)
+        chosen = best.model(reference).cameras[name]
+        spreads[name] = _frame_gaps_ms(chosen, other.model(reference).cameras[name])
         way = "bottom-up (upside down)" if chosen.flipped else "top-down (upright)"
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
@@ -899,8 +896,12 @@ class _Attempt:
             SCORE_MIN_SIGMA_MS,
         )
         sigma = (sigma * self.solution.sigma_factor)[inlier]
-        n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
-        return edge_log_likelihood(sigma, n_edges, _uniform_ms(self.cameras))
+        return edge_log_likelihood(sigma, self.n_edges, _uniform_ms(self.cameras))
+
+    @cached_property
+    def n_edges(self) -> int:
+        """Every band edge the cameras' readings hold, fitted or not (what a score counts)."""
+        return sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
 
     @property
     def evidence(self) -> float:
@@ -1030,6 +1031,14 @@ def _shifts_by_fit(
     return chosen
 
 
+def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:
+    """How far two clocks of one camera put each of its frames apart, ms, shape (n_frames,):
+    the larger gap of its first and last row."""
+    frames = np.arange(mine.n_frames)[:, None]
+    rows = np.array([0.0, mine.height - 1.0])
+    return np.abs(mine.t_global_ms(frames, rows) - theirs.t_global_ms(frames, rows)).max(axis=1)
+
+
 def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Attempt | None]]]) -> _Attempt:
     """``chosen`` with the doubt of each pair's other shifts (``pairs``: the pair and the
     solves at its other shifts): per camera whose times another shift moves
@@ -1042,12 +1051,11 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
             if trial is None:
                 continue
             other = trial.model(chosen.reference)
-            gaps = {}
-            for name in set(model.cameras) & set(other.cameras):
-                mine, theirs = model.cameras[name], other.cameras[name]
-                frames = np.arange(mine.n_frames)[:, None]
-                rows = np.array([0.0, mine.height - 1.0])
-                gaps[name] = np.abs(mine.t_global_ms(frames, rows) - theirs.t_global_ms(frames, rows)).max(axis=1)
+            gaps = {
+                name: _frame_gaps_ms(model.cameras[name], other.cameras[name])
+                for name in model.cameras
+                if name in other.cameras
+            }
             largest = max((gap.max() for gap in gaps.values()), default=0.0)
             for name, gap in gaps.items():
                 if gap.max() <= largest / 2.0:
@@ -1092,8 +1100,7 @@ def _shift_evidence(attempt: _Attempt, noise: dict[str, np.ndarray]) -> float:
     names = np.array(attempt.connected)[observations.camera]
     kinds = observations.trailing.astype(np.int64)
     sigma = np.array([noise[name][kind] for name, kind in zip(names, kinds)]) * attempt.solution.sigma_factor
-    n_edges = sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in attempt.cameras.values())
-    return residual_log_likelihood(attempt.solution.residual_ms, sigma, n_edges, _uniform_ms(attempt.cameras))
+    return residual_log_likelihood(attempt.solution.residual_ms, sigma, attempt.n_edges, _uniform_ms(attempt.cameras))
 
 
 def _solved_or_none(solved: Callable[[Matching], _Attempt], matching: Matching) -> _Attempt | None:
