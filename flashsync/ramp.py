@@ -54,6 +54,15 @@ BLUR_PRIOR_STD = 2.0
 #: row (Akaike's criterion asks for 2; a free hold trades with the blur and fits the noise
 #: of a blurred exponential ramp by 4-5 times).
 HOLD_EVIDENCE = 10.0
+#: What the reading of a camera's bands with pulses longer than the exposure is charged
+#: for each hold it gives a band whose own fit had none (:func:`common_width`), in units of
+#: the band's noise: about what a free hold wins by fitting noise and a ramp's shape
+#: (4-5 on a blurred exponential ramp, :data:`HOLD_EVIDENCE`). Uncharged, rig-442's
+#: 12.4-row sRGB camera, whose bands' own widths scatter over 11-14.4 rows under its tone
+#: curve, was read as a 4.7-row exposure of rectangles each as long as its band (the cost
+#: 83 read plainly, 11 so), its times 0.75 ms off; charged 10, rig-322's 5.7-row camera
+#: under LED pulses it takes two holds to explain was read plainly, 1.4 rows long.
+SPARE_HOLD = 5.0
 #: A camera's exposure (:func:`common_width`): the most of its bands used, the widths of
 #: the grid searched with every pulse no longer than the exposure, the shortest exposure
 #: tried with longer pulses allowed, rows, and the longest as a share of the bands' median
@@ -364,8 +373,9 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     pulses' are, :meth:`BandFit.with_width`; the plain exposure itself is read from settled
     fits, which place it better: counted alike there too, a reference's exposure moved
     0.37 ms; compared with spikes of failed fits, slow-rising pulses shorter than a 52-row
-    exposure were read as 19-row exposures of 1.6 ms rectangles) and the pulses it finds longer
-    than the exposure differ (:func:`_pulses_differ`: one pulse length for every flash
+    exposure were read as 19-row exposures of 1.6 ms rectangles; each hold it gives a band
+    whose own fit had none charged :data:`SPARE_HOLD`) and the pulses it finds longer than
+    the exposure differ (:func:`_pulses_differ`: one pulse length for every flash
     tells the two readings apart no better than one band does; a random rig's 98-row
     camera, whose two false bands 23 and 7 rows long made its bands' widths differ, was
     read 10 rows with its three real pulses 98 rows each, its times 5 ms off) or two or
@@ -382,18 +392,21 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     own = np.array([_data_cost(fit.x, fit.y, fit.p, _f_scale(fit.p), BAND) for fit in fits])
     scales = np.array([max(fit.variance, 1e-12) for fit in fits])
 
-    def total(width: float, longer: bool, limit: float = np.inf, unsettled: bool = False) -> tuple[float, np.ndarray]:
+    def total(
+        width: float, longer: bool, limit: float = np.inf, unsettled: bool = False
+    ) -> tuple[float, np.ndarray, np.ndarray]:
         """The bands' summed cost at ``width`` (as soon as it reaches ``limit``, that far),
-        and which bands' pulses are then the longer, shape (n_bands,)
-        (:meth:`BandFit.with_width`)."""
-        cost, outlasted = 0.0, np.zeros(len(fits), dtype=bool)
+        which bands' pulses are then the longer, and which are refitted with a hold their
+        own fit had not, both shape (n_bands,) (:meth:`BandFit.with_width`)."""
+        cost, outlasted, held = 0.0, np.zeros(len(fits), dtype=bool), np.zeros(len(fits), dtype=bool)
         for k, (fit, least, scale) in enumerate(zip(fits, own, scales)):
             refit = fit.with_width(width, longer, unsettled)
             cost += BAND_COST_CAP if refit is None else min(max(refit[1] - least, 0.0) / scale, BAND_COST_CAP)
             outlasted[k] = refit is not None and refit[0].p[1] > width
+            held[k] = refit is not None and refit[0].free[1] and not fit.free[1]
             if cost >= limit:
                 break
-        return cost, outlasted
+        return cost, outlasted, held
 
     plain = _plain_width(widths, lambda width: total(width, False)[0])
     if plain is None:
@@ -424,9 +437,10 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
         width, cost = float(refined.x), float(refined.fun)
     within = shorter[start:][scored[start:] <= cost + FLAT_EVIDENCE]
     width = _upper_end(lambda w: total(w, True)[0], max([width, *within]), cost + FLAT_EVIDENCE, longest)
-    cost, outlasted = total(width, True)
+    cost, outlasted, held = total(width, True)
     exposure_long = _one_exposure_long(widths[~outlasted], width)
-    if not ((_pulses_differ(widths[outlasted]) or exposure_long) and _explains_better(cost, plain[1])):
+    charged = cost + SPARE_HOLD * held.sum()
+    if not ((_pulses_differ(widths[outlasted]) or exposure_long) and _explains_better(charged, plain[1])):
         return plain[0], False
     apart = exposure_long and bool(np.all(widths[outlasted] >= (1 + PINNED_SHARE) * width))
     if width < (1 - PINNED_SHARE) * plain[0] or apart:
