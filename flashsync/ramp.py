@@ -60,7 +60,7 @@ HOLD_EVIDENCE = 10.0
 #: (4-5 on a blurred exponential ramp, :data:`HOLD_EVIDENCE`). Uncharged, rig-442's
 #: 12.4-row sRGB camera, whose bands' own widths scatter over 11-14.4 rows under its tone
 #: curve, was read as a 4.7-row exposure of rectangles each as long as its band (the cost
-#: 83 read plainly, 11 so), its times 0.75 ms off; charged 10, rig-322's 5.7-row camera
+#: 76 read plainly, 20 so, 50 charged), its times 0.72 ms off; charged 10, rig-322's 5.7-row camera
 #: under LED pulses it takes two holds to explain was read plainly, 1.4 rows long.
 SPARE_HOLD = 5.0
 #: A camera's exposure (:func:`common_width`): the most of its bands used, the widths of

@@ -200,11 +200,11 @@ def test_short_pulses_under_a_tone_curve_and_a_coarse_codec_are_not_read_as_rect
     (30 fps, 180 rows, an exposure of 2.175 ms = 12.4 readout rows, sRGB tone, crf 30) sees
     13 flashes that decay over 0.39-1.18 ms, every pulse shorter than the exposure. The
     detector's model is linear light, the tone curve bends the ramps, and the bands' own
-    widths scatter over 11-14.4 rows: at one exposure for all they cost 83 (in units of
+    widths scatter over 11-14.4 rows: at one exposure for all they cost 76 (in units of
     their noise), read as a 4.7-row exposure of rectangles 9.5-13 rows long, each band with
-    a hold of its own, 11. No band's own fit had found a hold worth its cost; that reading
-    is now charged for the six holds it gives them (``SPARE_HOLD``, 5 each: 41, short of the
-    50 it must lead by). Before, cam2's exposure was read 1.35 ms short and its times
+    a hold of its own, 20. No band's own fit had found a hold worth its cost; that reading
+    is now charged for the six holds it gives them (``SPARE_HOLD``, 5 each: 50, short of the
+    50 less than 76 it must cost). Before, cam2's exposure was read 1.35 ms short and its times
     0.75 ms off at error/sigma 5.4, without a word; now within 0.05 ms and 0.1 ms."""
     scenario = random_rig(442, max_height=180, duration_ms=8000.0)
     truth = render_scenario(scenario, tmp_path)
