@@ -993,7 +993,9 @@ def _shifts_by_fit(
     shift with most events, the others its doubts (:func:`_shift_doubts`). A pair's
     other shift (:attr:`~flashsync.match.PairAlignment.others`) that matches at least
     :data:`MIN_SHARED_FLASHES` events the chosen one leaves unmatched replaces it where it
-    is so decided, where ``other_shifts`` asks (a solve per such shift: once, on the readouts
+    is so decided and is its doubt where neither is (random rig 416 with pre-flashes: the
+    other shift led by 18, and the camera it moves was 60 ms off at error/sigma 63 with no
+    word), where ``other_shifts`` asks (a solve per such shift: once, on the readouts
     chosen; the decisions hang on the other cameras' readouts, and kept from one attempt of
     the readout search to the next they put rigs 406 and 408 tens of ms off).
 
@@ -1022,13 +1024,17 @@ def _shifts_by_fit(
         chosen = solved(matching.with_alignments(alignments, n_events))
     if needed:
         return _shift_doubts(chosen, [(pair, [trial(pair, s) for s in shifts[1:]]) for pair, shifts in needed])
+    doubts = []
     for pair, alignment in alignments.items() if other_shifts else ():
         for other in alignment.others:
             if _unmatched_in_chosen(alignment, other) >= MIN_SHARED_FLASHES:
                 swapped = trial(pair, other)
-                if _decided([chosen, swapped]) == 1:
-                    return swapped
-    return chosen
+                decided = _decided([chosen, swapped])
+                if decided == 1:
+                    return _shift_doubts(swapped, doubts) if doubts else swapped
+                if decided is None:
+                    doubts.append((pair, [swapped]))
+    return _shift_doubts(chosen, doubts) if doubts else chosen
 
 
 def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:
