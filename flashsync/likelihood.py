@@ -31,15 +31,26 @@ def edge_log_likelihood(sigma_ms: np.ndarray, n_edges: int, period_ms: float) ->
     return float(np.sum(-np.log(sigma_ms * np.sqrt(2.0 * np.pi)) - 0.5) - (n_edges - len(sigma_ms)) * np.log(period_ms))
 
 
-def residual_log_likelihood(residual_ms: np.ndarray, sigma_ms: np.ndarray, n_edges: int, period_ms: float) -> float:
+def residual_log_likelihood(
+    residual_ms: np.ndarray, sigma_ms: np.ndarray, flash: np.ndarray, n_edges: int, period_ms: float
+) -> float:
     """Log-likelihood of ``n_edges`` band edges of which the fitted ones have residuals
-    ``residual_ms`` at noise ``sigma_ms`` (ms, shape (k,) each): each the larger of its
-    Gaussian density and the uniform one over ``period_ms`` (an edge the fit misses by many
-    sigmas is no better than one it does not explain); the other ``n_edges - k`` uniform.
-    Fits of one set of edges compared at one noise: a loose fit that explains more edges
-    pays for every residual, where its own wider noise would hide them."""
+    ``residual_ms`` at noise ``sigma_ms`` about the times of their flashes ``flash`` (ms,
+    ms, flash indices; shape (k,) each): each the larger of its Gaussian density and the
+    uniform one over ``period_ms`` (an edge the fit misses by many sigmas is no better than
+    one it does not explain); the other ``n_edges - k`` uniform. Each flash's time is
+    integrated out, uniform over ``period_ms`` (Laplace: ``log(sqrt(2 pi) sigma_f /
+    period_ms)``, ``sigma_f`` the std its explained edges give it): a flash's time is free,
+    so one of its edges only places it, and a matching that names more flashes is not
+    credited with the edges that placed them. Fits of one set of edges compared at one
+    noise: a loose fit that explains more edges pays for every residual, where its own
+    wider noise would hide them."""
     gaussian = -np.log(sigma_ms * np.sqrt(2.0 * np.pi)) - 0.5 * (residual_ms / sigma_ms) ** 2
-    return float(np.sum(np.maximum(gaussian, -np.log(period_ms))) - (n_edges - len(residual_ms)) * np.log(period_ms))
+    explained = gaussian > -np.log(period_ms)
+    precision = np.bincount(flash[explained], weights=sigma_ms[explained] ** -2.0)
+    placing = np.sum(np.log(np.sqrt(2.0 * np.pi / precision[precision > 0]) / period_ms))
+    unexplained = n_edges - int(explained.sum())
+    return float(np.sum(gaussian[explained]) + placing - unexplained * np.log(period_ms))
 
 
 @dataclass(frozen=True)
