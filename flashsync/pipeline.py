@@ -48,6 +48,7 @@ from flashsync.likelihood import (
 )
 from flashsync.match import (
     MIN_SHARED_FLASHES,
+    MIN_TOLERANCE_MS,
     Matching,
     PairAlignment,
     approximate_times_ms,
@@ -1048,10 +1049,12 @@ def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:
 def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Attempt | None]]]) -> _Attempt:
     """``chosen`` with the doubt of each pair's other shifts (``pairs``: the pair and the
     solves at its other shifts): per camera whose times another shift moves
-    by more than half the largest move, how far (ms, each frame's largest over its rows;
-    :attr:`_Attempt.shift_spreads`, into its sigma) and a warning line."""
+    by more than half the largest move and by a matching tolerance at least
+    (:data:`~flashsync.match.MIN_TOLERANCE_MS`: less is a solve that left the pair's
+    events out, not another shift), how far (ms, each frame's largest over its rows;
+    :attr:`_Attempt.shift_spreads`, into its sigma) and a warning line naming the pairs."""
     model = chosen.model(chosen.reference)
-    spreads, warnings = {}, []
+    spreads, doubted = {}, {}
     for (a, b), trials in pairs:
         for trial in trials:
             if trial is None:
@@ -1064,15 +1067,17 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
             }
             largest = max((gap.max() for gap in gaps.values()), default=0.0)
             for name, gap in gaps.items():
-                if gap.max() <= largest / 2.0:
+                if gap.max() <= max(largest / 2.0, MIN_TOLERANCE_MS):
                     continue
                 spreads[name] = np.maximum(spreads.get(name, gap), gap)
-                warnings.append(
-                    f"{chosen.cameras[name].video}: the flashes of {a} and {b} also line up at another shift that "
-                    "explains the edges about as well (a flash with a weaker pre-flash before it, as TTL flashes fire, "
-                    f"makes two); its times may be off by up to {float(gap.max()):.1f} ms (in its sigma); name one "
-                    "flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
-                )
+                doubted.setdefault(name, []).append(f"{a} and {b}")
+    warnings = [
+        f"{chosen.cameras[name].video}: the flashes of {', of '.join(dict.fromkeys(named))} also line up at another "
+        "shift that explains the edges about as well (a flash with a weaker pre-flash before it, as TTL flashes fire, "
+        f"makes two); its times may be off by up to {float(spreads[name].max()):.1f} ms (in its sigma); name one "
+        "flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+        for name, named in doubted.items()
+    ]
     return replace(chosen, warnings=chosen.warnings + warnings, shift_spreads=spreads)
 
 
