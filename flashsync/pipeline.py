@@ -593,12 +593,13 @@ def _search_reference(
     return max(sorted(counts), key=lambda name: counts[name])
 
 
-#: The lead of log-likelihood that decides between two shifts of a pair (:func:`_decided`). Of
-#: 31 pre-flashed rigs (random rigs 401-445, pre-flashes 60 ms early, one camera blind to
-#: them) the right shift led by 46-260 mostly where the delay varied (1 ms std) and by
-#: 12-88 where it did not, and the wrong one led by 14 (a camera's clipped flashes fit
-#: worse than its unclipped pre-flashes) and by 67 (the first camera missed four flashes
-#: whose pre-flashes it saw): a constant delay can favour either, and the margin is wide.
+#: The lead of log-likelihood that decides between two shifts of a pair (:func:`_decided`,
+#: by :func:`_shift_evidence`). On random rigs 414-426 fired with pre-flashes 60 ms early
+#: (each camera blind to them p 1/2) and random rig 35 so, where the delay varied (1 ms std)
+#: the right shift led by 5-124 (by over 30 in most trials), and where it did not the lead
+#: went either way by up to 24 (the wrong one's by up to 17: rig-414, whose first camera
+#: missed four flashes whose pre-flashes it saw, lines up 8 events against 5 at the wrong
+#: shift): a constant delay can favour either, and the margin keeps it undecided.
 SHIFT_DECIDED_LOG_LIKELIHOOD = 20.0
 #: Log prior odds of a camera mounted upright against upside down: a reading costs this
 #: much of its log-likelihood per camera read the other way than detected (top-down, the
