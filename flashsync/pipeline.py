@@ -1033,10 +1033,10 @@ def _shifts_by_fit(
                 swapped = trial(pair, other)
                 decided = _decided([chosen, swapped])
                 if decided == 1:
-                    return _shift_doubts(swapped, doubts) if doubts else swapped
+                    return _shift_doubts(swapped, doubts)
                 if decided is None:
                     doubts.append((pair, [swapped]))
-    return _shift_doubts(chosen, doubts) if doubts else chosen
+    return _shift_doubts(chosen, doubts)
 
 
 def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:
@@ -1053,7 +1053,10 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
     by more than half the largest move and by a matching tolerance at least
     (:data:`~flashsync.match.MIN_TOLERANCE_MS`: less is a solve that left the pair's
     events out, not another shift), how far (ms, each frame's largest over its rows;
-    :attr:`_Attempt.shift_spreads`, into its sigma) and a warning line naming the pairs."""
+    :attr:`_Attempt.shift_spreads`, into its sigma) and a warning line naming the pairs;
+    ``chosen`` itself where there are no pairs."""
+    if not pairs:
+        return chosen
     model = chosen.model(chosen.reference)
     spreads, doubted = {}, {}
     for (a, b), trials in pairs:
