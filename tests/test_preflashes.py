@@ -64,11 +64,12 @@ def test_the_edges_fit_decides_the_shift_a_pre_flash_makes(tmp_path, missed):
     """A pre-flash delay that varies (1 ms std) leaves the wrong shift a loose fit: the
     solve takes the right one. With cam1 missing four flashes whose pre-flashes it saw, the
     wrong shift lines up 12 events against 8 (the other shift its rival, at least 0.6 as
-    many: :data:`~flashsync.match.RIVAL_SHIFT_FRACTION`); the fit takes the other. Before, both were a 'chance coincidence'
-    error. Missing seven, the wrong shift lines up 9 against 5 through a clock 577 ppm
-    off whose rate it bends, and its edges alone led by 38: it was taken 60 ms off with no
-    word (error/sigma 12.5), until the flashes' times were integrated out and the priors
-    counted (``pipeline._shift_evidence``; random rig 414 so, 8 against 5, the same)."""
+    many: :data:`~flashsync.match.RIVAL_SHIFT_FRACTION`); the fit takes the other.
+    Before, both were a 'chance coincidence' error. Missing seven, the wrong shift lines
+    up 9 against 5 through a clock 577 ppm off whose rate it bends, and its edges alone
+    led by 38: it was taken 60 ms off with no word (error/sigma 12.5), until the flashes'
+    times were integrated out and the priors counted (``pipeline._shift_evidence``;
+    random rig 414 so, 8 against 5, the same)."""
     scenario = ttl_rig(1.0, missed)
     truth, videos = rendered(scenario, tmp_path)
     model, report = synchronize(detect_videos(videos))
