@@ -991,8 +991,11 @@ def _shifts_by_fit(
     a pair's shifts, the one whose solve explains the edges best at one noise for all
     (:func:`_shift_evidence`) where it leads the others by :data:`SHIFT_DECIDED_LOG_LIKELIHOOD`.
     An undecided pair (:attr:`Matching.undecided`) is left out where its cameras are tied
-    through other pairs; else it counts at the shift so decided, or where none is at the
-    shift with most events, the others its doubts (:func:`_shift_doubts`). A pair's
+    through other pairs (those that count, and undecided ones the fit decided, in any
+    order); else it counts at the shift so decided, or where none is at the shift with most
+    events, the others its doubts (:func:`_shift_doubts`; random rig 415 with pre-flashes:
+    its first undecided pair taken so put five cameras' sigma at 60 ms, though a pair
+    decided after it tied them, and every pair after it was solved twice for nothing). A pair's
     other shift (:attr:`~flashsync.match.PairAlignment.others`) that matches at least
     :data:`MIN_SHARED_FLASHES` events the chosen one leaves unmatched replaces it where it
     is so decided and is its doubt where neither is (random rig 416 with pre-flashes: the
@@ -1012,15 +1015,33 @@ def _shifts_by_fit(
     def trial(pair: tuple[str, str], shift: PairAlignment) -> _Attempt | None:
         return _solved_or_none(solved, matching.with_alignments({**alignments, pair: shift}, n_events))
 
-    chosen = _solved_or_none(solved, matching.with_alignments(alignments, n_events)) if matching.undecided else None
-    needed = []
+    chosen, group = None, {}  # group: each camera's group of cameras tied through the pairs that count
+    if matching.undecided:
+        counting = matching.with_alignments(alignments, n_events)
+        chosen = _solved_or_none(solved, counting)
+        connected = set(chosen.connected) if chosen is not None else set()  # the reference's group, as solved
+        group = {name: "" if name in connected else min(counting.tied_to(name) - connected) for name in n_events}
+
+    def tie(a: str, b: str) -> None:
+        joined = group[b]
+        group.update({name: group[a] for name, g in group.items() if g == joined})
+
+    undecided = []
     for pair, alignment in matching.undecided.items():
-        if chosen is not None and set(pair) <= set(chosen.connected):
+        if group[pair[0]] == group[pair[1]]:
             continue  # tied through other pairs: left out
         shifts = (alignment, *alignment.rivals)
         decided = _decided([trial(pair, s) for s in shifts])
-        alignments[pair] = shifts[0 if decided is None else decided]
         if decided is None:
+            undecided.append((pair, shifts))
+        else:
+            alignments[pair] = shifts[decided]
+            tie(*pair)
+    needed = []
+    for pair, shifts in undecided:
+        if group[pair[0]] != group[pair[1]]:  # not tied by a pair decided after it
+            alignments[pair] = shifts[0]
+            tie(*pair)
             needed.append((pair, shifts))
     if chosen is None or len(alignments) > len(matching.alignments):
         chosen = solved(matching.with_alignments(alignments, n_events))
