@@ -1,4 +1,5 @@
-"""The flash ramp model and its fit, on synthetic ramps with a known edge."""
+"""The flash ramp model and its fit, on synthetic ramps with a known edge and on one real
+camera's bands (rig-415's cam1, fitted from its H.264 file)."""
 
 from pathlib import Path
 
