@@ -45,6 +45,16 @@ RIVAL_FRACTION = 0.7
 #: camera was 49 ms off at error/sigma 10); two cameras that both saw them line up at the
 #: pre-flash's delay with about half (a flash to the other's pre-flash).
 RIVAL_SHIFT_FRACTION = 0.6
+#: A shift under which a camera's events left unmatched while the other camera recorded are
+#: this many times brighter (median band strength) than those it matched is not believed
+#: (:func:`align_pair`): a camera misses faint flashes, not bright ones, and at a pre-flash's
+#: delay a camera that saw the pre-flashes (0.3 of their flash) lines its faint pre-flashes up
+#: with the other's flashes and leaves its own flashes unmatched. Over 44 rigs fired with
+#: pre-flashes, of 861 right shifts 4 came to 2.5 or more (one pair of rig 416, twice), of 555
+#: wrong ones 360, and all 11 wrong ones that counted as convincing 2.58 or more (random rig
+#: 455: its reference saw mostly pre-flashes, five pairs with it lined up at the pre-flash's
+#: delay, six cameras 59 ms off at error/sigma 100-253).
+BRIGHTER_LEFT = 2.5
 #: Most rival shifts of a pair that the solve's fit may decide between (a flash with a
 #: pre-flash lines up a camera that saw the pre-flashes with one that did not at two).
 MAX_RIVALS = 2
@@ -142,6 +152,7 @@ def align_pair(
     tolerance_ms: float,
     anchor: tuple[int, int] | None = None,
     n_candidates: int = 8,
+    strengths: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PairAlignment | None:
     """Coarse alignment of two cameras' event times (ms, own clocks).
 
@@ -154,6 +165,10 @@ def align_pair(
         times), ms.
     anchor : (i, j), optional
         Event i of a and event j of b are known to be the same flash.
+    strengths : (arrays of shape (n_a,), (n_b,)), optional
+        The events' band strengths (relative change, positive): a shift that leaves one
+        camera's bright events unmatched and matches its faint ones is not considered
+        (:data:`BRIGHTER_LEFT`).
 
     Returns
     -------
@@ -170,6 +185,8 @@ def align_pair(
         shifts = _candidate_shifts(times_a, times_b, tolerance_ms, n_candidates)
     results = [_refine(times_a, times_b, shift, tolerance_ms) for shift in shifts]
     results = sorted((r for r in results if r is not None), key=lambda r: (-len(r.matches), r.rms_ms))
+    if strengths is not None and anchor is None:
+        results = [r for r in results if _brighter_left(r, times_a, times_b, *strengths) < BRIGHTER_LEFT]
     if not results:
         return None
     best = results[0]
@@ -184,6 +201,23 @@ def align_pair(
     chance = [chance_alignments(_residuals_ms(r, times_a, times_b), *sizes) for r in distinct]
     others = tuple(replace(r, chance=c) for r, c in zip(distinct[1:], chance[1:]) if c <= MAX_CHANCE)
     return replace(best, ambiguous=ambiguous, chance=chance[0], others=others)
+
+
+def _brighter_left(
+    alignment: PairAlignment, times_a: np.ndarray, times_b: np.ndarray, strength_a: np.ndarray, strength_b: np.ndarray
+) -> float:
+    """How many times brighter (median strength) the events a camera leaves unmatched while
+    the other camera recorded are than those it matches, the larger of the two cameras'
+    (0 where neither leaves any)."""
+    mapped_b = alignment.alpha * times_b + alignment.beta  # b's times on a's clock
+    ratios = [0.0]
+    for times, other, strength, column in ((times_a, mapped_b, strength_a, 0), (mapped_b, times_a, strength_b, 1)):
+        matched = np.zeros(len(times), dtype=bool)
+        matched[alignment.matches[:, column]] = True
+        left = ~matched & (times >= other.min()) & (times <= other.max())
+        if left.any():
+            ratios.append(float(np.median(strength[left]) / np.median(strength[matched])))
+    return max(ratios)
 
 
 def _residuals_ms(alignment: PairAlignment, times_a: np.ndarray, times_b: np.ndarray) -> np.ndarray:
@@ -456,6 +490,7 @@ def match_events(
     tolerance_ms: float,
     anchors: dict[str, int] | None = None,
     memo: dict | None = None,
+    strengths: dict[str, np.ndarray] | None = None,
 ) -> Matching:
     """Align pairs of cameras along a spanning structure (every pair in rigs of a few
     cameras; :mod:`flashsync.partners`) and merge the pairs that count into flashes.
@@ -472,6 +507,8 @@ def match_events(
         Alignments and estimates of earlier calls, by the pair's event times: give the same
         dict to calls that differ in a few cameras' times (readout directions tried one
         camera at a time) and only those cameras' pairs are aligned again.
+    strengths : dict of str to array of shape (n_events,), optional
+        Per camera, its events' band strengths (:func:`align_pair`).
 
     Returns
     -------
@@ -500,9 +537,10 @@ def match_events(
 
     def aligned(a: str, b: str) -> PairAlignment | None:
         anchor = (anchors[a], anchors[b]) if a in anchors and b in anchors else None
-        key = ("alignment", keys[a], keys[b], tolerance_ms, anchor)
+        pair_strengths = (strengths[a], strengths[b]) if strengths is not None else None
+        key = ("alignment", keys[a], keys[b], tolerance_ms, anchor, pair_strengths is not None)
         if key not in memo:
-            memo[key] = align_pair(times_ms[a], times_ms[b], tolerance_ms, anchor)
+            memo[key] = align_pair(times_ms[a], times_ms[b], tolerance_ms, anchor, strengths=pair_strengths)
         return memo[key]
 
     def convincing(a: str, b: str) -> bool:

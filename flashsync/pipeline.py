@@ -976,7 +976,8 @@ def _attempt(
     anchor_events = parse_anchors(list(anchors), {n: sync_events[n].event for n in usable})
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
     times = {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}
-    matching = match_events(times, tolerance, anchor_events, memo)
+    strengths = {n: np.abs(sync_events[n].strength) for n in usable}
+    matching = match_events(times, tolerance, anchor_events, memo, strengths)
 
     def solved(matching: Matching) -> _Attempt:
         return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)

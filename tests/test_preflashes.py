@@ -166,3 +166,24 @@ def test_an_undecided_pair_tied_by_a_pair_decided_after_it_is_left_out(monkeypat
     assert len(asked) == 2 and not doubts, (asked, doubts)
     assert asked[0] not in result.alignments
     assert result.alignments[asked[1]].beta == pytest.approx(offset["cam1"] - offset[asked[1][1]], abs=1.0)
+
+
+def test_a_shift_that_leaves_the_bright_events_unmatched_is_not_taken():
+    """A camera that saw seven pre-flashes (faint: 0.3 of their flash) and four flashes, and
+    one that saw all eight flashes only (random rig 455's reference and cam6): at the
+    pre-flash's delay seven events line up, each flash of the second on a pre-flash of the
+    first, against four at the true shift. By count the wrong shift is convincing (four is
+    no rival of seven) and six cameras came out 59 ms off; but it leaves the first camera's
+    bright events unmatched while matching its faint ones, as a camera never misses: given
+    the events' strengths, the pair is aligned at the true shift."""
+    rng = np.random.default_rng(5)
+    flashes = np.cumsum(rng.uniform(400.0, 900.0, 8))
+    pre, seen = [0, 1, 2, 4, 5, 6, 7], [1, 3, 5, 6]
+    a = np.concatenate([flashes[pre] - 60.0, flashes[seen]])
+    order = np.argsort(a)
+    a, strength_a = a[order], np.concatenate([np.full(len(pre), 0.03), np.full(len(seen), 0.1)])[order]
+    b, strength_b = flashes + 5000.0, np.full(len(flashes), 0.1)
+    by_count = align_pair(a, b, tolerance_ms=10.0)
+    assert by_count.convincing and by_count.beta == pytest.approx(-5060.0, abs=1.0)
+    by_light = align_pair(a, b, tolerance_ms=10.0, strengths=(strength_a, strength_b))
+    assert by_light.beta == pytest.approx(-5000.0, abs=1.0) and len(by_light.matches) == len(seen)
