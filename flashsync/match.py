@@ -50,10 +50,10 @@ RIVAL_SHIFT_FRACTION = 0.6
 #: (:func:`align_pair`): a camera misses faint flashes, not bright ones, and at a pre-flash's
 #: delay a camera that saw the pre-flashes (0.3 of their flash) lines its faint pre-flashes up
 #: with the other's flashes and leaves its own flashes unmatched. Over 44 rigs fired with
-#: pre-flashes, of 861 right shifts 4 came to 2.5 or more (one pair of rig 416, twice), of 555
-#: wrong ones 360, and all 11 wrong ones that counted as convincing 2.58 or more (random rig
-#: 455: its reference saw mostly pre-flashes, five pairs with it lined up at the pre-flash's
-#: delay, six cameras 59 ms off at error/sigma 100-253).
+#: pre-flashes, of 861 right shifts 4 came to 2.5 or more (two pairs of rig 416 and of its
+#: twin), of 555 wrong ones 360, and all 11 wrong ones that counted as convincing 2.58 or
+#: more (random rig 455: its reference saw mostly pre-flashes, five pairs with it lined up at
+#: the pre-flash's delay, six cameras 59 ms off at error/sigma 100-253).
 BRIGHTER_LEFT = 2.5
 #: Most rival shifts of a pair that the solve's fit may decide between (a flash with a
 #: pre-flash lines up a camera that saw the pre-flashes with one that did not at two).
