@@ -7,7 +7,9 @@ of cameras aligned (every pair in rigs of a few cameras, else a spanning structu
 partners per camera: :mod:`flashsync.partners`), the offsets between all their event times
 vote for the shift (flashes fired by hand are irregular, so only the true shift lines many of
 them up); each leading candidate is refined into an affine map (shift and drift) by
-alternating one-to-one matching and fitting. Pairs sharing at least
+alternating one-to-one matching and fitting, and where the events' band strengths are given
+a shift that leaves one camera's bright events unmatched while it matches its faint ones is
+not considered (a camera misses faint flashes: :data:`BRIGHTER_LEFT`). Pairs sharing at least
 :data:`MIN_SHARED_FLASHES` events without a rival shift are then merged, strongest first,
 into flashes: groups of at most one event per camera (:func:`match_events`). Cameras are
 tied together through chains of shared flashes (:meth:`Matching.tied_to`). A pair that
