@@ -222,7 +222,9 @@ def test_alignments_are_remembered_between_calls(monkeypatch):
     times, _ = many_cameras(rng, [tau] * 8)
     aligned = []
     original = match.align_pair
-    monkeypatch.setattr(match, "align_pair", lambda a, b, *rest: aligned.append(1) or original(a, b, *rest))
+    monkeypatch.setattr(
+        match, "align_pair", lambda a, b, *rest, **options: aligned.append(1) or original(a, b, *rest, **options)
+    )
     memo = {}
     first = match.match_events(times, TOLERANCE_MS, memo=memo)
     n_first = len(aligned)
