@@ -4,11 +4,12 @@ A band (one detected pulse event with both edges visible and unsaturated) gives 
 the leading edge is the row whose exposure *ends* at the flash, the trailing edge the row
 whose exposure *starts* there (docs/architecture.md, time convention). Bands are paired
 across cameras by their approximate time on each camera's own clock (stamp + row x frame
-step / height) with the pipeline's matcher, :func:`flashsync.match.match_events`, at the
-tolerance of a readout direction that may be wrong (one frame period): loose enough for
-every effect of the catalogue (an upside-down camera misplaces a band by less than a frame,
-a dropped frame or a clock drift does not move a stamp). Nothing here depends on the model
-under test. A camera whose stamps change rate is paired both ways (its stamps as they
+step / height) and their strengths (a camera misses faint flashes, not bright ones) with
+the pipeline's matcher, :func:`flashsync.match.match_events`, at the tolerance of a
+readout direction that may be wrong (one frame period): loose enough for every effect
+of the catalogue (an upside-down camera misplaces a band by less than a frame, a dropped
+frame or a clock drift does not move a stamp). Nothing here depends on the model under
+test. A camera whose stamps change rate is paired both ways (its stamps as they
 are, and at one rate throughout), and every pairing also at ``sync``'s tolerance (a
 quarter of a frame period, every readout direction as told): flashes at nearly regular
 intervals can leave the loose one a rival shift, and a pair with one is not paired. The
@@ -201,7 +202,8 @@ def measure(detections: Sequence[CameraDetection], reference: str | None = None)
         tolerance = match_tolerance_ms(periods, readout_known)
         for times in product(*map(_frame_times_ms, detections)):
             pulses = {d.camera: _pulses(d.retimed(t)) for d, t in zip(detections, times)}
-            matching = match_events({name: pulses[name].time_ms for name in names}, tolerance)
+            strengths = {name: np.abs(pulses[name].strength) for name in names}
+            matching = match_events({name: pulses[name].time_ms for name in names}, tolerance, strengths=strengths)
             matchings.append((len(matching.flashes), len(matchings), matching, pulses))
     _, _, matching, pulses = max(matchings)
     tied = matching.tied_to(reference)
@@ -283,6 +285,11 @@ class _Pulses:
     bands: Bands
     time_ms: np.ndarray
     clean: np.ndarray
+
+    @property
+    def strength(self) -> np.ndarray:
+        """Each band's strength (relative brightness change), shape (n_bands,)."""
+        return self.events.strength[self.bands.first_edges()]
 
 
 def _pulses(detection: CameraDetection) -> _Pulses:
