@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from flashsync import detect_videos, synchronize
+from flashsync.diagnose.measure import measure
 from flashsync.evaluate import camera_accuracy
 from flashsync.match import align_pair
 from flashsync.simulation import render_scenario
@@ -201,8 +202,6 @@ def test_diagnose_pairs_each_band_with_its_own_flash(tmp_path, missed):
     ("no camera shares at least 3 flashes"); with seven it lined cam1's pre-flashes up with
     cam2's flashes, 60 ms off (random rig 455 so: a verdict of χ² 417642 over 76 degrees of
     freedom, the workflow's own pairing wrong, not the model)."""
-    from flashsync.diagnose.measure import measure
-
     truth, videos = rendered(ttl_rig(1.0, missed), tmp_path)
     measurement = measure(detect_videos(videos))
     edges = measurement.edges
