@@ -18,7 +18,8 @@ from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
 from flashsync.diagnose.effects import DRIFT_RATE
 from flashsync.diagnose.measure import Edges, Measurement, measure
-from flashsync.diagnose.workflow import SYNC_SHAPE, _candidates, _diagnosis, in_sync_shape, residual_test
+from flashsync.diagnose.verdict import noise_test
+from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import probe_errors, probes, sync_errors
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
@@ -787,3 +788,22 @@ def test_cli_bad_model_output_is_one_line_error(tmp_path, capsys, output, messag
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and message.format(target) in err
     assert Path(target).stat().st_mtime_ns == before
+
+
+def test_the_verdicts_rms_is_over_the_edges_its_test_counts():
+    """100 edges of 0.02 ms noise and three paired with the wrong flash, 58 ms off (random
+    rig 416's pre-flash, at most :data:`~flashsync.diagnose.verdict.OUTLIER_SHARE` of the
+    edges: left out of χ² as outliers): the verdict passes and gives the RMS of the edges it
+    counts, and the RMS with the outliers apart. Before, it read "consistent with noise …
+    (RMS 7.9171 ms, expected 0.2016 ms)", an RMS 40 times the noise it called consistent."""
+    residual_ms = np.random.default_rng(1).normal(0.0, 0.02, 103)
+    residual_ms[[10, 50, 90]] = 58.0
+    test = noise_test(
+        residual_ms, np.zeros(103, int), np.linspace(0, 8, 103), ["e"] * 103, ["cam1"], np.array([0.02]), 10
+    )
+    assert test.consistent and len(test.outliers) == 3 and test.counted_rms_ms == pytest.approx(0.02, rel=0.2)
+    rms_ms = float(np.sqrt(np.mean(residual_ms**2)))
+    d = Diagnosis(["cam1"], "cam1", 40, 103, [], rms_ms, rms_ms, rms_ms, True, 0.019, test, [], {})
+    assert (
+        f"(RMS {test.counted_rms_ms:.4f} ms, expected 0.0190 ms; {rms_ms:.4f} ms with the outlier edges)" in d.verdict
+    ), d.verdict

@@ -54,6 +54,8 @@ class NoiseTest:
     spans_s : list of (float, float)
         Where the test fails: spans of the recording (s after the reference's first frame,
         adjacent failing spans joined) whose edges fail it.
+    counted_rms_ms : float
+        RMS of the residuals the test counts (outliers left out), ms.
     """
 
     chi2: float
@@ -63,6 +65,7 @@ class NoiseTest:
     outliers: list[str] = field(default_factory=list)
     cameras: list[str] = field(default_factory=list)
     spans_s: list[tuple[float, float]] = field(default_factory=list)
+    counted_rms_ms: float = float("nan")
 
     @property
     def known(self) -> bool:
@@ -130,12 +133,14 @@ def noise_test(
     """
     noise = {name: float(value) for name, value in zip(names, camera_noise_ms)}
     if not np.all(np.isfinite(camera_noise_ms)):
-        return NoiseTest(float("nan"), float(max(len(residual_ms) - n_parameters, 1)), float("nan"), noise)
+        dof = float(max(len(residual_ms) - n_parameters, 1))
+        return NoiseTest(float("nan"), dof, float("nan"), noise, counted_rms_ms=_rms_ms(residual_ms))
     z = residual_ms / camera_noise_ms[camera]
     outlier = np.abs(z) > OUTLIER_SIGMAS
     if outlier.sum() > max(1, OUTLIER_SHARE * len(z)):
         outlier[:] = False
     outliers = [f"{labels[i]} ({abs(z[i]):.1f} sigma)" for i in np.flatnonzero(outlier)]
+    counted_rms_ms = _rms_ms(residual_ms[~outlier])
     z2, camera, time_s = z[~outlier] ** 2, camera[~outlier], time_s[~outlier]
     n = len(z2)
     dof = float(max(n - n_parameters, 1))
@@ -147,7 +152,7 @@ def noise_test(
     total = float(z2.sum())
     p_value = float(chi2.sf(total, dof))
     if p_value >= SIGNIFICANCE:
-        return NoiseTest(total, dof, p_value, noise, outliers)
+        return NoiseTest(total, dof, p_value, noise, outliers, counted_rms_ms=counted_rms_ms)
     cameras = [name for c, name in enumerate(names) if fails(camera == c)]
     bounds = np.linspace(time_s.min(), time_s.max(), SPANS + 1)
     span = np.clip(np.searchsorted(bounds, time_s, side="right") - 1, 0, SPANS - 1)
@@ -159,4 +164,9 @@ def noise_test(
             spans[-1] = (spans[-1][0], float(bounds[k + 1]))
         else:
             spans.append((float(bounds[k]), float(bounds[k + 1])))
-    return NoiseTest(total, dof, p_value, noise, outliers, cameras, spans)
+    return NoiseTest(total, dof, p_value, noise, outliers, cameras, spans, counted_rms_ms)
+
+
+def _rms_ms(residual_ms: np.ndarray) -> float:
+    """Root mean square of residuals, ms."""
+    return float(np.sqrt(np.mean(residual_ms**2)))

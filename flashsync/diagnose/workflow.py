@@ -178,7 +178,9 @@ class Diagnosis:
     @property
     def verdict(self) -> str:
         """One line on the final residuals against the noise (the χ² test, in words)."""
-        rms = f"RMS {self.final_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
+        rms = f"RMS {self.noise.counted_rms_ms:.4f} ms, expected {self.expected_ms:.4f} ms"
+        if self.noise.outliers:
+            rms += f"; {self.final_rms_ms:.4f} ms with the outlier edges"
         if not self.noise.known:
             return f"residuals {rms}; {self.noise.describe()}"
         if self.consistent:
