@@ -11,6 +11,10 @@ direction and, where the stamps change rate, its frame times (the stamps' own ra
 rate throughout). So the model written is :func:`~flashsync.pipeline.synchronize` on the
 detections read the way up the workflow found and, on each camera where it named a stamp
 rate change, timed as it found (one rate throughout, with that clock's frame uncertainty).
+A camera whose readout the workflow did not name (``flipped``) is read as ``sync`` read it:
+that the workflow found no evidence to turn it is no evidence against ``sync``'s (random
+rig 428: on four flashes the workflow left cam4 as told, top-down, where ``sync`` had read
+it bottom-up, as it is; written so, it was 9.3 ms off).
 Where the final model holds an effect ``sync``'s solve has no term for (saturation, pulse
 shape), or a reading the detection lacks, or ``sync`` cannot solve the detections so, the
 workflow's own model is written instead
@@ -31,7 +35,7 @@ import numpy as np
 
 from flashsync.detect import CameraDetection
 from flashsync.diagnose.candidate import Candidate, Term
-from flashsync.diagnose.effects import CATALOGUE, PULSE_SHAPE, SATURATION, STAMP_RATE
+from flashsync.diagnose.effects import CATALOGUE, FLIPPED, PULSE_SHAPE, SATURATION, STAMP_RATE
 from flashsync.errors import FlashsyncError
 from flashsync.model import SyncModel
 from flashsync.pipeline import SyncReport, synchronize
@@ -61,7 +65,12 @@ def written_model(
         for c in range(len(names))
         if Term(STAMP_RATE, c) in found.terms
     }
-    flipped = dict(zip(names, found.flipped))
+    flipped = {
+        name: found.flipped[c]
+        if synced is None or Term(FLIPPED, c) in found.terms or name not in synced[0].cameras
+        else synced[0].cameras[name].flipped
+        for c, name in enumerate(names)
+    }
     chosen = []
     for detection in detections:
         if detection.camera not in flipped:
