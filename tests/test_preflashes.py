@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from flashsync import detect_videos, synchronize
+from flashsync.diagnose import diagnose
 from flashsync.diagnose.measure import measure
 from flashsync.evaluate import camera_accuracy
 from flashsync.match import align_pair
@@ -194,8 +195,10 @@ def test_a_shift_that_leaves_the_bright_events_unmatched_is_not_taken():
     "missed", [(2, 5, 7, 10), (0, 2, 3, 5, 7, 9, 10)], ids=["more at the wrong shift", "far more at the wrong shift"]
 )
 def test_diagnose_pairs_each_band_with_its_own_flash(tmp_path, missed):
-    """``flashsync diagnose`` pairs the bands by their times and strengths, as ``sync``
-    does (a camera misses faint flashes, not bright ones). cam1 saw the faint pre-flashes
+    """Where ``sync`` cannot solve the videos, ``flashsync diagnose`` pairs the bands itself
+    (:func:`~flashsync.diagnose.measure.measure` without ``sync``'s model), by their times
+    and strengths, as ``sync``'s matcher does (a camera misses faint flashes, not bright
+    ones). cam1 saw the faint pre-flashes
     and missed ``missed`` of the flashes; every flash of the workflow's measurement holds
     bands of one true flash (by the frames that saw it). Before, the workflow paired by
     count alone: with four missed the shifts' rivalry left cam1 and cam2 unpaired
@@ -203,7 +206,30 @@ def test_diagnose_pairs_each_band_with_its_own_flash(tmp_path, missed):
     cam2's flashes, 60 ms off (random rig 455 so: a verdict of χ² 417642 over 76 degrees of
     freedom, the workflow's own pairing wrong, not the model)."""
     truth, videos = rendered(ttl_rig(1.0, missed), tmp_path)
-    measurement = measure(detect_videos(videos))
+    assert_one_true_flash_each(measure(detect_videos(videos)), truth, at_least=5)
+
+
+def test_diagnose_takes_the_pairing_sync_decided(tmp_path):
+    """Random rig 414 fired by TTL flashes (pre-flashes 60 ms early, cam2 blind to them,
+    cam1 missing flashes whose pre-flashes it saw): by their times alone the two cameras
+    line up five bands at the true shift at a chance of 1.09e-3, over the matcher's 1e-3,
+    and the workflow's own pairing refused the rig ("no camera shares at least 3 flashes
+    with cam1"), though ``sync`` pairs them (its fit of the edges decides the pre-flash's
+    shift) and solves them to 0.1 ms. ``diagnose`` takes ``sync``'s pairing: every flash of
+    its measurement holds bands of one true flash (two flashes left clean bands in both
+    cameras), and it diagnoses the rig."""
+    rig = random_rig(414, max_height=360, duration_ms=8000.0)
+    truth, videos = rendered(with_preflashes(rig, 60.0, jitter_ms=1.0, seed=rig.seed), tmp_path)
+    detections = detect_videos(videos)
+    model, _ = synchronize(detections)
+    assert_one_true_flash_each(measure(detections, paired_by=model), truth, at_least=2)
+    found = diagnose(detections)
+    assert camera_accuracy(found.sync_model, truth)["rms_ms"].max() < 0.2
+
+
+def assert_one_true_flash_each(measurement, truth, at_least: int) -> None:
+    """Every flash of ``measurement`` holds bands of one true flash (by the frames that saw
+    it), and there are ``at_least`` of them."""
     edges = measurement.edges
     for flash in np.unique(edges.flash):
         at = edges.flash == flash
@@ -212,4 +238,4 @@ def test_diagnose_pairs_each_band_with_its_own_flash(tmp_path, missed):
             for c, f in zip(edges.camera[at], edges.frame[at])
         ]
         assert set.intersection(*seen_by), (flash, seen_by)
-    assert len(np.unique(edges.flash)) >= 5
+    assert len(np.unique(edges.flash)) >= at_least

@@ -252,7 +252,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     """
     detections = [d.read_as_rolled() for d in detections]  # as sync reads them
     synced = _synchronized(detections, reference)
-    measurement = _flicker_sync_trusts(measure(detections, reference), synced[1] if synced else None)
+    paired = measure(detections, reference, paired_by=synced[0] if synced else None)
+    measurement = _flicker_sync_trusts(paired, synced[1] if synced else None)
     plain = fit_candidate(measurement, frozenset())
     if plain is None:
         raise NotEnoughDataError(
