@@ -16,7 +16,9 @@ addition, an effect added earlier whose evidence has fallen to :data:`THRESHOLD`
 later one explains its structure better) is taken out again, for good. The final residuals
 are then tested against the edge noise the band lengths show
 (:mod:`flashsync.diagnose.verdict`: χ², its p-value, and where an excess is). The data never
-say which effect is there: the workflow sees frame stamps and band edges.
+say which effect is there: the workflow sees frame stamps and band edges, paired into
+flashes as ``sync`` paired them wherever ``sync`` solves the videos
+(:mod:`flashsync.diagnose.measure`).
 
 The model it ends with is the effects found in ``sync``'s shape (:func:`in_sync_shape`):
 every camera's time per row, exposure and drift free under the priors ``sync``'s solve gives
