@@ -17,6 +17,7 @@ import pytest
 from flashsync import detect_videos, synchronize
 from flashsync.diagnose import diagnose
 from flashsync.diagnose.measure import measure
+from flashsync.errors import NotEnoughDataError
 from flashsync.evaluate import camera_accuracy
 from flashsync.match import align_pair
 from flashsync.simulation import render_scenario
@@ -120,13 +121,18 @@ def test_a_constant_delay_that_favours_the_shift_of_more_events_is_said_in_sigma
     edge by edge it led by 48, and cam2 was taken 60 ms off at error/sigma 378 with no word;
     with each flash's time integrated out (a flash's first edge only places it) it leads by
     9, short of the 20 a choice needs: the pair's other shift is its doubt, a warning names
-    the pair and ``--anchor``, and cam2's sigma holds the gap."""
+    the pair and ``--anchor``, and cam2's sigma holds the gap. ``diagnose``, which pairs as
+    ``sync`` did, has no pairing to build on and says so (before: "no camera shares at
+    least 3 flashes with cam1")."""
     truth, videos = rendered(ttl_rig(0.0, (2, 5, 7, 10), share=0.6), tmp_path)
-    model, report = synchronize(detect_videos(videos))
+    detections = detect_videos(videos)
+    model, report = synchronize(detections)
     (warning,) = [w for w in report.warnings if "pre-flash" in w]
     assert "cam2.mp4" in warning and "cam1 and cam2" in warning and "--anchor" in warning, warning
     table = camera_accuracy(model, truth).set_index("camera")
     assert table.loc["cam2", "z_rms"] <= 1.0 and table.loc["cam2", "sigma_rms_ms"] > 30.0, table.to_string()
+    with pytest.raises(NotEnoughDataError, match=r"flashes of cam2 line up with cam1's at another shift .*--anchor"):
+        diagnose(detections)
 
 
 def test_an_undecided_pair_tied_by_a_pair_decided_after_it_is_left_out(monkeypatch):

@@ -289,7 +289,7 @@ def _left_out(detection: CameraDetection, paired_by: SyncModel | None, doubted: 
             f"to {doubted[detection.camera]:.1f} ms); left out"
         )
     if paired_by is not None and detection.camera not in paired_by.cameras:
-        return f"{detection.video}: sync left it out (see its warnings); so does the workflow"
+        return f"{detection.video}: sync ties it to no other camera (flashsync sync says why); left out"
     return f"{detection.video}: shares fewer than {MIN_SHARED_FLASHES} flashes with the other cameras; left out"
 
 
