@@ -11,8 +11,8 @@ That pairing is the matcher's with the shifts the counts of events alone cannot 
 the edges; a camera whose times ``sync`` doubts by more than a matching tolerance (its
 flashes line up at another shift about as well) is left out, and so is an event its solve
 puts more than that off its flash. On 61 random rigs, 44 of them fired with pre-flashes,
-this pairing put bands of two true flashes into 1 of 763 flashes and refused 2 rigs (each
-camera of two, the second doubted by 60 ms); the workflow's own pairing, below, 47 of 714,
+this pairing put bands of two true flashes into 1 of 763 flashes and refused 2 rigs (of two
+cameras each, the second doubted by 60 ms); the workflow's own pairing, below, 47 of 714,
 and refused 7.
 
 Where ``sync`` cannot solve them, the bands are paired by their approximate time on each
@@ -210,7 +210,8 @@ def measure(
         An unknown reference.
     NotEnoughDataError
         Fewer than two cameras, no camera sharing at least
-        :data:`MIN_SHARED_FLASHES` flashes with the reference, or no clean band shared.
+        :data:`MIN_SHARED_FLASHES` flashes with the reference (or, paired by ``sync``, every
+        camera that would doubted), or no clean band shared.
     """
     names = [d.camera for d in detections]
     if len(names) < 2:
