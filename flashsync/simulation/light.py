@@ -108,6 +108,14 @@ def flash_light(start_w: np.ndarray, end_w: np.ndarray, flash: FlashSpec) -> np.
     return np.where(lit, light, 0.0)
 
 
+def flash_reaches(flash: FlashSpec, start_w_ms: float, end_w_ms: float) -> bool:
+    """Whether `flash_light` can be other than exactly 0 in a window within ``[start, end]``
+    (world ms): the flash fires before `end`, and its tail has not underflowed to 0 by
+    `start` (``exp(-750)`` is 0 in double precision)."""
+    spent_ms = flash.world_ms + flash.rise_ms + flash.hold_ms + 750.0 * flash.decay_ms
+    return flash.world_ms < end_w_ms and start_w_ms < spent_ms
+
+
 def half_light_ms(flash: FlashSpec) -> float:
     """Time after the firing instant when the flash has given half of its light, ms.
 

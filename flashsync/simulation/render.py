@@ -25,7 +25,7 @@ import numpy as np
 
 from flashsync.atomic import write_text
 from flashsync.simulation.encode import container_stamps, write_video
-from flashsync.simulation.light import Lighting, ambient_light, flash_light
+from flashsync.simulation.light import Lighting, ambient_light, flash_light, flash_reaches
 from flashsync.simulation.scenario import CameraSpec, FlashSpec, Scenario, check_scenario
 from flashsync.simulation.scene import (
     Player,
@@ -124,7 +124,8 @@ def row_light(camera: CameraSpec, t_frame_ms: float, lighting: Lighting) -> np.n
     start_w, end_w = camera.world_ms(end - camera.exposure_ms), camera.world_ms(end)
     light = ambient_light(start_w, end_w, lighting)
     for flash in lighting.flashes:
-        light = light + camera.flash_gain * flash_light(start_w, end_w, flash)
+        if flash_reaches(flash, start_w.min(), end_w.max()):  # the others add exactly 0
+            light = light + camera.flash_gain * flash_light(start_w, end_w, flash)
     return light
 
 
