@@ -14,14 +14,17 @@ from flashsync.io import load_ground_truth, load_scenario
 from flashsync.io.scenario import scenario_from_dict
 from flashsync.simulation import CameraSpec, FlashSpec, LightSwitch, Scenario, preset, render_scenario
 from flashsync.simulation.encode import write_video
+from flashsync.simulation.light import flash_light
 from flashsync.simulation.render import (
     Lighting,
     ambient_light,
     camera_view,
+    exposure_end_ms,
     frame_gain,
     kept_frames,
     puck_track,
     render_frame,
+    row_light,
 )
 from flashsync.simulation.scene import apply_homography, make_scene
 
@@ -283,3 +286,24 @@ def test_load_scenario_from_yaml_and_refuse_unknown_keys(tmp_path):
     odd.write_text("name: x\ncameras:\n  - {name: a, width: 65, height: 48, fps: 25}\n")
     with pytest.raises(FlashsyncError, match=r"odd\.yaml.*even"):
         load_scenario(odd)
+
+
+def test_a_frames_light_skips_only_flashes_that_add_exactly_nothing():
+    """`row_light` leaves out, per frame, the flashes that cannot reach its rows (not fired
+    yet, or their tail underflowed to 0): every frame's rows are bit for bit the sum over
+    every flash, for exponential, held and switched-off pulses, frames before, during and
+    long after them."""
+    camera = CameraSpec("c", 64, 48, 30.0, exposure_ms=4.0)
+    flashes = (
+        FlashSpec(100.0, 0.5, decay_ms=0.8),
+        FlashSpec(130.0, 0.4, decay_ms=0.0, hold_ms=1.5),
+        FlashSpec(400.0, 0.6, decay_ms=2.0, rise_ms=0.05),
+    )
+    lighting = Lighting(flashes=flashes)
+    for t_frame_ms in np.arange(0.0, 3000.0, 1000.0 / 30.0):
+        end = exposure_end_ms(camera, t_frame_ms)
+        start_w, end_w = camera.world_ms(end - camera.exposure_ms), camera.world_ms(end)
+        every = ambient_light(start_w, end_w, lighting)
+        for flash in flashes:
+            every = every + camera.flash_gain * flash_light(start_w, end_w, flash)
+        assert np.array_equal(row_light(camera, t_frame_ms, lighting), every), t_frame_ms
