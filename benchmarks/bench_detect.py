@@ -1,6 +1,7 @@
 """Detection throughput against the floor: decode-only, on generated 720p, 1080p and 4K H.264.
 
 Run: python benchmarks/bench_detect.py [--frames N] [--rounds N] [--sizes 720p,1080p,2160p] [--dir DIR]
+     python benchmarks/bench_detect.py --videos VIDEO... [--both-ways] [--rounds N]
 
 For each size it writes a clip (textured scene, moving blobs, a flash every ~40 frames,
 libx264 crf 23), then times on this machine, in alternating rounds on the same file:
@@ -10,7 +11,9 @@ runs for each video. Prints the best frames per second of each, their ratio (1.0
 as decoding) and the spread of the per-round ratios: a shared virtual machine's speed
 drifts by tens of percent between seconds, so only rounds run side by side compare.
 Last, the fixed start-up of the ``flashsync detect`` command (imports, compiled-kernel
-cache), which a long video amortises.
+cache), which a long video amortises. ``--videos`` times given videos instead of the
+generated clips (e.g. a random rig of the simulator's second world), ``--both-ways``
+reading each both ways up as ``flashsync sync`` does.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ import sys
 import tempfile
 import time
 from fractions import Fraction
+from functools import partial
 from pathlib import Path
 
 import av
@@ -91,23 +95,29 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=9)
     parser.add_argument("--sizes", default="720p,1080p,2160p")
     parser.add_argument("--dir", type=Path, help="where to write the clips (default: a temp dir)")
+    parser.add_argument("--videos", type=Path, nargs="+", help="time these videos instead of generated clips")
+    parser.add_argument("--both-ways", action="store_true", help="read each video both ways up, as sync does")
     args = parser.parse_args()
     folder = args.dir or Path(tempfile.mkdtemp(prefix="flashsync-bench-"))
     folder.mkdir(parents=True, exist_ok=True)
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"PyAV {av.__version__}, {args.frames} frames per clip, best of {args.rounds} rounds"
+        f"PyAV {av.__version__}, {'given videos' if args.videos else f'{args.frames} frames per clip'}, "
+        f"best of {args.rounds} rounds"
     )
     print(f"{'size':<7} {'decode fps':>11} {'detect fps':>11} {'ratio':>6}   per-round ratios")
-    for name in args.sizes.split(","):
+    detect_it = partial(detect_video, flipped=None if args.both_ways else False)
+    clips = {path.name: path for path in args.videos or []}
+    for name in () if args.videos else args.sizes.split(","):
         width, height = SIZES[name]
-        path = folder / f"bench_{name}_{args.frames}.mp4"
-        if not path.exists():
-            make_clip(path, width, height, args.frames)
-        detect_video(path)  # warm-up: loads the compiled kernels, fills the file cache
+        clips[name] = folder / f"bench_{name}_{args.frames}.mp4"
+        if not clips[name].exists():
+            make_clip(clips[name], width, height, args.frames)
+    for name, path in clips.items():
+        detect_it(path)  # warm-up: loads the compiled kernels, fills the file cache
         decode, detect = [], []
         for round_ in range(args.rounds):
-            pair = [(decode, decode_only), (detect, detect_video)]
+            pair = [(decode, decode_only), (detect, detect_it)]
             for results, function in pair[:: 1 if round_ % 2 else -1]:
                 results.append(fps(function, path))
         ratios = np.array(detect) / np.array(decode)
