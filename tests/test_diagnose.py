@@ -463,6 +463,20 @@ def test_too_few_cameras_or_shared_flashes_is_one_line_error(detections):
     assert "\n" not in str(error.value)
 
 
+def test_a_camera_sync_leaves_out_is_left_out_with_a_pointer_to_syncs_reason(detections):
+    """A third camera with one flash: ``sync`` leaves it out and says why; the workflow,
+    paired by ``sync``, leaves it out too and points there, not at a count of shared
+    flashes it never made."""
+    ref, other = pair(detections, CAMERA["drift"])
+    one_flash = other.events.take(other.events.event == other.events.event.min())
+    lonely = replace(other, camera="lonely", video=Path("lonely.mp4"), top_down=one_flash, bottom_up=one_flash)
+    model, report = synchronize([ref, other, lonely])
+    assert "lonely" not in model.cameras and any(w.startswith("lonely.mp4: ") for w in report.warnings)
+    measurement = measure([ref, other, lonely], paired_by=model)
+    assert [c.camera for c in measurement.cameras] == [ref.camera, other.camera]
+    assert measurement.warnings == ("lonely.mp4: sync ties it to no other camera (flashsync sync says why); left out",)
+
+
 def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsys):
     """``flashsync diagnose`` on the shipped sample: a table, JSON with the steps, and a Rerun
     recording whose residual series are one per step, camera and edge kind, then the final
