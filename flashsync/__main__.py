@@ -2,7 +2,7 @@
 
 import sys
 
-from flashsync.cli import main
+from flashsync.cli import process_main
 
 if __name__ == "__main__":  # not when a worker process of a local Dask cluster imports it
-    sys.exit(main())
+    sys.exit(process_main())

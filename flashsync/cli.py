@@ -92,6 +92,18 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, previous)
 
 
+def process_main() -> int:
+    """:func:`main` as a whole process runs it (the ``flashsync`` script, ``python -m flashsync``).
+
+    Once it returns, every output is complete or undone; SIGINT is then ignored, so that a
+    Ctrl-C while the interpreter shuts down (which can take a good part of a second) neither
+    kills it nor changes its exit code.
+    """
+    code = main()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    return code
+
+
 def _handle_sigterm():
     """Make SIGTERM raise :class:`Terminated` in the main thread; returns the handler before
     (None where it cannot be set: not the main thread)."""

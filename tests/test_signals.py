@@ -155,6 +155,44 @@ def test_sync_interrupted_after_the_model_says_the_model_was_written(synced_scen
         assert "the --pairwise table not printed" in line
 
 
+# flashsync as its script runs it, with a thread that keeps the interpreter 3 s in its shutdown (as
+# joining threads and tearing down modules do, for a good part of a second, at every real exit).
+SLOW_EXIT = """
+import sys, threading, time
+from flashsync.cli import process_main
+threading.Thread(target=time.sleep, args=(3,)).start()
+sys.argv[0] = "flashsync"
+sys.exit(process_main())
+"""
+
+
+def test_interrupt_while_the_interpreter_shuts_down_changes_nothing(synced_scenario, tmp_path):
+    """A Ctrl-C after restamp wrote its output, while the interpreter shuts down: the exit code
+    stays 0, nothing is printed after restamp's own line and the output stays complete."""
+    output = tmp_path / "out.csv"
+    command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
+    process = subprocess.Popen(
+        [sys.executable, "-c", SLOW_EXIT, *map(str, command)],
+        cwd=tmp_path,
+        env=ENV,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=interruptible,
+    )
+    deadline = time.monotonic() + 60
+    while not output.exists() and time.monotonic() < deadline:
+        time.sleep(0.002)
+    time.sleep(0.5)  # main has returned: the interpreter waits for the thread
+    assert process.poll() is None, "the interpreter did not wait for the thread"
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    rows = len((synced_scenario / "detections.csv").read_text().splitlines()) - 1
+    assert process.returncode == 0, (process.returncode, err)
+    assert err.splitlines() == [f"{command[1]} -> {output}: {rows} rows, {rows} stamped"], err
+    assert len(output.read_text().splitlines()) == rows + 1
+
+
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc to see when decoding starts")
 def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_scenario, tmp_path):
     """SIGTERM while 90 videos decode (in threads, ~30 s of work on a busy 2-core machine): exit 143 within a
