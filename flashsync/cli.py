@@ -97,10 +97,15 @@ def process_main() -> int:
 
     Once it returns, every output is complete or undone; SIGINT is then ignored, so that a
     Ctrl-C while the interpreter shuts down (which can take a good part of a second) neither
-    kills it nor changes its exit code.
+    kills it nor changes its exit code. And CPython's mark of an unhandled KeyboardInterrupt is
+    cleared: a Ctrl-C that left a string ``exec`` (a dataclass being built while a module is
+    imported) sets it even though :func:`main` caught the interrupt, and under ``python -m``
+    the interpreter then kills itself with SIGINT at exit instead of returning 130. Every string
+    ``exec`` clears the mark as it starts.
     """
     code = main()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    exec("pass", {})
     return code
 
 

@@ -193,6 +193,35 @@ def test_interrupt_while_the_interpreter_shuts_down_changes_nothing(synced_scena
     assert len(output.read_text().splitlines()) == rows + 1
 
 
+def test_an_interrupt_that_leaves_a_string_exec_still_exits_130(synced_scenario, tmp_path):
+    """``python -m`` a module that runs flashsync as its script does, with restamp's work
+    interrupted inside a string ``exec`` (as a Ctrl-C landing while a dataclass is built):
+    exit 130 and the interrupted line, not "killed by SIGINT"."""
+    (tmp_path / "interrupted_in_exec").mkdir()
+    (tmp_path / "interrupted_in_exec" / "__main__.py").write_text(
+        "import importlib, sys\n"
+        "from flashsync.cli import process_main\n"
+        "def interrupted(*args, **kwargs):\n"
+        "    exec('raise KeyboardInterrupt', {})\n"
+        "importlib.import_module('tracking_adapter.restamp').restamp_file = interrupted\n"
+        "sys.exit(process_main())\n"
+    )
+    output = tmp_path / "out.csv"
+    command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
+    process = subprocess.run(
+        [sys.executable, "-m", "interrupted_in_exec", *map(str, command)],
+        cwd=tmp_path,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        preexec_fn=interruptible,
+        timeout=60,
+    )
+    assert process.returncode == 130, (process.returncode, process.stderr)
+    assert last_line(process.stderr) == "flashsync restamp: interrupted; no output written"
+    assert not output.exists()
+
+
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc to see when decoding starts")
 def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_scenario, tmp_path):
     """SIGTERM while 90 videos decode (in threads, ~30 s of work on a busy 2-core machine): exit 143 within a
