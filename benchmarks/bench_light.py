@@ -180,7 +180,7 @@ def report(name: str, result: dict) -> None:
         if flicker is not None:
             hz = f"{flicker.hz:.0f} Hz" if flicker.hz else "Hz not told"
             print(
-                f"  {camera}: flicker {hz}, period {flicker.period_rows:.2f} ± {flicker.period_rows_std:.2f} rows, "
+                f"  {camera}: flicker {hz}, period {flicker.period_rows:.2f} ± {flicker.period_rows_sigma:.2f} rows, "
                 f"depth {100 * flicker.depth:.1f} %"
             )
     if "errors" in result:

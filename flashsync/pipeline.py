@@ -1381,12 +1381,6 @@ def _contradicted_row_times(
     return contradicted
 
 
-#: Relative standard deviation of a time per row from the mains flicker's period in rows at
-#: the least: through H.264 the period comes out 0.2-1.7 % off (README, "Real light"), often
-#: many times its own spread.
-FLICKER_ROW_TIME_STD = 0.01
-
-
 def mains_flicker(cameras: Sequence[CameraDetection]) -> list[Flicker | None]:
     """Per camera, its rolling flicker where it identified the rig's mains frequency (the
     one most cameras identified: one hall, one mains) and a whole period fits in the image,
@@ -1403,10 +1397,9 @@ def mains_flicker(cameras: Sequence[CameraDetection]) -> list[Flicker | None]:
 
 def flicker_row_time_ms(flicker: Flicker) -> tuple[float, float]:
     """The time per row a mains flicker tells, ``(1000 / hz) / period_rows``, and its standard
-    deviation (the period's spread, relative :data:`FLICKER_ROW_TIME_STD` at the least), ms."""
+    deviation (the period's relative :attr:`~flashsync.flicker.Flicker.period_rows_sigma`), ms."""
     row_time = 1000.0 / flicker.hz / flicker.period_rows
-    spread = flicker.period_rows_std / flicker.period_rows
-    return row_time, row_time * max(spread if np.isfinite(spread) else 0.0, FLICKER_ROW_TIME_STD)
+    return row_time, row_time * flicker.period_rows_sigma / flicker.period_rows
 
 
 def _row_time_priors(

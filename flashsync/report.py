@@ -8,6 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from flashsync.flicker import CODEC_PERIOD_SHARE
 from flashsync.model import CameraClock, SyncModel
 
 
@@ -29,9 +30,14 @@ def detection_notes(detection) -> list[str]:
                     if flicker.bottom_up
                     else " (read bottom-up as told by --flipped: check its mounting)"
                 )
+        sigma = flicker.period_rows_sigma
+        floor = (
+            f" (at least {100 * CODEC_PERIOD_SHARE:.0f} %: a codec bends the pattern; "
+            f"its spread {flicker.period_rows_std:.2f})"
+        )
         notes.append(
             f"{detection.camera}: rolling flicker {hz}, period {flicker.period_rows:.2f} "
-            f"± {flicker.period_rows_std:.2f} readout rows, {depth}measured on "
+            f"± {sigma:.2f} readout rows{floor if sigma > flicker.period_rows_std else ''}, {depth}measured on "
             f"{flicker.n_frames} frames and removed before detection{rolls}"
         )
     dropped = [
