@@ -16,7 +16,7 @@ from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.adopt import written_model
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
-from flashsync.diagnose.effects import DRIFT_RATE
+from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED
 from flashsync.diagnose.measure import Edges, Measurement, measure
 from flashsync.diagnose.verdict import noise_test
 from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
@@ -826,3 +826,21 @@ def test_the_verdicts_rms_is_over_the_edges_its_test_counts():
     assert (
         f"(RMS {test.counted_rms_ms:.4f} ms, expected 0.0190 ms; {rms_ms:.4f} ms with the outlier edges)" in d.verdict
     ), d.verdict
+
+
+def test_the_final_model_reads_every_camera_as_sync_reads_it(tmp_path):
+    """The second world's rig-428 (``random_rig(428, max_height=360, duration_ms=8000)``: four
+    cameras, three upside down, four flashes). No step turns cam4 on four flashes, where
+    ``sync`` reads it bottom-up by them, as it is. The final model reads it so too and says
+    so: its residuals pass the χ² test (before: cam4 top-down, 0.39 ms RMS, χ² 17.6 over 2 on
+    the model ``-o`` did not write) and every camera is read as the model ``-o`` writes."""
+    scenario = random_rig(428, max_height=360, duration_ms=8000.0)
+    render_scenario(scenario, tmp_path)
+    d = diagnose(detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras]))
+    assert not [s for s in d.steps if s.effect == FLIPPED and s.camera == "cam4"]
+    assert d.sync_readouts == ["cam4"]
+    truth = {c.name: c.flipped for c in scenario.cameras}
+    assert {m["camera"]: m["readout"] == "bottom-up" for m in d.model} == truth
+    assert {name: camera.flipped for name, camera in d.sync_model.cameras.items()} == truth
+    assert d.consistent, d.verdict
+    assert "and cam4 read the other way up, as sync reads it" in format_diagnosis(d)

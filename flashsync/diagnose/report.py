@@ -38,6 +38,12 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
             " " * 6 + "in sync's shape".ljust(32) + f" {'every':<10} {d.found_rms_ms:>13.4f} "
             f"{d.final_rms_ms:>9.4f}  the effects above with every camera's time per row, exposure and drift "
             "free under sync's priors (time per row nominal ± 8 % or its flicker's, drift 0 ± 50 ppm)"
+            + (
+                f", and {', '.join(d.sync_readouts)} read the other way up, as sync reads "
+                f"{'it' if len(d.sync_readouts) == 1 else 'them'}"
+                if d.sync_readouts
+                else ""
+            )
         )
     lines += [d.verdict, f"model written (-o): {d.written}", d.agreement]
     lines.append(

@@ -21,13 +21,14 @@ flashes as ``sync`` paired them wherever ``sync`` solves the videos
 (:mod:`flashsync.diagnose.measure`).
 
 The model it ends with is the effects found in ``sync``'s shape (:func:`in_sync_shape`):
-every camera's time per row, exposure and drift free under the priors ``sync``'s solve gives
-them. An effect too small to pass the threshold on its own still moves the times between and
-beyond the flashes: on the second world's random rigs (hidden rows and clock drifts of tens
-of ppm on every camera) the last step's model was a median 0.34 ms off the truth, the same
-effects in ``sync``'s shape 0.087 ms. What ``flashsync diagnose -o`` writes is ``sync``'s
-solve with the readouts and stamp-rate choices that model found
-(:mod:`flashsync.diagnose.adopt`): one solver for both commands."""
+every camera's time per row, exposure and drift free under the priors ``sync``'s solve
+gives them, and every camera read the way up ``sync`` reads it. An effect too small to pass
+the threshold on its own still moves the times between and beyond the flashes: on the
+second world's random rigs (hidden rows and clock drifts of tens of ppm on every camera)
+the last step's model was a median 0.34 ms off the truth, the same effects in ``sync``'s
+shape 0.087 ms. What ``flashsync diagnose -o`` writes is ``sync``'s solve with the readouts
+and stamp-rate choices that model found (:mod:`flashsync.diagnose.adopt`):
+one solver for both commands."""
 
 from __future__ import annotations
 
@@ -41,7 +42,16 @@ from flashsync.detect import CameraDetection
 from flashsync.diagnose.adopt import written_model
 from flashsync.diagnose.agreement import Gap, agreement, model_gaps
 from flashsync.diagnose.candidate import Candidate, Term, fit_candidate
-from flashsync.diagnose.effects import CATALOGUE, DRIFT, DRIFT_RATE, EXPOSURE, FLICKER, OTHER_CAMERAS, ROW_TIME
+from flashsync.diagnose.effects import (
+    CATALOGUE,
+    DRIFT,
+    DRIFT_RATE,
+    EXPOSURE,
+    FLICKER,
+    FLIPPED,
+    OTHER_CAMERAS,
+    ROW_TIME,
+)
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
@@ -126,6 +136,9 @@ class Diagnosis:
         The final model is the last step's effects in ``sync``'s shape
         (:func:`in_sync_shape`); False where that could not be fitted (a warning says so)
         and the final model is the last step's.
+    sync_readouts : list of str
+        The cameras the final model reads the other way up from the steps, as ``sync`` reads
+        them (:func:`in_sync_shape`).
     expected_ms : float
         RMS the edge noise seen in band lengths (:attr:`Measurement.noise_ms`) would leave
         after fitting the final model's parameters, ms; NaN when unknown.
@@ -169,6 +182,7 @@ class Diagnosis:
     edge_residuals: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     sync_gaps: list[Gap] = field(default_factory=list)
+    sync_readouts: list[str] = field(default_factory=list)
     sync_model: SyncModel | None = field(default=None, repr=False, compare=False)
     written: str = ""
 
@@ -274,7 +288,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
             removed.add(term)
             current = without
             fits.append(current)
-    shaped = in_sync_shape(measurement, current, synced[1].free_drift if synced else ())
+    turned = _read_otherwise(detections, synced[0]) if synced else ()
+    shaped = in_sync_shape(measurement, current, synced[1].free_drift if synced else (), turned)
     fits += [shaped] * (shaped is not None)
     model, written = written_model(detections, reference, fits[-1], synced)
     return replace(
@@ -285,12 +300,18 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     )
 
 
-def in_sync_shape(measurement: Measurement, found: Candidate, free_drift: Sequence[str] = ()) -> Candidate | None:
+def in_sync_shape(
+    measurement: Measurement, found: Candidate, free_drift: Sequence[str] = (), turned: Sequence[str] = ()
+) -> Candidate | None:
     """The ``found`` model's effects with every camera's time per row, exposure and drift
     (:data:`SYNC_SHAPE`) free under ``sync``'s priors (the fit's pseudo-observations: time per
     row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm but on the cameras
-    ``free_drift``, whose drift ``sync`` solved without it, a warning each); None where it
-    cannot be fitted or gives a camera a time per row or an exposure below zero."""
+    ``free_drift``, whose drift ``sync`` solved without it, a warning each) and the cameras
+    ``turned``, which ``sync`` reads the other way up from the measurement, read that way
+    (rig-428: on four flashes no step turned cam4, which ``sync`` had read bottom-up by its
+    flashes, as it is; the final model left it top-down, 0.39 ms RMS and a verdict that failed
+    at χ² 17.6 over 2, while ``-o`` wrote ``sync``'s reading); None where it cannot be fitted
+    or gives a camera a time per row or an exposure below zero."""
     cameras = range(len(measurement.cameras))
     terms = found.terms | {
         Term(effect, c)
@@ -298,6 +319,7 @@ def in_sync_shape(measurement: Measurement, found: Candidate, free_drift: Sequen
         for c in cameras
         if not (CATALOGUE[effect].scope == OTHER_CAMERAS and c == measurement.reference)
     }
+    terms |= {Term(FLIPPED, c) for c in cameras if measurement.cameras[c].camera in turned}
     free = frozenset(c for c in cameras if measurement.cameras[c].camera in free_drift)
     warnings = tuple(
         f"{measurement.cameras[c].video}: sync solves its clock without the drift prior (its events put the drift "
@@ -308,6 +330,12 @@ def in_sync_shape(measurement: Measurement, found: Candidate, free_drift: Sequen
         replace(measurement, free_drift=free, warnings=measurement.warnings + warnings), frozenset(terms)
     )
     return shaped if shaped is not None and shaped.physical(set(cameras)) else None
+
+
+def _read_otherwise(detections: Sequence[CameraDetection], model: SyncModel) -> list[str]:
+    """The cameras ``model`` reads the other way up from their detection's reading in use
+    (the one the measurement's edges are in)."""
+    return [d.camera for d in detections if d.camera in model.cameras and model.cameras[d.camera].flipped != d.flipped]
 
 
 def _synchronized(detections: Sequence[CameraDetection], reference: str | None) -> tuple[SyncModel, SyncReport] | None:
@@ -466,6 +494,11 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
         found_rms_ms=fits[len(steps)].rms_ms,
         final_rms_ms=final.rms_ms,
         sync_shape=shaped,
+        sync_readouts=[
+            measurement.cameras[t.camera].camera
+            for t in sorted(final.terms - fits[len(steps)].terms)
+            if t.effect == FLIPPED and shaped
+        ],
         expected_ms=float(expected),
         noise=residual_test(measurement, final),
         model=_camera_models(final),
