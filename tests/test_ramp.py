@@ -165,6 +165,20 @@ def test_of_two_readings_nearly_as_good_the_longer_is_the_exposure():
     assert _longest_minimum(costs, 3.0 + 10.0) == 1
 
 
+def saved_band_fits(name: str) -> list[BandFit]:
+    """A camera's bands as the detector fitted them whole, saved in ``tests/clips``: each
+    band's rows ``x`` and changes ``y`` (concatenated, ``sizes`` long), parameters ``p`` and
+    ``free``."""
+    bands = np.load(CLIPS / name)
+    ends = np.cumsum(bands["sizes"])
+    return [
+        BandFit(x, y, p, free)
+        for x, y, p, free in zip(
+            np.split(bands["x"], ends[:-1]), np.split(bands["y"], ends[:-1]), bands["p"], bands["free"]
+        )
+    ]
+
+
 def test_a_short_exposure_only_one_band_asks_for_is_not_taken():
     """The ten bands of rig-415's cam1 as the detector fitted them whole from its H.264 file
     (sRGB, a 5.78-row exposure under rectangular pulses of 2.3-15.5 rows). The last, a faint
@@ -172,14 +186,7 @@ def test_a_short_exposure_only_one_band_asks_for_is_not_taken():
     1.24-row exposure (the others' 5.8-row ramps blurred nearly fit that too, it fits
     nothing longer), and the camera's times came out 0.3 ms off. Read without the band that
     asks most for the short exposure, the rest find the exposure, and that is taken."""
-    bands = np.load(CLIPS / "rig415_cam1_bands.npz")
-    ends = np.cumsum(bands["sizes"])
-    fits = [
-        BandFit(x, y, p, free)
-        for x, y, p, free in zip(
-            np.split(bands["x"], ends[:-1]), np.split(bands["y"], ends[:-1]), bands["p"], bands["free"]
-        )
-    ]
+    fits = saved_band_fits("rig415_cam1_bands.npz")
     width, longer = common_width(fits)
     assert longer and abs(width - 5.78) < 0.3
     assert common_width(fits[:-1]) == pytest.approx((width, True))
@@ -193,13 +200,6 @@ def test_a_short_exposure_two_bands_ask_for_is_taken():
     the one that asks most, the three left lack the evidence to find pulses longer at all:
     that is no reading of another exposure, and the short one stands (before, the camera, the
     rig's reference, was read 9.1 rows and every other camera's times 0.2 ms off)."""
-    bands = np.load(CLIPS / "rig4_cam1_bands.npz")
-    ends = np.cumsum(bands["sizes"])
-    fits = [
-        BandFit(x, y, p, free)
-        for x, y, p, free in zip(
-            np.split(bands["x"], ends[:-1]), np.split(bands["y"], ends[:-1]), bands["p"], bands["free"]
-        )
-    ]
+    fits = saved_band_fits("rig4_cam1_bands.npz")
     width, longer = common_width(fits)
     assert longer and abs(width - 5.74) < 1.0

@@ -27,9 +27,10 @@ def interruptible() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def start(*args, cwd: Path) -> subprocess.Popen:
+def start(*args, cwd: Path, program: tuple[str, ...] = ("-m", "flashsync")) -> subprocess.Popen:
+    """The command ``args`` as ``python -m flashsync`` runs it (or ``python *program``)."""
     return subprocess.Popen(
-        [sys.executable, "-m", "flashsync", *map(str, args)],
+        [sys.executable, *program, *map(str, args)],
         cwd=cwd,
         env=ENV,
         stdout=subprocess.PIPE,
@@ -171,15 +172,7 @@ def test_interrupt_while_the_interpreter_shuts_down_changes_nothing(synced_scena
     stays 0, nothing is printed after restamp's own line and the output stays complete."""
     output = tmp_path / "out.csv"
     command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
-    process = subprocess.Popen(
-        [sys.executable, "-c", SLOW_EXIT, *map(str, command)],
-        cwd=tmp_path,
-        env=ENV,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        preexec_fn=interruptible,
-    )
+    process = start(*command, cwd=tmp_path, program=("-c", SLOW_EXIT))
     deadline = time.monotonic() + 60
     while not output.exists() and time.monotonic() < deadline:
         time.sleep(0.002)

@@ -27,8 +27,8 @@ the threshold on its own still moves the times between and beyond the flashes: o
 second world's random rigs (hidden rows and clock drifts of tens of ppm on every camera)
 the last step's model was a median 0.34 ms off the truth, the same effects in ``sync``'s
 shape 0.087 ms. What ``flashsync diagnose -o`` writes is ``sync``'s solve with the readouts
-and stamp-rate choices that model found (:mod:`flashsync.diagnose.adopt`):
-one solver for both commands."""
+and stamp-rate choices that model found (:mod:`flashsync.diagnose.adopt`): one solver for
+both commands."""
 
 from __future__ import annotations
 
@@ -497,8 +497,10 @@ def _diagnosis(measurement: Measurement, fits: list[Candidate], steps: list[Step
         sync_readouts=[
             measurement.cameras[t.camera].camera
             for t in sorted(final.terms - fits[len(steps)].terms)
-            if t.effect == FLIPPED and shaped
-        ],
+            if t.effect == FLIPPED
+        ]
+        if shaped
+        else [],
         expected_ms=float(expected),
         noise=residual_test(measurement, final),
         model=_camera_models(final),
