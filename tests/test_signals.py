@@ -156,14 +156,20 @@ def test_sync_interrupted_after_the_model_says_the_model_was_written(synced_scen
         assert "the --pairwise table not printed" in line
 
 
-# flashsync as its script runs it, with a thread that keeps the interpreter 3 s in its shutdown (as
-# joining threads and tearing down modules do, for a good part of a second, at every real exit).
+# flashsync as its script runs it, with a thread that keeps the interpreter 3 s in its shutdown once
+# the command is done (as joining threads and tearing down modules do, for a good part of a second,
+# at every real exit), however long the command took.
 SLOW_EXIT = """
 import sys, threading, time
 from flashsync.cli import process_main
-threading.Thread(target=time.sleep, args=(3,)).start()
+done = threading.Event()
+threading.Thread(target=lambda: (done.wait(), time.sleep(3))).start()
 sys.argv[0] = "flashsync"
-sys.exit(process_main())
+try:
+    code = process_main()
+finally:
+    done.set()
+sys.exit(code)
 """
 
 
@@ -201,17 +207,10 @@ def test_an_interrupt_that_leaves_a_string_exec_still_exits_130(synced_scenario,
     )
     output = tmp_path / "out.csv"
     command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
-    process = subprocess.run(
-        [sys.executable, "-m", "interrupted_in_exec", *map(str, command)],
-        cwd=tmp_path,
-        env=ENV,
-        capture_output=True,
-        text=True,
-        preexec_fn=interruptible,
-        timeout=60,
-    )
-    assert process.returncode == 130, (process.returncode, process.stderr)
-    assert last_line(process.stderr) == "flashsync restamp: interrupted; no output written"
+    process = start(*command, cwd=tmp_path, program=("-m", "interrupted_in_exec"))
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, (process.returncode, err)
+    assert last_line(err) == "flashsync restamp: interrupted; no output written"
     assert not output.exists()
 
 
