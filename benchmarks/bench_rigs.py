@@ -14,7 +14,9 @@ and the share of probes within 2 sigma, per camera and pairwise). Detection is c
 events on frames that show no flash are false, flashes seen with no event are missed; and
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
 the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`), and every flash
-edge's median error by its camera's tone curve and its kind (paired, or lone).
+edge's median error by its camera's tone curve and its kind (paired, or lone); and every
+rolling flicker period that named the mains frequency against the true one, over the
+standard deviation flashsync takes (``Flicker.period_rows_sigma``) and over its spread alone.
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
@@ -104,6 +106,38 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
         "flash_edge_kinds": kinds,
         "flash_edge_error_rows": errors,
     }
+
+
+def flicker_error(detection: CameraDetection, scenario, truth: GroundTruth) -> dict:
+    """The camera's rolling flicker period against the truth, where it named the scenario's
+    mains frequency: ``flicker_error_pct`` (measured minus true period, % of the true one),
+    ``flicker_sigma_pct`` (the standard deviation taken, :attr:`Flicker.period_rows_sigma`)
+    and ``flicker_spread_pct`` (its spread alone); NaN elsewhere."""
+    flicker = detection.flicker
+    if not scenario.flicker_depth or flicker is None or flicker.hz != scenario.flicker_hz:
+        return {"flicker_error_pct": np.nan, "flicker_sigma_pct": np.nan, "flicker_spread_pct": np.nan}
+    true = 1000.0 / scenario.flicker_hz / truth.cameras[detection.camera].row_time_ms
+    return {
+        "flicker_error_pct": 100.0 * (flicker.period_rows / true - 1.0),
+        "flicker_sigma_pct": 100.0 * flicker.period_rows_sigma / true,
+        "flicker_spread_pct": 100.0 * flicker.period_rows_std / true,
+    }
+
+
+def flicker_block(cameras: pd.DataFrame) -> list[str]:
+    """The flicker periods against the truth, and their error over the standard deviation
+    taken and over the spread alone."""
+    named = cameras.dropna(subset=["flicker_error_pct"])
+    if not len(named):
+        return []
+    z = named["flicker_error_pct"] / named["flicker_sigma_pct"]
+    spread_z = named["flicker_error_pct"] / named["flicker_spread_pct"]
+    return [
+        f"rolling flicker period against the truth ({len(named)} cameras that named the mains frequency):",
+        f"  |error| %                {distribution(named['flicker_error_pct'].abs(), '%')}",
+        f"  error/σ: RMS {np.sqrt(np.mean(z**2)):.2f}; within 2σ {100 * np.mean(np.abs(z) <= 2):.1f} %; "
+        f"error/spread alone: RMS {np.sqrt(np.mean(spread_z**2)):.2f}",
+    ]
 
 
 def edge_block(cameras: pd.DataFrame) -> list[str]:
@@ -223,7 +257,11 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
         detection = by_name[spec.name]
         if detection.undecided and spec.name in model.cameras:
             detection = detection.read_flipped(model.cameras[spec.name].flipped)
-        counts.append(detection_counts(detection, truth.cameras[spec.name]) | edge_errors(detection, truth))
+        counts.append(
+            detection_counts(detection, truth.cameras[spec.name])
+            | edge_errors(detection, truth)
+            | flicker_error(detection, scenario, truth)
+        )
     extra = pd.DataFrame(counts).assign(
         rig=scenario.name,
         height=[c.height for c in scenario.cameras],
@@ -364,6 +402,8 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
         lines += edge_block(tables)
     if "flash_edge_kinds" in tables:  # not in the --json files of earlier runs
         lines += tone_block(tables)
+    if "flicker_error_pct" in tables:  # not in the --json files of runs before 2026-11-29
+        lines += flicker_block(tables)
     return "\n".join(lines)
 
 

@@ -43,8 +43,8 @@ MAINS_FLICKER_HZ = (100.0, 120.0)
 #: Relative standard deviation of a period measured through a codec at the least: H.264
 #: bends the pattern, and its spread over the video misses that. The 24 cameras of the kept
 #: random rigs 0-29 whose mains frequency was named right (``bench_rigs.py --seeds 0:30
-#: --max-height 360 --duration-s 8``, 2026-11-29): median 0.33 %, RMS 0.78 %, largest 1.96 %
-#: off the truth, 6.7 times their spread RMS; against this floor 0.78.
+#: --max-height 360 --duration-s 8``, 2026-11-29): median 0.33 %, largest 1.96 % off the
+#: truth, 6.7 times their spread RMS; against this floor 0.78, 95.8 % within 2 sigma.
 CODEC_PERIOD_SHARE = 0.01
 
 
