@@ -80,5 +80,5 @@ def local_cluster():
     """A real Dask LocalCluster of two worker processes (the cluster extra); its scheduler's
     tcp address."""
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         yield cluster.scheduler_address
