@@ -339,12 +339,15 @@ def camera_block(cameras: pd.DataFrame) -> list[str]:
         ("|T_row error| %, mixed", cameras[~cameras["equal_rate"]]),
     ):
         lines.append(f"  {label:<25}{distribution(part['row_time_error_pct'].abs(), '%')}")
-    if "row_time_z" in cameras:  # not in the --json files of runs before 2026-11-26
-        row_z = cameras["row_time_z"].dropna()
-        lines.append(
-            f"  T_row error/σ: RMS {np.sqrt(np.mean(row_z**2)):.2f}; within 2σ "
-            f"{100 * np.mean(row_z.abs() <= 2):.1f} %, over 3: {int((row_z.abs() > 3).sum())} of {len(row_z)} cameras"
-        )
+    # not in the --json files of runs before 2026-11-26 and 2026-11-29
+    for label, column in (("T_row", "row_time_z"), ("exposure", "exposure_z")):
+        if column in cameras:
+            scores = cameras[column].dropna()
+            lines.append(
+                f"  {label} error/σ: RMS {np.sqrt(np.mean(scores**2)):.2f}; within 2σ "
+                f"{100 * np.mean(scores.abs() <= 2):.1f} %, over 3: {int((scores.abs() > 3).sum())} of "
+                f"{len(scores)} cameras"
+            )
     lines += [
         f"  error/σ RMS (non-ref)    {distribution(others['z_rms'])}",
         f"  within 2σ % (non-ref)    {distribution(others['within_2sigma'], '%', 100)}",

@@ -314,7 +314,7 @@ def _parser() -> argparse.ArgumentParser:
         metavar="CAMERA=MS",
         help="exposure time of a camera in ms: adds t_center_ms; repeatable",
     )
-    restamp.add_argument("--std", action="store_true", help="add t_global_std_ms from the solve")
+    restamp.add_argument("--std", action="store_true", help="add t_global_std_ms (and t_center_std_ms) from the solve")
     _as_shown_option(restamp)
     restamp.add_argument("--strict", action="store_true", help="exit with code 1 if any row could not be stamped")
 

@@ -168,7 +168,8 @@ def camera_accuracy(
     (sync error over the probes); ``reference_rms_ms`` (RMS of the error of its times
     against the reference's at the same instants: free of the global clock's own error;
     NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
-    ``exposure_error_ms`` (model - truth; NaN where the model has none);
+    ``exposure_error_ms`` (model - truth; NaN where the model has none) and ``exposure_z``
+    (over its standard deviation; NaN where the model states none);
     ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
     error over its predicted standard deviation); ``z_rms`` and
     ``within_2sigma`` (RMS of error / sigma and the fraction of probes within 2 sigma; NaN
@@ -198,12 +199,14 @@ def camera_accuracy(
         z_rms, within = _z_stats(against_reference, against_std)
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
+        exposure_std = camera.exposure_std_ms if camera.exposure_std_ms is not None else float("nan")
         row.update(
             rms_ms=float(np.sqrt(np.mean(error**2))),
             max_ms=float(np.max(np.abs(error))),
             reference_rms_ms=float(np.sqrt(np.mean(against_reference**2))) if against_reference.size else np.nan,
             sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
             exposure_error_ms=exposure - true.exposure_ms,
+            exposure_z=_over(exposure - true.exposure_ms, exposure_std),
             row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
             row_time_z=_over(camera.row_time_ms - true.row_time_ms, float(np.sqrt(camera.covariance[2, 2]))),
             z_rms=z_rms,

@@ -27,9 +27,10 @@ GROUPS = 10
 def flash_scatter(
     events: Observations, n_cameras: int, reference: int, solution: Solution, priors: Priors
 ) -> list[np.ndarray]:
-    """Per camera, the jackknife covariance of its clock's parameters over solves that each
-    leave one group of flashes out: ``alpha``, ``beta_ms``, ``row_time_ms`` and its warp
-    (the layout of :attr:`~flashsync.solve.CameraSolution.covariance`, (3 + k, 3 + k)).
+    """Per camera, the jackknife covariance of its clock's parameters and its exposure over
+    solves that each leave one group of flashes out: ``alpha``, ``beta_ms``, ``row_time_ms``
+    and its warp (the layout of :attr:`~flashsync.solve.CameraSolution.covariance`), then
+    ``exposure_ms``: (4 + k, 4 + k), the last row and column NaN for a camera without one.
 
     Each solve keeps ``solution``'s drift model (its warps' knots, the cameras solved
     without the drift prior) and ``priors``. A solve the remaining flashes cannot support
@@ -48,7 +49,7 @@ def flash_scatter(
             continue
         solved.append([_parameters(camera) for camera in trial.cameras])
     if len(solved) < 2:
-        return [np.zeros_like(camera.covariance) for camera in solution.cameras]
+        return [np.zeros((len(camera.covariance) + 1,) * 2) for camera in solution.cameras]
     count = len(solved)
     scatter = []
     for c in range(n_cameras):
@@ -59,5 +60,5 @@ def flash_scatter(
 
 
 def _parameters(camera: CameraSolution) -> np.ndarray:
-    """A camera's solved clock as one vector, in its covariance's order."""
-    return np.concatenate([[camera.alpha, camera.beta_ms, camera.row_time_ms], camera.warp_ms])
+    """A camera's solved clock as one vector, in its covariance's order, then its exposure."""
+    return np.concatenate([[camera.alpha, camera.beta_ms, camera.row_time_ms], camera.warp_ms, [camera.exposure_ms]])

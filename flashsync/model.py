@@ -44,6 +44,8 @@ class CameraClock:
         Covariance of (alpha, beta_ms, row_time_ms) from the solve; zeros if unknown.
     exposure_ms : float or None
         Exposure time, ms, where known.
+    exposure_std_ms : float or None
+        Its standard deviation, ms, where the model states one.
     video : str
         The video file the camera came from.
     drift_knots_ms, drift_warp_ms : ndarrays of shape (k + 2,), (k,)
@@ -75,6 +77,7 @@ class CameraClock:
     drift_warp_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     frame_std_ms: np.ndarray | None = None
     display_rotation_deg: int = 0
+    exposure_std_ms: float | None = None
 
     def __post_init__(self):
         if self.frame_std_ms is None:

@@ -83,6 +83,7 @@ def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
             "row_time_std_ms": std[2],
             "sync_std_ms": sync_uncertainty_ms(camera),
             "exposure_ms": camera.exposure_ms,
+            "exposure_std_ms": camera.exposure_std_ms,
             "events": len(inliers),
             "rejected": len(events) - len(inliers),
             "residual_std_ms": float(np.std(inliers["residual_ms"])) if len(inliers) else float("nan"),
@@ -108,13 +109,12 @@ def sync_table(model: SyncModel, report=None) -> str:
     table = camera_table(model, report)
     lines = [
         f"{'camera':<12} {'drift ppm':>10} {'rows/s':>8} {'shift ms':>14} {'± ms':>7} "
-        f"{'T_row ms':>10} {'± %':>5} {'sync ± ms':>9} {'exp ms':>6} {'events':>6} {'rej':>3} "
+        f"{'T_row ms':>10} {'± %':>5} {'sync ± ms':>9} {'exp ms':>6} {'± ms':>5} {'events':>6} {'rej':>3} "
         f"{'res std ms':>10}" + (f" {'stamps':>22}" if report is not None else "")
     ]
     for row in table.itertuples():
         name = row.camera + ("*" if row.reference else "") + ("^" if row.flipped else "")
-        known = row.exposure_ms is not None and np.isfinite(row.exposure_ms)
-        exposure = f"{row.exposure_ms:>6.2f}" if known else f"{'-':>6}"
+        exposure = f"{_number(row.exposure_ms, 6, 2)} {_number(row.exposure_std_ms, 5, 2)}"
         line = (
             f"{name:<12} {row.drift_ppm:>10.3f} {row.drift_rows_per_s:>8.4f} {row.shift_ms:>14.3f} "
             f"{row.shift_std_ms:>7.4f} {row.row_time_ms:>10.6f} "
@@ -134,6 +134,11 @@ SIGMA_MEANING = (
     "with each flash left out (the reference's: its rows' below its first, whose times are the clock); a camera "
     "against the reference's rows: the root of the sum of both squares"
 )
+
+
+def _number(value: float | None, width: int, decimals: int) -> str:
+    """``value`` right-aligned in ``width`` characters, ``-`` where it is unknown."""
+    return f"{value:>{width}.{decimals}f}" if value is not None and np.isfinite(value) else f"{'-':>{width}}"
 
 
 def _stamps(row) -> str:

@@ -38,7 +38,8 @@ def camera_2_z(observations: Observations, truth: np.ndarray, with_scatter: bool
     priors = Priors({}, None)
     solution = solve_clocks(observations, 3, priors=priors)
     solved = solution.cameras[2]
-    covariance = solved.covariance + (flash_scatter(observations, 3, 0, solution, priors)[2] if with_scatter else 0.0)
+    scatter = flash_scatter(observations, 3, 0, solution, priors)[2][:-1, :-1]  # the clock's, not the exposure's
+    covariance = solved.covariance + (scatter if with_scatter else 0.0)
     t_frame = observations.t_frame_ms[observations.camera == 2]
     z = []
     for q in (0.0, CAMERAS[2][4] - 1.0):

@@ -21,6 +21,7 @@ def camera(flipped=False):
         covariance=np.diag([1e-12, 1e-4, 1e-8]),
         exposure_ms=10.0,
         video="cam2.mp4",
+        exposure_std_ms=0.05,
     )
 
 
@@ -86,6 +87,7 @@ def test_model_file_round_trip(tmp_path):
     original, again = model.camera("cam2"), loaded.camera("cam2")
     for field in ("alpha", "beta_ms", "row_time_ms", "flipped", "height", "width", "exposure_ms", "video"):
         assert getattr(again, field) == getattr(original, field)
+    assert again.exposure_std_ms == 0.05 and loaded.camera("cam1").exposure_std_ms is None
     np.testing.assert_array_equal(again.frame_times_ms, original.frame_times_ms)
     np.testing.assert_array_equal(again.covariance, original.covariance)
     pd.testing.assert_frame_equal(loaded.events, model.events)

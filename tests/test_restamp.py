@@ -19,7 +19,7 @@ N_FRAMES = 50
 
 @pytest.fixture
 def model():
-    """cam1: reference, 100 rows; cam2: flipped, drifting, 80 rows, exposure 4 ms."""
+    """cam1: reference, 100 rows; cam2: flipped, drifting, 80 rows, exposure 4 ± 0.06 ms."""
     cam1 = CameraClock(
         "cam1",
         np.arange(N_FRAMES) * 40.0 + 3.0,
@@ -39,6 +39,7 @@ def model():
         flipped=True,
         covariance=np.diag([1e-10, 0.04, 4e-6]),
         exposure_ms=4.0,
+        exposure_std_ms=0.06,
     )
     return SyncModel("cam1", {"cam1": cam1, "cam2": cam2})
 
@@ -132,19 +133,24 @@ def test_dataframe_contract(model):
         "t_global_ms",
         "t_global_std_ms",
         "t_center_ms",
+        "t_center_std_ms",
         "restamp_error",
     ]
     expected = [expected_time(c, f, y) for c, f, y in zip(stamped.camera, stamped.frame, stamped.y)]
     np.testing.assert_allclose(stamped.t_global_ms, expected, atol=1e-9)
     std_cam1 = np.sqrt(0.01 + 1e-6 * 10.0**2)
     assert stamped.t_global_std_ms.iloc[0] == pytest.approx(std_cam1)
+    # mid-exposure: half the exposure's sigma on top; none where the exposure is unknown (cam1)
+    assert np.isnan(stamped.t_center_std_ms.iloc[0])
+    np.testing.assert_allclose(stamped.t_center_std_ms.iloc[1:], np.hypot(stamped.t_global_std_ms.iloc[1:], 0.03))
     assert stamped.restamp_error.isna().all()
 
 
 def test_exposure_given_by_caller_overrides_model(model):
     detections = pd.DataFrame({"camera": ["cam1", "cam2"], "frame": [0, 0], "y": [0.0, 0.0]})
-    stamped = restamp(detections, model, exposure_ms={"cam1": 10.0, "cam2": 6.0})
+    stamped = restamp(detections, model, exposure_ms={"cam1": 10.0, "cam2": 6.0}, with_std=True)
     np.testing.assert_allclose(stamped.t_global_ms - stamped.t_center_ms, [5.0, 3.0])
+    np.testing.assert_allclose(stamped.t_center_std_ms, stamped.t_global_std_ms)  # a caller's exposure is exact
     with pytest.raises(FlashsyncError, match="cam9"):
         restamp(detections, model, exposure_ms={"cam9": 1.0})
 

@@ -11,6 +11,11 @@ Every input row and column is kept, in order and unchanged, and new columns foll
     Mid-exposure instant ``t_global_ms - exposure_ms / 2``, ms, the instant a blurred
     centroid belongs to; present when any model camera has a known exposure (from the
     model or given by the caller), empty for cameras whose exposure is unknown.
+``t_center_std_ms``
+    Its standard deviation, ms (with ``with_std=True`` and ``t_center_ms``): the root of
+    the sum of the squares of ``t_global_std_ms`` and half the exposure's standard
+    deviation (the model's ``exposure_std_ms``; a caller's exposure counts as exact), their
+    correlation left out; empty where the model states no exposure standard deviation.
 ``restamp_error``
     Why a row was not stamped (one of :data:`REASONS`), empty for stamped rows.
 
@@ -31,6 +36,7 @@ import tempfile
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -70,7 +76,7 @@ REASONS = (
     "x outside the shown image",
     "no finite time from the model",
 )
-NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "restamp_error")
+NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "t_center_std_ms", "restamp_error")
 _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
 _BATCH_ROWS = 1 << 20
 
@@ -125,7 +131,7 @@ def restamp(
     exposure_ms : mapping of str to float, optional
         Exposure time per camera, ms; overrides the model's value for those cameras.
     with_std : bool
-        Add ``t_global_std_ms``.
+        Add ``t_global_std_ms`` (and ``t_center_std_ms``).
     as_shown : bool
         ``x`` and ``y`` are in the picture a player shows, not the stored frame's pixels
         (module docstring); ``x`` is then required too.
@@ -136,8 +142,9 @@ def restamp(
     -------
     DataFrame
         A copy of ``detections`` (same index, columns, dtypes and values) followed by
-        ``t_global_ms`` (float64, NaN where not stamped), optionally ``t_global_std_ms``
-        and ``t_center_ms`` (float64), and ``restamp_error`` (str, NaN where stamped).
+        ``t_global_ms`` (float64, NaN where not stamped), optionally ``t_global_std_ms``,
+        ``t_center_ms`` and ``t_center_std_ms`` (float64), and ``restamp_error`` (str, NaN
+        where stamped).
 
     Examples
     --------
@@ -190,7 +197,7 @@ def restamp_file(
     exposure_ms : mapping of str to float, optional
         Exposure time per camera, ms; overrides the model's value.
     with_std : bool
-        Add ``t_global_std_ms``.
+        Add ``t_global_std_ms`` (and ``t_center_std_ms``).
     as_shown : bool
         ``x`` and ``y`` are in the picture a player shows (:func:`restamp`).
     block_bytes : int
@@ -316,7 +323,7 @@ def _restamp_csv_text(
     in_path: Path,
     out_path: Path,
     model: SyncModel,
-    exposures: dict[str, float | None],
+    exposures: dict[str, Exposure | None],
     with_std: bool,
     needed: tuple[str, ...],
     block_bytes: int,
@@ -408,7 +415,7 @@ def _restamp_batches(
     out_path: Path,
     out_kind: str,
     model: SyncModel,
-    exposures: dict[str, float | None],
+    exposures: dict[str, Exposure | None],
     with_std: bool,
     needed: tuple[str, ...],
     block_bytes: int,
@@ -461,7 +468,7 @@ def _read_batches(
 
 
 def _stamp(
-    arrays: list[pa.Array], model: SyncModel, exposures: dict[str, float | None], with_std: bool
+    arrays: list[pa.Array], model: SyncModel, exposures: dict[str, Exposure | None], with_std: bool
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Stamp the rows given by their ``camera``, ``frame`` and ``y`` arrays, and an ``x``
     array where the points are given as shown (:func:`_coordinate_columns`).
@@ -469,8 +476,8 @@ def _stamp(
     Returns
     -------
     columns : dict of str to ndarray of shape (n,)
-        ``t_global_ms``, optionally ``t_global_std_ms`` and ``t_center_ms``, ms, NaN where
-        not stamped.
+        ``t_global_ms``, optionally ``t_global_std_ms``, ``t_center_ms`` and
+        ``t_center_std_ms``, ms, NaN where not stamped.
     reasons : ndarray of shape (n,), int8
         0 where stamped, else ``1 +`` index into :data:`REASONS`.
     """
@@ -516,8 +523,11 @@ def _stamp(
             columns["t_global_ms"][rows] = clock.t_global_ms(frames, stored)
             if "t_global_std_ms" in columns:
                 columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, stored)
-        if "t_center_ms" in columns and exposures[clock.name] is not None:
-            columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposures[clock.name] / 2
+        exposure = exposures[clock.name]
+        if "t_center_ms" in columns and exposure is not None:
+            columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposure.ms / 2
+            if "t_center_std_ms" in columns:
+                columns["t_center_std_ms"][rows] = np.hypot(columns["t_global_std_ms"][rows], exposure.std_ms / 2)
     computed = [columns[name] for name in ("t_global_ms", "t_global_std_ms") if name in columns]
     infinite = ~np.all([np.isfinite(values) for values in computed], axis=0)
     reasons[infinite & (reasons == 0)] = len(REASONS)
@@ -592,8 +602,15 @@ def _count(reasons: np.ndarray, summary: RestampSummary) -> None:
             summary.failed[reason] = summary.failed.get(reason, 0) + int(count)
 
 
-def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dict[str, float | None]:
-    """Each model camera's exposure, ms (None if unknown); the caller's values first."""
+class Exposure(NamedTuple):
+    """A camera's exposure and its standard deviation, ms (NaN: not stated)."""
+
+    ms: float
+    std_ms: float
+
+
+def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dict[str, Exposure | None]:
+    """Each model camera's exposure (None if unknown); the caller's values first, taken as exact."""
     given = dict(exposure_ms or {})
     unknown = [name for name in given if name not in model.cameras]
     if unknown:
@@ -605,16 +622,21 @@ def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dic
     for name, value in given.items():
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
             raise InputError(f"exposure of camera {name} is {value!r}; give a time >= 0 in ms")
-    return {name: given.get(name, clock.exposure_ms) for name, clock in model.cameras.items()}
+    exposures = {name: Exposure(value, 0.0) for name, value in given.items()}
+    for name, clock in model.cameras.items():
+        if name not in exposures and clock.exposure_ms is not None:
+            std = clock.exposure_std_ms
+            exposures[name] = Exposure(clock.exposure_ms, std if std is not None else float("nan"))
+    return {name: exposures.get(name) for name in model.cameras}
 
 
-def _new_columns(exposures: dict[str, float | None], with_std: bool) -> list[str]:
+def _new_columns(exposures: dict[str, Exposure | None], with_std: bool) -> list[str]:
     """The columns restamp adds, in order."""
     wanted = {"t_global_ms", "restamp_error"}
     if with_std:
         wanted.add("t_global_std_ms")
     if any(value is not None for value in exposures.values()):
-        wanted.add("t_center_ms")
+        wanted.update(("t_center_ms", "t_center_std_ms") if with_std else ("t_center_ms",))
     return [name for name in NEW_COLUMNS if name in wanted]
 
 
