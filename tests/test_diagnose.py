@@ -21,7 +21,7 @@ from flashsync.diagnose.measure import Edges, Measurement, measure
 from flashsync.diagnose.verdict import noise_test
 from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
-from flashsync.evaluate import probe_errors, probes, sync_errors
+from flashsync.evaluate import camera_accuracy, probe_errors, probes, sync_errors
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
 from flashsync.model import CameraClock, SyncModel
 from flashsync.pipeline import detect_videos, synchronize
@@ -208,6 +208,26 @@ def test_no_hidden_effect_names_nothing_and_ends_at_the_plain_model_in_syncs_sha
     assert d.found_rms_ms == d.initial_rms_ms
     assert_settled(d, cameras, truth, world)
     assert "no effect of the catalogue" in format_diagnosis(d)
+
+
+@pytest.mark.parametrize("case", ["exposure", "saturation"])
+def test_diagnose_o_states_an_exposures_sigma_only_where_it_covers_the_error(rendered, case):
+    """``diagnose -o`` writes ``sync``'s solve (a hidden exposure): every exposure with its
+    standard deviation, the truth within 3 of it. Where it writes the workflow's own model
+    (hidden saturation, which ``sync`` has no term for) it states none: the robust fit's
+    sigma, even with ``sync``'s floor in quadrature, put the second world's truth 3.1 and
+    2.5 sigma away here (its reference's 8 ms exposure 0.079 ms off)."""
+    detections, truth, _ = rendered
+    d = diagnose(pair(detections, CAMERA[case]))
+    if case == "saturation":
+        assert d.written.startswith("the workflow's own model"), d.written
+        assert all(camera.exposure_std_ms is None for camera in d.sync_model.cameras.values())
+        return
+    table = camera_accuracy(d.sync_model, truth)
+    table = table[table["solved"]]
+    assert len(table) == 2 and (table["exposure_z"].abs() <= 3.0).all(), table[
+        ["camera", "exposure_error_ms", "exposure_z"]
+    ]
 
 
 def test_one_bad_edge_names_nothing(detections):
