@@ -81,6 +81,13 @@ _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
 _BATCH_ROWS = 1 << 20
 
 
+class Exposure(NamedTuple):
+    """A camera's exposure and its standard deviation, ms (NaN: not stated)."""
+
+    ms: float
+    std_ms: float
+
+
 def _coordinate_columns(as_shown: bool) -> tuple[str, ...]:
     """The columns a detection is stamped from: :data:`REQUIRED_COLUMNS`, and ``x`` for
     points given as shown."""
@@ -600,13 +607,6 @@ def _count(reasons: np.ndarray, summary: RestampSummary) -> None:
     for reason, count in zip(REASONS, counts[1:]):
         if count:
             summary.failed[reason] = summary.failed.get(reason, 0) + int(count)
-
-
-class Exposure(NamedTuple):
-    """A camera's exposure and its standard deviation, ms (NaN: not stated)."""
-
-    ms: float
-    std_ms: float
 
 
 def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dict[str, Exposure | None]:
