@@ -72,9 +72,16 @@ def run_demo(
 
     lines = [f"flashsync demo on {samples} ({len(videos)} videos, {elapsed:.1f} s)", "", sync_table(model, report), ""]
     lines += [f"warning: {w}" for w in report.warnings]
-    lines.append("synchronisation error against ground truth, every frame and row:")
+    lines.append("synchronisation error against ground truth, every frame and row, and each exposure:")
     for row in errors.itertuples():
-        lines.append(f"  {row.camera:<10} RMS {row.rms_ms:.4f} ms   max {row.max_ms:.4f} ms")
+        camera = model.cameras[row.camera]
+        exposure = (
+            f"   exposure {camera.exposure_ms:5.2f} ± {camera.exposure_std_ms:.2f} ms, "
+            f"true {truth.cameras[row.camera].exposure_ms:5.2f}"
+            if camera.exposure_ms is not None and camera.exposure_std_ms is not None
+            else ""
+        )
+        lines.append(f"  {row.camera:<10} RMS {row.rms_ms:.4f} ms   max {row.max_ms:.4f} ms{exposure}")
     overall = float(np.sqrt(np.mean(errors["rms_ms"] ** 2)))
     lines.append(f"  {'all':<10} RMS {overall:.4f} ms")
     lines.append(f"re-stamped {format_summary(summary)}")

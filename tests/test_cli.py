@@ -1,5 +1,6 @@
 """The flashsync command end to end on rendered videos, and every bad input it must refuse."""
 
+import re
 import subprocess
 import sys
 
@@ -107,6 +108,21 @@ def test_restamp_keeps_every_row_and_explains_failures(tiny_scenario, tmp_path, 
         "--strict",
     )
     assert code == 1
+
+
+def test_the_demo_syncs_the_sample_and_checks_it_against_the_truth(tmp_path, capsys):
+    """``flashsync demo`` (the README's first command): the chain on the shipped sample,
+    its outputs written, every camera's sync error and exposure against the truth printed:
+    within 0.1 ms RMS, and each exposure within 3 of its stated standard deviation."""
+    code, out, _ = run(capsys, "demo", "-o", tmp_path / "demo")
+    assert code == 0
+    assert all((tmp_path / "demo" / name).is_file() for name in ("events.csv", "sync.json", "restamped.csv"))
+    cameras = re.findall(
+        r"^  (cam\d) +RMS ([\d.]+) ms +max [\d.]+ ms +exposure +([\d.]+) ± ([\d.]+) ms, true +([\d.]+)$", out, re.M
+    )
+    assert len(cameras) == 4, out
+    for _, rms, exposure, std, true in cameras:
+        assert float(rms) < 0.1 and abs(float(exposure) - float(true)) <= 3 * float(std), out
 
 
 def test_help_of_every_command_has_an_example():
