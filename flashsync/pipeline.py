@@ -283,6 +283,7 @@ def synchronize(
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
+        + _exposure_doubts(best)
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -709,6 +710,24 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
                 "across frames, or the same frame rate as the others); give it (--row-time CAMERA=MS) if known"
             )
     return warnings
+
+
+#: A camera's exposure whose standard deviation exceeds this (ms) is warned about (the
+#: issue's exposure target): its mid-exposure times carry half of it.
+EXPOSURE_DOUBT_MS = 0.1
+
+
+def _exposure_doubts(best: _Attempt) -> list[str]:
+    """A warning per camera whose exposure the band lengths pin down more loosely than
+    :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, or lengths that differ from flash
+    to flash). Its sigma says so already."""
+    return [
+        f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {solution.exposure_std_ms:.2f} ms: "
+        "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, or lengths that differ from "
+        "flash to flash); restamp's t_center_ms carries half of it; give it (restamp --exposure CAMERA=MS) if known"
+        for name, solution in zip(best.connected, best.solution.cameras)
+        if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS
+    ]
 
 
 def _free_drifts(best: _Attempt, reference: str) -> list[str]:
