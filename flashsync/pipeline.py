@@ -719,12 +719,14 @@ EXPOSURE_DOUBT_MS = 0.1
 
 def _exposure_doubts(best: _Attempt) -> list[str]:
     """A warning per camera whose exposure the band lengths pin down more loosely than
-    :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, or lengths that differ from flash
-    to flash). Its sigma says so already."""
+    :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, lengths that differ from flash to
+    flash, or a time per row the flashes leave loose: a length is in rows). Its sigma says
+    so already."""
     return [
         f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {solution.exposure_std_ms:.2f} ms: "
-        "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, or lengths that differ from "
-        "flash to flash); restamp's t_center_ms carries half of it; give it (restamp --exposure CAMERA=MS) if known"
+        "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash "
+        "to flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp --exposure "
+        "CAMERA=MS) if known"
         for name, solution in zip(best.connected, best.solution.cameras)
         if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS
     ]
