@@ -234,6 +234,8 @@ CASES = [
     ),
     ("model exposure NaN", _restamp_with_model(_set("exposure_ms", math.nan)), 1, ['"exposure_ms"', "finite"]),
     ("model exposure as text", _restamp_with_model(_set("exposure_ms", "8")), 1, ['"exposure_ms"', 'text "8"']),
+    ("model exposure sigma below 0", _restamp_with_model(_set("exposure_std_ms", -0.1)), 1, ['"exposure_std_ms"']),
+    ("model exposure sigma NaN", _restamp_with_model(_set("exposure_std_ms", math.nan)), 1, ['"exposure_std_ms"']),
     (
         "model flipped as text",
         _restamp_with_model(_set("flipped", "false")),
