@@ -46,10 +46,13 @@ from flashsync.timestamps import check_timestamps
 #: a row's blocks do (the median over blocks, and with it the band's level, is clipped; a few
 #: clipped blocks do not move it).
 SATURATED = 0.98
-#: Noise of a saturated band's leading edge in units of a clean one's: a clipped plateau
-#: pulls the half-level crossing early (``python benchmarks/bench_edges.py --crf 23
-#: --strengths 1.0,2.5``: 1.2-2.1 rows RMS, mean -1.2 to -2.0 rows, against 0.10-0.13 rows
-#: for unsaturated edges at crf 23); the solve weighs such edges down by its square.
+#: Noise of a saturated band's leading edge in units of a clean one's. Its clipped rows are
+#: left out of its fit (:attr:`_Segment.unclipped_change`), but its level then rests on its
+#: ramps' shape: ``python benchmarks/bench_edges.py --clips 10 --crf 23 --strengths
+#: 1.0,2.5``: 0.85-1.13 rows RMS, mean -0.6 to -0.8 rows (4.4-12.1 rows RMS fitted on the
+#: clipped level), against 0.10-0.13 rows for unsaturated edges at crf 23; an edge whose
+#: partner is hidden cannot tell the level, nor a rectangular pulse's ramps (their slope
+#: alone). The solve weighs such edges down by its square.
 SATURATED_EDGE_SIGMA = 12.0
 #: The same for an edge flagged ``long_pulse``: in a camera whose flashes outlast its
 #: exposure (:func:`~flashsync.ramp.common_width`), an edge not fitted whole with that
@@ -134,7 +137,9 @@ class DetectorSettings:
 @dataclass
 class _Segment:
     """A run ``[start, stop)`` of changed readout rows in one frame; ``change`` is that
-    frame's relative change times the run's sign (so the band is positive)."""
+    frame's relative change times the run's sign (so the band is positive), ``clipped``
+    which of its readout rows are at white (bool, shape (height,): the median of the row's
+    column blocks at :data:`SATURATED` or more)."""
 
     frame: int
     t_frame_ms: float
@@ -142,10 +147,24 @@ class _Segment:
     start: int
     stop: int
     sign: int
-    saturated: bool
+    clipped: np.ndarray
     sigma: float
     stripe: Stripe
     step: float
+
+    @property
+    def saturated(self) -> bool:
+        """Some of the run's rows are clipped at white."""
+        return bool(self.clipped[self.start : self.stop].any())
+
+    @property
+    def unclipped_change(self) -> np.ndarray:
+        """``change`` with the clipped rows blind (NaN), for the ramp fits: a clipped row's
+        change says only "at least this", and fitted as the band's level it pulls a
+        band's half-light crossings out (leading edges early, trailing ones late). Left out,
+        a band's level comes from its ramps' shape where both are in view; an edge alone
+        cannot tell it and stays near its crossing."""
+        return np.where(self.clipped, np.nan, self.change)
 
 
 @dataclass
@@ -222,6 +241,7 @@ class EventDetector:
         # with them as it stands at that level
         searched = ECHO_FRACTION * threshold
         shortest = max(self.settings.min_rows, self.height // 100)
+        clipped = np.median(readout, axis=1) >= SATURATED
         for sign in (1, -1) if peak > searched and self._n_history >= MIN_BASELINE else ():
             signed = sign * change
             stripes = []
@@ -242,7 +262,7 @@ class EventDetector:
                         int(start),
                         int(stop),
                         sign,
-                        bool(np.max(np.median(readout[start:stop], axis=1)) >= SATURATED),
+                        clipped,
                         sigma,
                         stripe,
                         _step(readout[start:stop], float(np.median(signed[start:stop])), sign),
@@ -382,10 +402,12 @@ class EventDetector:
             return
         whole = None
         if kind is Band.PULSE and len(event.segments) == 1 and leading is not None and trailing is not None:
-            whole = fit_pulse_band(first.change, leading, trailing, trailing_rise, plateau)
+            whole = fit_pulse_band(first.unclipped_change, leading, trailing, trailing_rise, plateau)
             leading, trailing = (whole.leading, whole.trailing) if whole is not None else (leading, trailing)
         elif kind is Band.PULSE and len(event.segments) == 2 and leading is not None and trailing is not None:
-            split = fit_split_band(first.change, leading, last.change, trailing, trailing_rise, plateau)
+            split = fit_split_band(
+                first.unclipped_change, leading, last.unclipped_change, trailing, trailing_rise, plateau
+            )
             leading, trailing = split if split is not None else (leading, trailing)
             if _peak(last) < TAIL_SHARE * _peak(first):  # the next frame holds the pulse's tail alone
                 trailing, trailing_rise = None, np.nan
@@ -568,7 +590,7 @@ def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: 
     rise = abs(three_quarters - quarter)
     if kind is not Band.PULSE:
         return row - (three_quarters - quarter), rise
-    return fit_pulse_edge(segment.change, row, rise, level, rising=crossing is _rising_crossing), rise
+    return fit_pulse_edge(segment.unclipped_change, row, rise, level, rising=crossing is _rising_crossing), rise
 
 
 #: Rows before a leading edge (after a trailing edge) that must be visible and lit.

@@ -61,6 +61,25 @@ def test_leading_edges_match_the_flash_instants(tmp_path, crf, rms_rows):
     assert np.sqrt(np.mean(error_rows**2)) < rms_rows, error_rows
 
 
+@pytest.mark.parametrize("exposure_ms", [4.0, 8.0])
+def test_a_clipped_bands_edges_are_read_at_the_flash_not_at_half_the_clip(tmp_path, exposure_ms):
+    """Eight flashes 1.2-2.4 times the scene's light clip the sensor at white: each band's
+    rows at white say only "at least this", so the whole-band fit leaves them out and takes
+    the band's level from its ramps. Fitted as the band's level they pulled both edges out:
+    at 8 ms 0.9-2.9 rows (median 1.6), and at 4 ms the clipped band read as a rectangular
+    pulse under a short exposure, each edge 8-10 rows off the flash."""
+    rows = [30.2, 85.7, 120.4, 55.1, 100.9, 20.6, 70.3, 110.8]
+    strengths = [1.2, 1.5, 1.8, 2.1, 2.4, 1.3, 1.7, 2.2]
+    flashes = [flash_at(4 + 6 * i, row, strength) for i, (row, strength) in enumerate(zip(rows, strengths))]
+    video, truth = render(tmp_path, flashes=flashes, n_frames=55, exposure_ms=exposure_ms)
+    events = events_to_frame(detect_video(video).events)
+    assert len(events) == 2 * len(rows) and events["flags"].str.contains("saturated").all(), events
+    edge_ms = truth.global_time_ms("cam", events["frame"].to_numpy(), events["row"].to_numpy())
+    half_ms = np.array([f["half_rise_global_ms"] for f in truth.flashes])[events["event"].to_numpy()]
+    error_rows = (edge_ms - half_ms - np.where(events["edge"] == "trailing", exposure_ms, 0.0)) / ROW_MS
+    assert np.median(np.abs(error_rows)) < 0.3 and np.max(np.abs(error_rows)) < 2.5, error_rows.round(2)
+
+
 def test_straddling_flash_is_one_event_with_its_leading_edge_in_the_first_frame(tmp_path):
     # a 16 ms band is 92 rows: 12 at the bottom of frame 10, 50 hidden rows, 30 in frame 11
     video, truth = render(tmp_path, flashes=[flash_at(10, HEIGHT - 12)], exposure_ms=16.0)

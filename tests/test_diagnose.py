@@ -151,22 +151,21 @@ def test_a_hidden_effect_is_named_first_and_the_gap_closes(rendered, effect):
 
 
 def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
-    """Bands clipped at white (32 of the camera's 38 events) have their edges moved out, the
-    farther the deeper the clip, which makes the band longer: the effect fits how far a
-    clipped band's edges move out (one offset for bands in one frame, one for bands split
-    across two, each kind's length measured against its own median), the share of a band's
-    length over that median they move by, and how much farther the trailing edge moves (the
-    pulse's tail). The edge noise comes from the unclipped bands (a clipped band's length is
-    the effect's evidence). Named first in both worlds and the gap shrinks 5x or to the noise
-    floor: over scenario seeds 1-3 in each world 2.1-6.8x, after 0.015-0.065 ms against a
-    floor of 0.029-0.124 ms, before 0.100-0.156 ms. The verdict is not asserted: on some
-    draws the clipped edges still scatter 0.02-0.05 ms per band beyond the unclipped bands'
-    noise (the flash's pulse length varies from flash to flash, and with it how far the edges
-    move). The model ``diagnose -o`` writes
-    (the effect in ``sync``'s shape) is closer to the truth than the plain model in that shape:
-    0.024 against 0.107 ms in the first world, 0.069 against 0.135 in the second (``sync``,
-    which does not know the effect, 0.120 and 0.085; the plain model at frame period / height
-    is 0.015 and 0.038: this rig has no hidden rows, so the nominal time per row is exact)."""
+    """Bands clipped at white (32 of the camera's 38 events) come out longer the deeper the
+    clip: the effect fits how far a clipped band's edges move out (one offset for bands in
+    one frame, one for bands split across two, each kind's length measured against its own
+    median), the share of a band's length over that median they move by, and how much
+    farther the trailing edge moves (the pulse's tail). The edge noise comes from the
+    unclipped bands (a clipped band's length is the effect's evidence). Since the detector
+    leaves a band's clipped rows out of its fit (``tests/test_detect.py``), the offset is
+    gone (0.09 and 0.14 ms before, -0.01 now) and what is left goes with the depth of the
+    clip: named first in both worlds, the gap 0.061 -> 0.022 ms (first world) and 0.082 ->
+    0.033 (second; 0.101 -> 0.024 and 0.155 -> 0.034 before), within the noise floor, the
+    share 0.32 and 0.50. The model ``diagnose -o`` writes (the effect in ``sync``'s shape)
+    is nearer the truth than the plain model in that shape and than ``sync`` (which has no
+    term for it): 0.063 against 0.069 and 0.099 ms in the first world, 0.038 against 0.053
+    and 0.113 in the second (``sync`` 0.127 and 0.167 before the clipped rows were left
+    out)."""
     detections, truth, world = rendered
     cameras = pair(detections, CAMERA["saturation"])
     d = diagnose(cameras)
@@ -175,10 +174,12 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     floor = FLOOR * d.expected_ms
     assert step.rms_before_ms > floor, "the hidden effect must show above the noise"
     assert step.rms_after_ms <= max(step.rms_before_ms / 5.0, floor), format_diagnosis(d)
-    assert d.model[1]["saturation_ms"] > 0.05 and 0.2 < d.model[1]["saturation_share"] < 0.6, d.model[1]
+    assert 0.2 < d.model[1]["saturation_share"] < 0.6, d.model[1]
     measurement = measure(cameras)
     plain = in_sync_shape(measurement, fit_candidate(measurement, frozenset()))
-    assert pooled_error_ms(d.sync_model, truth) < 0.7 * pooled_error_ms(plain.sync_model(), truth)
+    written = pooled_error_ms(d.sync_model, truth)
+    assert written < pooled_error_ms(plain.sync_model(), truth)
+    assert written < pooled_error_ms(synchronize(cameras)[0], truth)
     assert d.written == f"the workflow's own model: sync's solve has no term for saturation on {step.camera}"
 
 
