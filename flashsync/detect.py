@@ -241,8 +241,9 @@ class EventDetector:
         # with them as it stands at that level
         searched = ECHO_FRACTION * threshold
         shortest = max(self.settings.min_rows, self.height // 100)
-        clipped = np.median(readout, axis=1) >= SATURATED
-        for sign in (1, -1) if peak > searched and self._n_history >= MIN_BASELINE else ():
+        searching = peak > searched and self._n_history >= MIN_BASELINE
+        clipped = np.median(readout, axis=1) >= SATURATED if searching else None
+        for sign in (1, -1) if searching else ():
             signed = sign * change
             stripes = []
             for start, stop in _runs(signed > searched, gap=2):
