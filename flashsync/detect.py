@@ -48,8 +48,8 @@ from flashsync.timestamps import check_timestamps
 SATURATED = 0.98
 #: Noise of a saturated band's leading edge in units of a clean one's. Its clipped rows are
 #: left out of its fit (:attr:`_Segment.unclipped_change`), but its level then rests on its
-#: ramps' shape: ``python benchmarks/bench_edges.py --clips 10 --crf 23 --strengths
-#: 1.0,2.5``: 0.85-1.13 rows RMS, mean -0.6 to -0.8 rows (4.4-12.1 rows RMS fitted on the
+#: ramps' shape: ``python benchmarks/bench_edges.py --clips 12 --crf 23 --strengths
+#: 1.0,2.5``: 0.85-1.11 rows RMS, mean -0.6 to -0.75 rows (4.1-11.1 rows RMS fitted on the
 #: clipped level), against 0.10-0.13 rows for unsaturated edges at crf 23; an edge whose
 #: partner is hidden cannot tell the level, nor a rectangular pulse's ramps (their slope
 #: alone). The solve weighs such edges down by its square.
