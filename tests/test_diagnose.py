@@ -228,7 +228,9 @@ def test_diagnose_os_own_model_states_no_exposure_sigma(rendered):
     """Where ``diagnose -o`` writes the workflow's own model (hidden saturation, which
     ``sync`` has no term for) it states no exposure sigma: the robust fit's, even with
     ``sync``'s floor in quadrature, put the second world's truth 3.1 and 2.5 sigma away here
-    (its reference's 8 ms exposure 0.079 ms off)."""
+    (its reference's 8 ms exposure 0.079 ms off); the scatter of the fit with each group of
+    flashes left out and that floor, 3.3 sigma on the reference of scenario seed 1's second
+    world and 2.9 on seed 2's (2026-11-29, a throwaway script)."""
     detections, _, _ = rendered
     d = diagnose(pair(detections, CAMERA["saturation"]))
     assert d.written.startswith("the workflow's own model"), d.written
