@@ -52,7 +52,9 @@ SATURATED = 0.98
 #: 1.0,2.5``: 0.85-1.11 rows RMS, mean -0.6 to -0.75 rows (4.1-11.1 rows RMS fitted on the
 #: clipped level), against 0.10-0.13 rows for unsaturated edges at crf 23; an edge whose
 #: partner is hidden cannot tell the level, nor a rectangular pulse's ramps (their slope
-#: alone). The solve weighs such edges down by its square.
+#: alone). The solve weighs such an edge alone down by its square, and a clipped band's
+#: length; the band's midpoint, as sharp as an unclipped band's, it does not
+#: (:func:`flashsync.pipeline._timing_bands`).
 SATURATED_EDGE_SIGMA = 12.0
 #: The same for an edge flagged ``long_pulse``: in a camera whose flashes outlast its
 #: exposure (:func:`~flashsync.ramp.common_width`), an edge not fitted whole with that
