@@ -19,6 +19,7 @@ from flashsync.diagnose import diagnose
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker
+from flashsync.model import SyncModel
 from flashsync.pipeline import (
     EDGE_NOISE_FLOOR_ROWS,
     EDGE_NOISE_QUALITY,
@@ -227,6 +228,17 @@ def clip(detection: CameraDetection, out_ms: np.ndarray, unclipped: int, row_tim
     return replace(detection, top_down=replace(bands, row=row, flags=flags), bottom_up=None)
 
 
+def clock_errors_ms(model: SyncModel, truth: np.ndarray, frame_times: list[np.ndarray], c: int) -> tuple:
+    """The model's times of synthetic camera ``c`` (every 50th frame, every 60th row) minus
+    the true ones (the global clock's origin removed), and their predicted σ, ms."""
+    camera = model.cameras[f"cam{c}"]
+    frame, row = np.meshgrid(np.arange(0, camera.n_frames, 50), np.arange(0.0, 1080.0, 60.0))
+    origin = model.cameras["cam0"].t_global_ms(0, 0.0) - frame_times[0][0]
+    alpha, beta, row_time = truth[c]
+    error = camera.t_global_ms(frame, row) - (alpha * frame_times[c][frame] + beta + row * row_time) - origin
+    return error, camera.t_global_std_ms(frame, row)
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_a_camera_of_clipped_bands_is_timed_by_their_midpoints(seed):
     """Three synthetic cameras (1080 rows, edges 0.05 ms noisy), 30 flashes; cam1's bands
@@ -247,20 +259,31 @@ def test_a_camera_of_clipped_bands_is_timed_by_their_midpoints(seed):
         detections = synthetic_detections(events, truth, frame_times, seed=seed)
         detections[1] = clip(detections[1], out_ms, unclipped, truth[1, 2])
         model, _ = synchronize(detections)
-
-        def true_ms(c: int, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
-            alpha, beta, row_time = truth[c]
-            return alpha * frame_times[c][frame] + beta + row * row_time
-
-        origin = model.cameras["cam0"].t_global_ms(0, 0.0) - true_ms(0, 0, 0.0)  # the global clock's origin
-        frame, row = np.meshgrid(np.arange(0, model.cameras["cam1"].n_frames, 50), np.arange(0.0, 1080.0, 60.0))
-        error = model.cameras["cam1"].t_global_ms(frame, row) - true_ms(1, frame, row) - origin
+        error, _ = clock_errors_ms(model, truth, frame_times, 1)
         return float(np.sqrt(np.mean(error**2))), model.cameras["cam1"].exposure_ms - EXPOSURE_MS
 
     unclipped_ms, _ = error_rms_ms(unclipped=30)
     clipped_ms, exposure_error_ms = error_rms_ms(unclipped=3)
     assert clipped_ms <= 1.8 * unclipped_ms + 0.005, (clipped_ms, unclipped_ms)
     assert abs(exposure_error_ms) < 0.08
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_a_camera_of_clipped_bands_alone_states_no_exposure(seed):
+    """The same rig with every one of cam1's bands clipped: a clipped band is longer than the
+    exposure by what the clip adds, so with fewer than two unclipped bands
+    (``pipeline.MIN_UNCLIPPED_BANDS``) the clipped ones are not timing bands: cam1 is timed by
+    their leading edges, 12x down, states no exposure, and its σ covers its error (0.11 and
+    0.21 ms RMS at error/σ 0.86 and 1.69). Timed by their midpoints it stated one, 2.20 ±
+    0.14 and 2.17 ± 0.18 ms against the true 2; on a rendered camera whose scene was at white
+    under the bands (white level 140), 1.15 ± 0.08 ms against 8, and its times were 17 σ off."""
+    events, truth, frame_times = synthetic_events(3, 30, seed=seed)
+    detections = synthetic_detections(events, truth, frame_times, seed=seed)
+    detections[1] = clip(detections[1], np.random.default_rng(seed).uniform(0.0, 0.3, 30), 0, truth[1, 2])
+    model, _ = synchronize(detections)
+    assert model.cameras["cam1"].exposure_ms is None
+    error, sigma = clock_errors_ms(model, truth, frame_times, 1)
+    assert np.sqrt(np.mean((error / sigma) ** 2)) < 2.0
 
 
 def test_equal_rate_cameras_without_split_bands_keep_an_honest_time_per_row():
