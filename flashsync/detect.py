@@ -97,7 +97,7 @@ class DetectorSettings:
         Shortest band, rows; at least 1 % of the frame height is used.
     min_level : float
         Darkest row (fraction of white above black) whose relative change is measured;
-        darker rows are blind.
+        darker rows are blind, as are rows at white (:data:`SATURATED`).
     min_step : float
         Smallest brightness step (fraction of white; 1.5 DN) that counts as a change.
     min_band_step : float
@@ -461,9 +461,11 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
 
     Per row: the median over column blocks of ``(current - baseline) / baseline``, with the
     baseline the per-block median of ``history`` (shape (k, height, blocks)); NaN where
-    fewer than half the blocks are lit (baseline >= ``min_level``). A block that moved by
-    less than ``min_step`` counts as unchanged (a one-DN jump of a dark flat area at an
-    H.264 key frame is a large relative change).
+    fewer than half the blocks are lit (baseline at ``min_level`` or above, and under
+    :data:`SATURATED`: a block already at white cannot show a flash, and counted as
+    unchanged it ended a band where the scene turned white, its edge read there). A block
+    that moved by less than ``min_step`` counts as unchanged (a one-DN jump of a dark flat
+    area at an H.264 key frame is a large relative change).
 
     Returns (change, agree, noise, peak, lit_start, lit_stop): change of shape (height,);
     ``agree``, the fraction of the lit blocks whose change is within a factor of two of the
@@ -488,7 +490,7 @@ def _relative_change(history, current, min_level, min_step):  # pragma: no cover
                 for i in range(k):
                     column[i] = history[i, r, b]
                 baseline = _median_in_place(column, k)
-            if baseline >= min_level:
+            if min_level <= baseline < SATURATED:
                 step = current[r, b] - baseline
                 lit[n_lit] = step / baseline if abs(step) >= min_step else 0.0
                 n_lit += 1

@@ -281,6 +281,35 @@ def _split_band_edges(
     return events.row, events.flags, start + half, start + width + half - period
 
 
+@pytest.mark.parametrize("white", [(120, 200), (110, 130)])
+def test_rows_where_the_scene_is_at_white_hide_an_edge_rather_than_make_one(white):
+    """A flash band from row 80 to 143 (exact profiles, 200 rows) over a scene at white in
+    rows ``white``: those rows cannot brighten, so the band's edges there are hidden, as in
+    dark rows. Counted as unchanged, they ended the band at the white rows' first (a
+    trailing edge 21 rows early) and, with white rows inside the band, began a second band
+    after them (its leading edge at row 129.5). The leading edge stays at its row."""
+    height, start, width, decay = 200, 80.0, 60.0, 4.0
+    rng = np.random.default_rng(0)
+    scene = rng.uniform(0.3, 0.6, (height, 8)).astype(np.float32)
+    scene[white[0] : white[1]] = 1.0
+    rows = np.arange(height, dtype=float)
+
+    def share(z):
+        return np.where(z > 0, -np.expm1(-np.maximum(z, 0) / decay), 0.0)
+
+    detector = EventDetector("cam", height, DetectorSettings())
+    for frame in range(40):
+        band = 0.4 * (share(rows - start) - share(rows - start - width)) if frame == 20 else 0.0 * rows
+        light = scene * (1.0 + band[:, None]) * (1.0 + 0.0005 * rng.standard_normal(scene.shape))
+        detector.push(frame, frame * 40.0, np.minimum(light, 1.0).astype(np.float32))
+    events = events_to_frame(detector.finish())
+    half = decay * np.log(2.0)
+    first = events[events["event"] == 0]
+    assert list(first["edge"]) == ["leading"] and "trailing_hidden" in first["flags"].iloc[0], events
+    assert abs(first["row"].iloc[0] - (start + half)) < 0.1, events
+    assert not (np.abs(events["row"].to_numpy()[:, None] - np.array(white)) < 3.0).any(), events
+
+
 @pytest.mark.parametrize("decay", [4.0, 8.0, 12.0, 16.0, 24.0])
 def test_a_band_split_across_frames_is_fitted_whole(decay):
     """A band cut by the frame's end, its pulse still rising at the frame's last row (at a
