@@ -14,9 +14,10 @@ and the share of probes within 2 sigma, per camera and pairwise). Detection is c
 events on frames that show no flash are false, flashes seen with no event are missed; and
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
 the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`), and every flash
-edge's median error by its camera's tone curve and its kind (paired, or lone); and every
-rolling flicker period that named the mains frequency against the true one, over the
-standard deviation flashsync takes (``Flicker.period_rows_sigma``) and over its spread alone.
+edge's median error by its camera's tone curve and its kind (paired, or lone), and their
+spread by the encoder's crf; and every rolling flicker period that named the mains
+frequency against the true one, over the standard deviation flashsync takes
+(``Flicker.period_rows_sigma``) and over its spread alone.
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
@@ -158,24 +159,55 @@ def edge_block(cameras: pd.DataFrame) -> list[str]:
     return lines
 
 
+def flash_edges(cameras: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
+    """Every flash edge of ``cameras`` (one row each): its kind, its error against the truth
+    (rows) and its camera's ``columns``; an edge over 50 rows off (matched to the wrong
+    flash) left out."""
+    counts = [len(k) for k in cameras["flash_edge_kinds"]]
+    edges = pd.DataFrame(
+        {
+            **{column: np.repeat(cameras[column].to_numpy(), counts) for column in columns},
+            "kind": np.concatenate([np.asarray(k, dtype=object) for k in cameras["flash_edge_kinds"]]),
+            "error": np.concatenate([np.asarray(e, dtype=float) for e in cameras["flash_edge_error_rows"]]),
+        }
+    )
+    return edges[edges["error"].abs() < 50]
+
+
 def tone_block(cameras: pd.DataFrame) -> list[str]:
     """Flash edges' median error (rows) by their camera's tone curve and their kind (a lone
     edge's partner is hidden): a tone curve compresses the light of a band's plateau, so
     its half-level crossings move out, leading edges early and trailing ones late, the
     more the longer the ramp."""
-    edges = pd.DataFrame(
-        {
-            "tone": np.repeat(cameras["tone"].to_numpy(), [len(k) for k in cameras["flash_edge_kinds"]]),
-            "kind": np.concatenate([np.asarray(k, dtype=object) for k in cameras["flash_edge_kinds"]]),
-            "error": np.concatenate([np.asarray(e, dtype=float) for e in cameras["flash_edge_error_rows"]]),
-        }
-    )
-    edges = edges[edges["error"].abs() < 50]  # an edge matched to the wrong flash
+    edges = flash_edges(cameras, ["tone"])
     kinds = ["leading paired", "trailing paired", "leading lone", "trailing lone"]
     lines = [f"flash edges against the truth by tone curve, median rows (count): {', '.join(kinds)}"]
     for tone, mine in edges.groupby("tone"):
         medians = [mine.loc[mine["kind"] == kind, "error"] for kind in kinds]
         lines.append(f"  {tone:<7}" + "".join(f"  {m.median():+6.2f} ({m.size:>4})" for m in medians))
+    return lines
+
+
+#: The encoder's crf bins of :func:`codec_block`, first and last: the simulator's rigs
+#: are encoded at crf 18-30 (`flashsync.simulation.rigs`).
+CRF_BINS = ((18, 20), (21, 23), (24, 26), (27, 30))
+
+
+def codec_block(cameras: pd.DataFrame) -> list[str]:
+    """Paired flash edges' spread against the truth (robust σ, rows, and the share more than
+    2 rows off) by their camera's crf: the codec's dead zone erases the faint foot of a ramp
+    (most in the B-frames of a high crf), and the edge moves."""
+    edges = flash_edges(cameras, ["crf"])
+    edges = edges[edges["kind"].str.endswith("paired")]
+    lines = ["paired flash edges against the truth by the encoder's crf:"]
+    for low, high in CRF_BINS:
+        error = edges.loc[edges["crf"].between(low, high), "error"].to_numpy()
+        if error.size:
+            spread = MAD_TO_SIGMA * np.median(np.abs(error - np.median(error)))
+            lines.append(
+                f"  crf {low}-{high}  n {error.size:>5}  robust σ {spread:.2f} rows"
+                f"  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
+            )
     return lines
 
 
@@ -268,6 +300,7 @@ def run_rig(scenario, keep: Path | None = None) -> tuple[dict, pd.DataFrame]:
         fps=[c.fps for c in scenario.cameras],
         exposure_ms=[c.exposure_ms for c in scenario.cameras],
         tone=[c.tone for c in scenario.cameras],
+        crf=[c.crf for c in scenario.cameras],
         true_flipped=[c.flipped for c in scenario.cameras],
         equal_rate=info["equal_rate"],
         shared_flashes=[shared[c.name] for c in scenario.cameras],
@@ -405,6 +438,8 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
         lines += edge_block(tables)
     if "flash_edge_kinds" in tables:  # not in the --json files of earlier runs
         lines += tone_block(tables)
+    if "crf" in tables:  # not in the --json files of runs before 2026-11-29, seventh
+        lines += codec_block(tables)
     if "flicker_error_pct" in tables:  # not in the --json files of runs before 2026-11-29
         lines += flicker_block(tables)
     return "\n".join(lines)
