@@ -188,15 +188,15 @@ def tone_block(cameras: pd.DataFrame) -> list[str]:
     return lines
 
 
-#: The encoder's crf bins of :func:`codec_block`, first and last: the simulator's rigs
+#: The encoder's crf bins of :func:`codec_block`, each (first, last): the simulator's rigs
 #: are encoded at crf 18-30 (`flashsync.simulation.rigs`).
 CRF_BINS = ((18, 20), (21, 23), (24, 26), (27, 30))
 
 
 def codec_block(cameras: pd.DataFrame) -> list[str]:
     """Paired flash edges' spread against the truth (robust σ, rows, and the share more than
-    2 rows off) by their camera's crf: the codec's dead zone erases the faint foot of a ramp
-    (most in the B-frames of a high crf), and the edge moves."""
+    2 rows off) by their camera's crf: the codec's dead zone erases the faint foot of a ramp,
+    the more the higher the crf, and the edge moves."""
     edges = flash_edges(cameras, ["crf"])
     edges = edges[edges["kind"].str.endswith("paired")]
     lines = ["paired flash edges against the truth by the encoder's crf:"]
