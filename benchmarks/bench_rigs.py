@@ -77,13 +77,18 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
     flash had given half its light, rows; for the clean ones (no flag) with their band's
     ``quality`` (``edge_quality``, ``edge_error_rows``), for all with their kind
     (``flash_edge_kinds``: leading or trailing, paired or lone where the other edge is
-    hidden; ``flash_edge_error_rows``). An edge on a frame of no flash the camera saw is
-    left out, and every edge of a reading that is not the camera's true one."""
+    hidden; ``flash_edge_error_rows``) and, for a lone one, how far it lies from the frame's
+    end on the side its partner is hidden, in its ramp's 25 %-to-75 % rises
+    (``flash_edge_cut_rises``: readout rows to the last row from a leading edge, from the
+    first to a trailing one; NaN for a paired edge). An edge on a frame of no flash the
+    camera saw is left out, and every edge of a reading that is not the camera's true one."""
     camera = truth.cameras[detection.camera]
     events = detection.events if detection.flipped == camera.flipped else detection.events.take(slice(0, 0))
     clean = np.array([not flags for flags in events.flags], dtype=bool)
     lone = events.has_flag(Flag.LEADING_HIDDEN) | events.has_flag(Flag.TRAILING_HIDDEN)
-    quality, error, kinds, errors = [], [], [], []
+    readout = events.row if not detection.flipped else detection.height - 1 - events.row
+    cut = np.where(events.edge == Edge.LEADING, detection.height - 1 - readout, readout) / events.rise_rows
+    quality, error, kinds, errors, cuts = [], [], [], [], []
     for i in np.flatnonzero(events.band == Band.PULSE):
         frame = int(events.frame[i])
         flashes = [int(k) for k, frames in camera.flashes_seen.items() if frame in frames]
@@ -98,6 +103,7 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
         true_row = min(rows, key=lambda row: abs(row - events.row[i]))
         kinds.append(f"{events.edge[i]} {'lone' if lone[i] else 'paired'}")
         errors.append(float(events.row[i] - true_row))
+        cuts.append(float(cut[i]) if lone[i] else float("nan"))
         if clean[i]:
             quality.append(float(events.quality[i]))
             error.append(errors[-1])
@@ -106,6 +112,7 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
         "edge_error_rows": error,
         "flash_edge_kinds": kinds,
         "flash_edge_error_rows": errors,
+        "flash_edge_cut_rises": cuts,
     }
 
 
@@ -161,8 +168,9 @@ def edge_block(cameras: pd.DataFrame) -> list[str]:
 
 def flash_edges(cameras: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     """Every flash edge of ``cameras`` (one row each): its kind, its error against the truth
-    (rows) and its camera's ``columns``; an edge over 50 rows off (matched to the wrong
-    flash) left out."""
+    (rows), where the run recorded it its rises from the frame's cut (``cut_rises``,
+    :func:`edge_errors`) and its camera's ``columns``; an edge over 50 rows off (matched to
+    the wrong flash) left out."""
     counts = [len(k) for k in cameras["flash_edge_kinds"]]
     edges = pd.DataFrame(
         {
@@ -171,6 +179,8 @@ def flash_edges(cameras: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
             "error": np.concatenate([np.asarray(e, dtype=float) for e in cameras["flash_edge_error_rows"]]),
         }
     )
+    if "flash_edge_cut_rises" in cameras:  # not in the --json files of runs before 2026-11-29, eighth
+        edges["cut_rises"] = np.concatenate([np.asarray(c, dtype=float) for c in cameras["flash_edge_cut_rises"]])
     return edges[edges["error"].abs() < 50]
 
 
@@ -208,6 +218,31 @@ def codec_block(cameras: pd.DataFrame) -> list[str]:
                 f"  crf {low}-{high}  n {error.size:>5}  robust σ {spread:.2f} rows"
                 f"  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
             )
+    return lines
+
+
+#: The bins of :func:`lone_block`: a lone edge's distance from the frame's cut, in its ramp's rises.
+CUT_BINS = ((0, 2), (2, 4), (4, 8), (8, 16), (16, np.inf))
+
+
+def lone_block(cameras: pd.DataFrame) -> list[str]:
+    """Lone flash edges (their partner hidden beyond the frame's first or last row) against
+    the truth by their kind and how many rises of their ramp lie between them and that cut:
+    the median and robust σ (rows) and the share more than 2 rows off. Near the cut the rows
+    the detector reads a band's level from are still on its ramp (a trailing edge's under
+    the leading ramp of a pulse's tail). An edge whose rise was not measured is not binned."""
+    edges = flash_edges(cameras, [])
+    lines = ["lone flash edges against the truth by their distance from the frame's cut (ramp rises):"]
+    for kind in ("leading lone", "trailing lone"):
+        mine = edges[edges["kind"] == kind]
+        for low, high in CUT_BINS:
+            error = mine.loc[(mine["cut_rises"] >= low) & (mine["cut_rises"] < high), "error"].to_numpy()
+            if error.size:
+                spread = MAD_TO_SIGMA * np.median(np.abs(error - np.median(error)))
+                lines.append(
+                    f"  {kind:<14} {low:>2}-{high:<3} n {error.size:>4}  median {np.median(error):+.2f}  "
+                    f"robust σ {spread:.2f} rows  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
+                )
     return lines
 
 
@@ -440,6 +475,8 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
         lines += tone_block(tables)
     if "crf" in tables:  # not in the --json files of runs before 2026-11-29, seventh
         lines += codec_block(tables)
+    if "flash_edge_cut_rises" in tables:  # not in the --json files of runs before 2026-11-29, eighth
+        lines += lone_block(tables)
     if "flicker_error_pct" in tables:  # not in the --json files of runs before 2026-11-29
         lines += flicker_block(tables)
     return "\n".join(lines)
