@@ -213,12 +213,15 @@ def codec_block(cameras: pd.DataFrame) -> list[str]:
     for low, high in CRF_BINS:
         error = edges.loc[edges["crf"].between(low, high), "error"].to_numpy()
         if error.size:
-            spread = MAD_TO_SIGMA * np.median(np.abs(error - np.median(error)))
-            lines.append(
-                f"  crf {low}-{high}  n {error.size:>5}  robust σ {spread:.2f} rows"
-                f"  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
-            )
+            lines.append(f"  crf {low}-{high}  n {error.size:>5}  {spread(error)}")
     return lines
+
+
+def spread(error: np.ndarray) -> str:
+    """Edges' errors (rows, shape (n,)) as the blocks print their spread: the robust σ and
+    the share more than 2 rows off."""
+    sigma = MAD_TO_SIGMA * np.median(np.abs(error - np.median(error)))
+    return f"robust σ {sigma:.2f} rows  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
 
 
 #: The bins of :func:`lone_block`: a lone edge's distance from the frame's cut, in its ramp's rises.
@@ -238,11 +241,8 @@ def lone_block(cameras: pd.DataFrame) -> list[str]:
         for low, high in CUT_BINS:
             error = mine.loc[(mine["cut_rises"] >= low) & (mine["cut_rises"] < high), "error"].to_numpy()
             if error.size:
-                spread = MAD_TO_SIGMA * np.median(np.abs(error - np.median(error)))
-                lines.append(
-                    f"  {kind:<14} {low:>2}-{high:<3} n {error.size:>4}  median {np.median(error):+.2f}  "
-                    f"robust σ {spread:.2f} rows  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
-                )
+                head = f"  {kind:<14} {low:>2}-{high:<3} n {error.size:>4}  median {np.median(error):+.2f}"
+                lines.append(f"{head}  {spread(error)}")
     return lines
 
 
