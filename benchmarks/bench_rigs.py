@@ -15,10 +15,9 @@ events on frames that show no flash are false, flashes seen with no event are mi
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
 the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`), and every flash
 edge's median error by its camera's tone curve and its kind (paired, or lone), their
-spread by the encoder's crf, and the lone ones' by their distance from the frame's cut;
-and every rolling flicker period that named the mains
-frequency against the true one, over the standard deviation flashsync takes
-(``Flicker.period_rows_sigma``) and over its spread alone.
+spread by the encoder's crf, and the lone ones' by their distance from the frame's cut; and
+every rolling flicker period that named the mains frequency against the true one, over the
+standard deviation flashsync takes (``Flicker.period_rows_sigma``) and over its spread alone.
 
 Prints one line per rig, then the distribution over rigs and cameras, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
