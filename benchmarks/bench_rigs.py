@@ -1,6 +1,7 @@
 """flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
 
 Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12] [--preflash MS]
+                                   [--readout LO:HI]
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
@@ -44,7 +45,7 @@ from flashsync.io.truth import load_ground_truth
 from flashsync.pipeline import edge_noise_rows
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.simulation import render_scenario
-from flashsync.simulation.rigs import RECIPES, random_rig, recipe, with_preflashes
+from flashsync.simulation.rigs import RECIPES, random_rig, recipe, with_fast_readout, with_preflashes
 from flashsync.simulation.truth import CameraTruth, GroundTruth
 
 #: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
@@ -504,6 +505,12 @@ def main() -> None:
     parser.add_argument(
         "--preflash-jitter-ms", type=float, default=1.0, help="std of the pre-flashes' delay, ms (default 1)"
     )
+    parser.add_argument(
+        "--readout",
+        metavar="LO:HI",
+        help="give the random rigs' sensors a fast readout: each camera reads its rows in a fraction U(LO, HI) of "
+        "its frame period (rigs named rig-N-readLO-HI; with_fast_readout)",
+    )
     parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
     parser.add_argument(
         "--recipe-duration-s",
@@ -548,6 +555,12 @@ def main() -> None:
                     with_preflashes(rig, args.preflash, jitter_ms=args.preflash_jitter_ms, seed=rig.seed),
                     name=f"{rig.name}-ttl{args.preflash:g}",
                 )
+                for rig in rigs
+            ]
+        if args.readout is not None:
+            low, high = (float(x) for x in args.readout.split(":"))
+            rigs = [
+                replace(with_fast_readout(rig, (low, high), seed=rig.seed), name=f"{rig.name}-read{low:g}-{high:g}")
                 for rig in rigs
             ]
         scenarios += rigs

@@ -44,7 +44,10 @@ pose               looks at a point of the ice from 15-35 m away and 10-18 m up,
 =================  ==========================================================================
 
 `with_preflashes` fires a rig's flashes as TTL flashes do: a weak pre-flash a few tens of ms
-before each, which some cameras do not see.
+before each, which some cameras do not see. `with_fast_readout` gives a rig's sensors a
+readout faster than their frame period (a sensor built for 50-120 fps run at 25-30 reads
+its rows in a fraction of the frame and idles in a long vertical blanking), which
+`random_rig` never draws.
 
 `RECIPES` names fixed rigs: the independent-footage rigs of the honest-numbers issue's
 table and the real-light issue's cases, re-created with second-world settings (xenon or
@@ -572,6 +575,30 @@ def with_preflashes(
     fired = dataclasses.replace(scenario, cameras=cameras, flashes=flashes)
     check_scenario(fired, f"{scenario.name} with pre-flashes")
     return fired
+
+
+def with_fast_readout(scenario: Scenario, fractions: tuple[float, float] = (0.45, 0.75), seed: int = 0) -> Scenario:
+    """`scenario` with sensors that read out faster than their frame period: each camera's
+    rows down to its last visible one (``r0 + height``) are read in a fraction U(*fractions*)
+    of its frame period, the hidden rows after them (``r1``) grown to fill the rest (never
+    shrunk), all else kept.
+
+    Examples
+    --------
+    >>> from flashsync.simulation import preset
+    >>> fast = with_fast_readout(preset("tiny"), (0.5, 0.5))
+    >>> [round((c.r0 + c.height) / c.rows_total, 2) for c in fast.cameras]
+    [0.5, 0.5]
+    """
+    rng = np.random.default_rng([seed, zlib.crc32(b"fast readout")])
+    cameras = []
+    for camera in scenario.cameras:
+        read = camera.r0 + camera.height
+        total = int(round(read / rng.uniform(*fractions)))
+        cameras.append(dataclasses.replace(camera, r1=max(camera.r1, total - read)))
+    fast = dataclasses.replace(scenario, cameras=tuple(cameras))
+    check_scenario(fast, f"{scenario.name} with a fast readout")
+    return fast
 
 
 def recipe(name: str, seed: int = 0, duration_ms: float | None = None) -> Scenario:
