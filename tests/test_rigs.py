@@ -4,13 +4,14 @@ the named recipes of the issues' rigs."""
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.simulation import render_scenario
-from flashsync.simulation.rigs import NTSC_30, NTSC_60, RATES, RECIPES, random_rig, recipe
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, RATES, RECIPES, random_rig, recipe, with_fast_readout
 
 
 def test_same_seed_same_rig_and_other_seeds_differ():
@@ -53,6 +54,19 @@ def test_a_small_random_rig_renders(tmp_path):
     assert list(truth.cameras) == ["cam1", "cam2"]
     assert all((tmp_path / c.file).stat().st_size > 0 for c in truth.cameras.values())
     assert any(c.flashes_seen for c in truth.cameras.values())
+
+
+def test_a_fast_readout_reads_the_rows_in_part_of_the_frame(tmp_path):
+    """`with_fast_readout` grows only the hidden rows after the image: the rendered truth's
+    time per row reads the visible rows in the fraction drawn, the rest of the rig as it was."""
+    rig = random_rig(3, max_height=180, duration_ms=1500.0, cameras=(2, 2))
+    fast = with_fast_readout(rig, (0.45, 0.75), seed=1)
+    assert [replace(c, r1=0) for c in fast.cameras] == [replace(c, r1=0) for c in rig.cameras]
+    assert replace(fast, cameras=rig.cameras) == rig
+    truth = render_scenario(fast, tmp_path)
+    for camera in fast.cameras:
+        read = truth.cameras[camera.name].row_time_ms * (camera.r0 + camera.height) / camera.frame_period_ms
+        assert 0.45 <= read <= 0.75 and camera.r1 > 0.3 * camera.height
 
 
 def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
