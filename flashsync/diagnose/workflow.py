@@ -305,7 +305,8 @@ def in_sync_shape(
 ) -> Candidate | None:
     """The ``found`` model's effects with every camera's time per row, exposure and drift
     (:data:`SYNC_SHAPE`) free under ``sync``'s priors (the fit's pseudo-observations: time per
-    row nominal ± 8 % or its rolling flicker's, drift 0 ± 50 ppm but on the cameras
+    row nominal ± :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` or its rolling flicker's,
+    drift 0 ± :data:`~flashsync.solve.DRIFT_PRIOR_STD` but on the cameras
     ``free_drift``, whose drift ``sync`` solved without it, a warning each) and the cameras
     ``turned``, which ``sync`` reads the other way up from the measurement, read that way
     (rig-428: on four flashes no step turned cam4, which ``sync`` had read bottom-up by its
