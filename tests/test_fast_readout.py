@@ -16,7 +16,7 @@ from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenari
 @pytest.fixture(scope="module")
 def same_row(tmp_path_factory):
     """cam1 (25 fps) reads its 180 rows in 52 % of its frame and sees every flash on one row
-    (they fire 7-13 of its frames apart): its flashes cannot tell its time per row, 0.115
+    (they fire 7-13 of its frames apart): its flashes cannot tell its time per row, 0.116
     ms against the nominal 0.212. The reference (30 fps, full readout) sees them on rows
     all over its frame. Both are read top-down, as mounted (their readout direction is not
     in question here)."""
