@@ -488,6 +488,17 @@ def parse_seeds(text: str) -> list[int]:
     return list(range(int(first), int(last))) if last else [int(first)]
 
 
+def readout_fractions(text: str) -> tuple[float, float]:
+    """``LO:HI`` of ``--readout``: the fractions of the frame period a sensor may read its rows in."""
+    try:
+        low, high = (float(x) for x in text.split(":"))
+    except ValueError:
+        low = high = float("nan")
+    if not 0.0 < low <= high <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text}: give LO:HI with 0 < LO <= HI <= 1, e.g. 0.45:0.75")
+    return low, high
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -507,6 +518,7 @@ def main() -> None:
     )
     parser.add_argument(
         "--readout",
+        type=readout_fractions,
         metavar="LO:HI",
         help="give the random rigs' sensors a fast readout: each camera reads its rows in a fraction U(LO, HI) of "
         "its frame period (rigs named rig-N-readLO-HI; with_fast_readout)",
@@ -558,7 +570,7 @@ def main() -> None:
                 for rig in rigs
             ]
         if args.readout is not None:
-            low, high = (float(x) for x in args.readout.split(":"))
+            low, high = args.readout
             rigs = [
                 replace(with_fast_readout(rig, (low, high), seed=rig.seed), name=f"{rig.name}-read{low:g}-{high:g}")
                 for rig in rigs
