@@ -3,8 +3,11 @@ the named recipes of the issues' rigs."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from collections import Counter
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -67,6 +70,18 @@ def test_a_fast_readout_reads_the_rows_in_part_of_the_frame(tmp_path):
     for camera in fast.cameras:
         read = truth.cameras[camera.name].row_time_ms * (camera.r0 + camera.height) / camera.frame_period_ms
         assert 0.45 <= read <= 0.75 and camera.r1 > 0.3 * camera.height
+
+
+@pytest.mark.parametrize("fractions", ["0.5", "a:b", "0.7:0.4", "1.2:1.5", "0:0.5"])
+def test_bench_rigs_readout_out_of_range_is_one_line(fractions):
+    """``bench_rigs.py --readout`` takes LO:HI with 0 < LO <= HI <= 1; anything else is one
+    line of argparse's and exit 2, before any rig is drawn."""
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_rigs.py"
+    run = subprocess.run(
+        [sys.executable, str(script), "--readout", fractions], capture_output=True, text=True, timeout=60
+    )
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+    assert f"argument --readout: {fractions}: give LO:HI with 0 < LO <= HI <= 1" in run.stderr.splitlines()[-1]
 
 
 def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
