@@ -81,12 +81,12 @@ FLOOR_RANK = 8
 NOMINAL_HIDDEN_ROWS = 1.05
 
 
-def approximate_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
+def approximate_times_ms(detection: CameraDetection, events: Events, share: float = 1.0) -> np.ndarray:
     """Times of the camera's ``events`` on its own clock, ms, with a nominal time per row: frame
     time + readout row x shortest frame step / (:data:`NOMINAL_HIDDEN_ROWS` x height) (a few per
     cent off: good to a few ms; the closer, the tighter true matches sit and the stronger
-    their evidence)."""
-    row_time = nominal_row_time_ms(detection)
+    their evidence), or ``share`` of it."""
+    row_time = share * nominal_row_time_ms(detection)
     return events.t_frame_ms + readout_rows(events.row, detection.height, detection.flipped) * row_time
 
 

@@ -80,6 +80,12 @@ NOMINAL_ROW_TIME_STD = 0.35
 #: 0.98 and 93 %, in milliseconds whatever the time per row (0.043-0.22 ms).
 EXPOSURE_FLOOR_MS = 0.02
 
+#: Shares of the nominal time per row at which a camera that matching at the nominal leaves
+#: untied is matched again (:func:`_tie_fast_readouts`): a sensor that reads its rows in part
+#: of its frame period puts its lower rows' flashes up to half a frame later than the nominal
+#: does, beyond the matching tolerance.
+FAST_READOUT_SHARES = (0.8, 0.65, 0.5, 0.35)
+
 
 def detect_videos(
     paths: Sequence[str | Path],
@@ -227,6 +233,11 @@ def synchronize(
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
         the detector's event number, as in the events table and the model's events.
+
+    Events are matched at each camera's nominal time per row; a sensor that reads its rows
+    in part of its frame period may then be left untied, and is matched again at shorter
+    ones (:func:`_tie_fast_readouts`): on the readings chosen, or, where nothing solves at
+    the nominal, in every attempt.
     """
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
@@ -237,6 +248,27 @@ def synchronize(
         )
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
+    try:
+        return _synchronized(detections, reference, row_times, anchors, retie=False)
+    except NotEnoughDataError as failure:  # a camera reading fast may not have matched at the nominal
+        try:
+            return _synchronized(detections, reference, row_times, anchors, retie=True)
+        except FlashsyncError:
+            raise failure from None
+
+
+def _synchronized(
+    detections: Sequence[CameraDetection],
+    reference: str,
+    row_times: dict[str, float] | None,
+    anchors: Sequence[str],
+    retie: bool,
+) -> tuple[SyncModel, SyncReport]:
+    """:func:`synchronize` on checked arguments. ``retie``: every attempt matches the
+    cameras it leaves untied again at shorter times per row (:func:`_tie_fast_readouts`);
+    else only the last, on the readings chosen, and only where that ties more cameras
+    (:func:`_retied`)."""
+    names = [d.camera for d in detections]
     as_rolled = [d.read_as_rolled() for d in detections]  # where its flicker's roll tells its readout
     rolled = [d.camera for d, read in zip(detections, as_rolled) if read is not d]
     detections = as_rolled
@@ -248,7 +280,7 @@ def synchronize(
     memo: dict = {}  # pair alignments shared by the attempts (a flip changes only that camera's pairs)
 
     def attempt_on(on: str) -> Callable[[dict[str, CameraDetection]], _Attempt]:
-        return lambda trial: _attempt(trial, on, row_times, anchors, rate_std, memo)
+        return lambda trial: _attempt(trial, on, row_times, anchors, rate_std, memo, retie=retie)
 
     # The choices (readouts, frame times) are made in name order on a reference that neither
     # the camera order nor the reference given decides (:func:`_search_reference`); the
@@ -274,8 +306,11 @@ def synchronize(
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
+    if not retie:
+        chosen = best.cameras
+        best, retie = _retied(best, lambda: _attempt(chosen, reference, row_times, anchors, rate_std, memo, retie=True))
     if any(alignment.others for alignment in best.alignments.values()):
-        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
+        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True, retie=retie)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     best = best.with_flash_scatter()
@@ -997,11 +1032,13 @@ def _attempt(
     rate_std: dict[str, float] | None = None,
     memo: dict | None = None,
     other_shifts: bool = False,
+    retie: bool = False,
 ) -> _Attempt:
     """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
     the relative standard error of its frame clock's rate (it and the reference's widen the
     prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`);
-    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`)."""
+    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`); ``retie``:
+    match the cameras left untied again at shorter times per row (:func:`_tie_fast_readouts`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= 2]
     warnings = [
@@ -1019,12 +1056,68 @@ def _attempt(
     tolerance = match_tolerance_ms([median_step_ms(cameras[n].frame_times_ms) for n in usable], readout_known=True)
     times = {n: _start_times_ms(cameras[n], sync_events[n]) for n in usable}
     strengths = {n: np.abs(sync_events[n].strength) for n in usable}
-    matching = match_events(times, tolerance, anchor_events, memo, strengths)
+
+    def matched(times: dict[str, np.ndarray]) -> Matching:
+        return match_events(times, tolerance, anchor_events, memo, strengths)
+
+    matching = matched(times)
+    if retie:
+        matching = _tie_fast_readouts(matching, times, reference, cameras, sync_events, matched)
 
     def solved(matching: Matching) -> _Attempt:
         return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)
 
     return _shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts)
+
+
+def _retied(best: _Attempt, retied: Callable[[], _Attempt]) -> tuple[_Attempt, bool]:
+    """The attempt ``retied`` makes (``best``'s readings, the cameras it left untied matched
+    again at shorter times per row: :func:`_tie_fast_readouts`) where that ties more cameras
+    and every one it adds times its rows as a sensor can (:attr:`_Attempt.implausible`: a
+    camera read the wrong way up can be tied so), and whether it was taken; else ``best``.
+    Made once the readings are chosen, whose search compares attempts that tie the same
+    cameras the same way."""
+    if set(best.connected) == set(best.cameras):
+        return best, False
+    try:
+        other = retied()
+    except FlashsyncError:
+        return best, False
+    added = set(other.connected) - set(best.connected)
+    if not added or set(best.connected) - set(other.connected) or added & set(other.implausible):
+        return best, False
+    return other, True
+
+
+def _tie_fast_readouts(
+    matching: Matching,
+    times: dict[str, np.ndarray],
+    reference: str,
+    cameras: dict[str, CameraDetection],
+    sync_events: dict[str, Events],
+    matched: Callable[[dict[str, np.ndarray]], Matching],
+) -> Matching:
+    """``matching`` with each camera the nominal time per row leaves untied to ``reference``
+    matched again at the share of it (:data:`FAST_READOUT_SHARES`) that ties it with the
+    most of its events, where one does and no camera tied before comes loose. ``times``: the
+    events' approximate times the matching was made on (:func:`_start_times_ms`); ``matched``
+    matches a set of them. The reference is tried first where it is tied to no camera."""
+    tied = matching.tied_to(reference)
+    loose = [name for name in times if name not in tied]
+    if loose and len(tied) == 1:
+        loose.insert(0, reference)
+    for name in loose:
+        best, most = None, 0
+        for share in FAST_READOUT_SHARES:
+            retimed = {**times, name: _start_times_ms(cameras[name], sync_events[name], share)}
+            trial = matched(retimed)
+            now = trial.tied_to(reference)
+            count = sum(camera == name for camera, _ in trial.flashes)
+            if name in now and tied <= now and count > most:
+                best, most = (trial, retimed), count
+        if best is not None:
+            (matching, times), tied = best, best[0].tied_to(reference)
+    return matching
 
 
 def _shifts_by_fit(
@@ -1622,14 +1715,14 @@ def _sync_events(detection: CameraDetection) -> Events:
     return events.take(leading | (lone & clean))
 
 
-def _start_times_ms(detection: CameraDetection, events: Events) -> np.ndarray:
+def _start_times_ms(detection: CameraDetection, events: Events, share: float = 1.0) -> np.ndarray:
     """Approximate times (ms, the camera's own clock) of the starts of the bands of the
-    camera's ``events``: :func:`~flashsync.match.approximate_times_ms`, a trailing edge's
-    one exposure (:func:`_exposure_rows` at the nominal time per row; none where that is
-    unknown) earlier."""
+    camera's ``events``: :func:`~flashsync.match.approximate_times_ms` at ``share`` of the
+    nominal time per row, a trailing edge's one exposure (:func:`_exposure_rows` at that
+    time per row; none where that is unknown) earlier."""
     trailing = events.edge == Edge.TRAILING
-    exposure_ms = (_exposure_rows(detection) or 0.0) * nominal_row_time_ms(detection)
-    return approximate_times_ms(detection, events) - np.where(trailing, exposure_ms, 0.0)
+    exposure_ms = (_exposure_rows(detection) or 0.0) * share * nominal_row_time_ms(detection)
+    return approximate_times_ms(detection, events, share) - np.where(trailing, exposure_ms, 0.0)
 
 
 def _trailing_edges(detection: CameraDetection) -> Events:

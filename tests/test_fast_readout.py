@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from flashsync import detect_videos, synchronize
+from flashsync import detect_videos, pipeline, synchronize
+from flashsync.errors import NotEnoughDataError
 from flashsync.evaluate import camera_accuracy
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
@@ -47,3 +48,53 @@ def test_a_time_per_row_the_flashes_do_not_tell_has_a_sigma_that_covers_a_fast_r
     assert abs(table.loc["cam1", "exposure_z"]) <= 3.0, table.loc["cam1"]
     assert table.loc["cam1", "z_rms"] <= 2.0, table.loc["cam1"]
     assert [w for w in report.warnings if "cam1.mp4: its time per row" in w], report.warnings
+
+
+@pytest.fixture(scope="module")
+def fast_and_full(tmp_path_factory):
+    """cam1 (25 fps) reads its 180 rows in 45 % of its frame (time per row 0.097 ms, the
+    nominal 0.212): timed at the nominal, its flashes on the lower rows come up to 20 ms
+    late, twice the matching tolerance. cam0 (30 fps) and cam2 (50 fps) read over their
+    whole frame. Sixteen flashes at irregular instants, on rows all over the frames."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 30.0, r0=6, r1=4, exposure_ms=4.0),
+        CameraSpec("cam1", 320, 180, 25.0, r0=6, r1=227, exposure_ms=4.0, start_ms=500.0, offset_ms=-480.0),
+        CameraSpec("cam2", 320, 180, 50.0, r0=8, r1=6, exposure_ms=3.0, start_ms=200.0, offset_ms=150.0),
+    )
+    rng = np.random.default_rng(1)
+    instants = 300.0 + np.cumsum(150.0 + rng.exponential(200.0, 60))
+    flashes = tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.4, 0.7)), 3)) for t in instants)
+    scenario = Scenario("fast-and-full", cameras, 6000.0, flashes=flashes[:16], n_players=0, seed=1)
+    folder = tmp_path_factory.mktemp("fast-and-full")
+    truth = render_scenario(scenario, folder)
+    return truth, detect_videos([folder / f"{c.name}.mp4" for c in cameras], estimate_readout=False)
+
+
+def test_a_camera_that_reads_fast_is_tied_not_left_out(fast_and_full, monkeypatch):
+    """Matched at the nominal time per row, cam1 shares too few flashes with the others and
+    is left out; matched again at shorter times per row, it is tied and solved: within 0.1
+    ms RMS of the truth (0.030), its time per row within 1 % (+0.39 %), error/sigma RMS
+    within 2 (1.2)."""
+    truth, detections = fast_and_full
+    model, report = synchronize(detections)
+    table = camera_accuracy(model, truth).set_index("camera")
+    assert table.loc["cam1", "rms_ms"] < 0.1, table
+    assert abs(table.loc["cam1", "row_time_error_pct"]) < 1.0, table
+    assert table.loc["cam1", "z_rms"] <= 2.0, table
+    assert not [w for w in report.warnings if "left out" in w], report.warnings
+    monkeypatch.setattr(pipeline, "FAST_READOUT_SHARES", ())  # the premise: the nominal leaves it out
+    _, report = synchronize(detections)
+    assert [w for w in report.warnings if "cam1.mp4: shares too few flashes" in w], report.warnings
+
+
+def test_a_reference_that_reads_fast_is_tied_to_the_others(fast_and_full, monkeypatch):
+    """With cam1 as the reference, the nominal ties it to no camera and ``sync`` failed;
+    matched again at shorter times per row, every camera is solved within 0.1 ms RMS."""
+    truth, detections = fast_and_full
+    model, _ = synchronize(detections, reference="cam1")
+    table = camera_accuracy(model, truth).set_index("camera")
+    assert set(model.cameras) == {"cam0", "cam1", "cam2"}
+    assert (table["rms_ms"] < 0.1).all(), table
+    monkeypatch.setattr(pipeline, "FAST_READOUT_SHARES", ())
+    with pytest.raises(NotEnoughDataError, match="no camera shares enough flashes with cam1"):
+        synchronize(detections, reference="cam1")
