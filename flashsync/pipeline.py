@@ -86,6 +86,9 @@ EXPOSURE_FLOOR_MS = 0.02
 #: does, beyond the matching tolerance.
 FAST_READOUT_SHARES = (0.8, 0.65, 0.5, 0.35)
 
+#: Fewest sync events (:func:`_sync_events`) a camera needs to be matched at all.
+MIN_SYNC_EVENTS = 2
+
 
 def detect_videos(
     paths: Sequence[str | Path],
@@ -969,6 +972,15 @@ class _Attempt:
         return edge_log_likelihood(sigma, self.n_edges, _uniform_ms(self.cameras))
 
     @cached_property
+    def untied(self) -> list[str]:
+        """Cameras left untied that have the sync events to be matched (:data:`MIN_SYNC_EVENTS`)."""
+        return [
+            name
+            for name, detection in self.cameras.items()
+            if name not in self.connected and len(_sync_events(detection)) >= MIN_SYNC_EVENTS
+        ]
+
+    @cached_property
     def n_edges(self) -> int:
         """Every band edge the cameras' readings hold, fitted or not (what a score counts)."""
         return sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
@@ -1040,9 +1052,10 @@ def _attempt(
     ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`); ``retie``:
     match the cameras left untied again at shorter times per row (:func:`_tie_fast_readouts`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
-    usable = [name for name, events in sync_events.items() if len(events) >= 2]
+    usable = [name for name, events in sync_events.items() if len(events) >= MIN_SYNC_EVENTS]
     warnings = [
-        f"{cameras[name].video}: {len(sync_events[name])} usable flash events (need at least 2); left out"
+        f"{cameras[name].video}: {len(sync_events[name])} usable flash events "
+        f"(need at least {MIN_SYNC_EVENTS}); left out"
         for name in cameras
         if name not in usable
     ]
@@ -1076,8 +1089,8 @@ def _retied(best: _Attempt, retied: Callable[[], _Attempt]) -> tuple[_Attempt, b
     and every one it adds times its rows as a sensor can (:attr:`_Attempt.implausible`: a
     camera read the wrong way up can be tied so), and whether it was taken; else ``best``.
     Made once the readings are chosen, whose search compares attempts that tie the same
-    cameras the same way."""
-    if set(best.connected) == set(best.cameras):
+    cameras the same way; not made where no camera :attr:`~_Attempt.untied` is left."""
+    if not best.untied:
         return best, False
     try:
         other = retied()
