@@ -1114,10 +1114,11 @@ def _tie_fast_readouts(
     matched again at the share of it (:data:`FAST_READOUT_SHARES`) that ties it with the
     most of its events, where one does and no camera tied before comes loose. ``times``: the
     events' approximate times the matching was made on (:func:`_start_times_ms`); ``matched``
-    matches a set of them. The reference is tried first where it is tied to no camera."""
+    matches a set of them. The reference is tried first where it is tied to no camera (and
+    has the events to be matched: ``times`` holds it)."""
     tied = matching.tied_to(reference)
     loose = [name for name in times if name not in tied]
-    if loose and len(tied) == 1:
+    if loose and len(tied) == 1 and reference in times:
         loose.insert(0, reference)
     for name in loose:
         best, most = None, 0

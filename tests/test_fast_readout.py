@@ -5,6 +5,7 @@ the camera may have, and its uncertainty must say so."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -100,6 +101,17 @@ def test_a_reference_that_reads_fast_is_tied_to_the_others(fast_and_full, monkey
     monkeypatch.setattr(pipeline, "FAST_READOUT_SHARES", ())
     with pytest.raises(NotEnoughDataError, match="no camera shares enough flashes with cam1"):
         synchronize(detections, reference="cam1")
+
+
+def test_a_reference_that_saw_no_flash_is_named_not_a_crash(fast_and_full):
+    """A reference with no flash events cannot be tied, at any time per row: ``sync`` says so
+    and names the reference to give instead. Matching again at shorter times per row tried
+    the reference first without its events and raised a ``KeyError`` (a throwaway fast rig
+    whose reference saw none of its flashes; the CLI would print a traceback)."""
+    _, detections = fast_and_full
+    blind = replace(detections[1], top_down=detections[1].top_down.take(np.zeros(len(detections[1].top_down), bool)))
+    with pytest.raises(NotEnoughDataError, match="no camera shares enough flashes with cam1.*--reference cam"):
+        synchronize([detections[0], blind, detections[2]], reference="cam1")
 
 
 def test_matching_again_is_kept_only_where_it_ties_more_cameras_as_sensors_can():
