@@ -46,6 +46,17 @@ MAINS_FLICKER_HZ = (100.0, 120.0)
 #: --max-height 360 --duration-s 8``, 2026-11-29): median 0.33 %, largest 1.96 % off the
 #: truth, 6.7 times their spread RMS; against this floor 0.78, 95.8 % within 2 sigma.
 CODEC_PERIOD_SHARE = 0.01
+#: Flicker periods a frame must hold for the codec's bend (:data:`CODEC_PERIOD_SHARE`) to bound
+#: its period's error. In fewer, what else changes down the rows (a stretch that varies from
+#: frame to frame, dark rows) bends a pattern of so few periods further: the floor grows as
+#: the square of ``FEW_PERIODS / periods`` (how a smooth disturbance leaks into a sinusoid's
+#: frequency). The 75 cameras of the kept rigs whose flicker was named (rigs 0-61, the
+#: recipes, 44 rigs reading out in 45-75 % of their frame; 2026-11-30), error against the
+#: truth over this floor by periods a frame: 1-1.5 RMS 2.1 (0.03-9.2 % off and one 22 %, at
+#: 6.9; 7.1 against the codec's 1 % alone), 1.5-2.5 0.56, beyond 0.70. As the cube, 1.2 under
+#: 1.5 periods (that one at 3.9), but ``sync`` no longer found that 22 % prior contradicted
+#: by the flashes and took it (its time per row 4.5 sigma off, 1.0 as the square).
+FEW_PERIODS = 2.5
 
 
 @dataclass(frozen=True)
@@ -71,6 +82,8 @@ class Flicker:
     phase : ndarray of float, shape (frames,)
         Phase of the fundamental at stored row 0 in each decoded frame, radians (NaN where not
         measured).
+    height : int
+        Rows of the frames it was measured on.
     bottom_up : bool or None
         The readout direction its roll tells (a sensor reading bottom-up rolls the pattern
         the other way through the stored rows): True bottom-up, False top-down; None where
@@ -83,14 +96,26 @@ class Flicker:
     depth: float
     n_frames: int
     phase: np.ndarray
+    height: int
     bottom_up: bool | None = None
+
+    @property
+    def periods(self) -> float:
+        """Flicker periods a frame holds."""
+        return self.height / self.period_rows
+
+    @property
+    def floor_share(self) -> float:
+        """The least relative standard deviation of the period: :data:`CODEC_PERIOD_SHARE`,
+        more in a frame of fewer than :data:`FEW_PERIODS` periods."""
+        return CODEC_PERIOD_SHARE * max(1.0, (FEW_PERIODS / self.periods) ** 2)
 
     @property
     def period_rows_sigma(self) -> float:
         """The period's standard deviation as flashsync takes it, rows: its spread, and at
-        least :data:`CODEC_PERIOD_SHARE` of the period."""
+        least :attr:`floor_share` of the period."""
         spread = self.period_rows_std if np.isfinite(self.period_rows_std) else 0.0
-        return max(spread, CODEC_PERIOD_SHARE * self.period_rows)
+        return max(spread, self.floor_share * self.period_rows)
 
 
 @dataclass(frozen=True)
@@ -383,7 +408,9 @@ class FlickerRemover:
         phase = np.full(self._n_out, np.nan)
         if np.isfinite(radius):
             phase[frames] = np.angle(points - centre)
-        return Flicker(hz, float(1.0 / nu), float(nu_std / nu**2), float(radius), len(frames), phase, bottom_up)
+        return Flicker(
+            hz, float(1.0 / nu), float(nu_std / nu**2), float(radius), len(frames), phase, self.height, bottom_up
+        )
 
 
 @dataclass

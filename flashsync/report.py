@@ -31,10 +31,11 @@ def detection_notes(detection) -> list[str]:
                     else " (read bottom-up as told by --flipped: check its mounting)"
                 )
         sigma = flicker.period_rows_sigma
-        floor = (
-            f" (at least {100 * CODEC_PERIOD_SHARE:.0f} %: a codec bends the pattern; "
-            f"its spread {flicker.period_rows_std:.2f})"
-        )
+        bent = "a codec bends the pattern"
+        if flicker.floor_share > CODEC_PERIOD_SHARE:
+            few = f"the scene more in a frame of only {flicker.periods:.2f} periods"
+            bent += f" by {100 * CODEC_PERIOD_SHARE:.0f} %, {few}"
+        floor = f" (at least {100 * flicker.floor_share:.2g} %: {bent}; its spread {flicker.period_rows_std:.2f})"
         notes.append(
             f"{detection.camera}: rolling flicker {hz}, period {flicker.period_rows:.2f} "
             f"± {sigma:.2f} readout rows{floor if sigma > flicker.period_rows_std else ''}, {depth}measured on "

@@ -325,7 +325,7 @@ def test_a_mains_flicker_that_contradicts_the_flashes_is_not_a_prior():
 
     def seen(c: int, hz: float, named: float) -> Flicker:
         period = 1000.0 / hz / truth[c, 2]
-        return Flicker(named, period, 0.001 * period, 0.03, 100, np.zeros(1))
+        return Flicker(named, period, 0.001 * period, 0.03, 100, np.zeros(1), detections[c].height)
 
     detections[1] = replace(detections[1], flicker=seen(1, 120.0, 120.0))
     detections[2] = replace(detections[2], flicker=seen(2, 100.0, 120.0))
