@@ -1599,6 +1599,15 @@ def _reading_edges(detection: CameraDetection) -> ReadingEdges:
 #: without its band's other half, it scatters about twice as much (MAD 0.53 rows against 0.33
 #: over the kept rigs).
 LONE_EDGE_SIGMA = 2.0
+#: Noise of a lone edge (its band's other edge beyond the frame's cut) whose ramp reaches the
+#: cut, in units of a clean one's; one ``r`` rises of its ramp from the cut has
+#: ``LONE_CUT_SIGMA / sqrt(r)``, at least 1. Against the truth over the kept random rigs 0-49
+#: (``bench_rigs.py``'s block "lone flash edges against the truth by their distance from the
+#: frame's cut") such edges spread 1.4 rows within two rises of the cut and 0.33-0.47 beyond
+#: sixteen, a paired edge 0.26-0.54. 4 gained most on those rigs, but on rigs whose sensors
+#: read out in part of their frame, which hold more lone edges and fewer flashes, more
+#: cameras came out further than 3 (README, "Lone edges weighed by their distance from the cut").
+LONE_CUT_SIGMA = 3.0
 
 
 def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
@@ -1606,12 +1615,23 @@ def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
     to noise (:func:`_faintness`), and a clipped band's
     (:data:`~flashsync.detect.SATURATED_EDGE_SIGMA`), one that the flash may have
     outlasted (:data:`~flashsync.detect.LONG_PULSE_EDGE_SIGMA`: flagged ``long_pulse``, or
-    :func:`_outreaching`) and a trailing edge whose leading edge is hidden
-    (:data:`LONE_EDGE_SIGMA`) noisier."""
+    :func:`_outreaching`) and a lone edge (:func:`_lone_sigma`) noisier."""
     outlasted = events.has_flag(Flag.LONG_PULSE) | _outreaching(detection, events)
-    lone = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
-    sigma = np.where(outlasted, LONG_PULSE_EDGE_SIGMA, np.where(lone, LONE_EDGE_SIGMA, 1.0))
+    sigma = np.maximum(np.where(outlasted, LONG_PULSE_EDGE_SIGMA, 1.0), _lone_sigma(detection, events))
     return _faintness(detection, events) * np.where(events.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, sigma)
+
+
+def _lone_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Each edge's noise as a lone edge, in units of a clean one's (1 for an edge of a whole
+    band; shape (n,)): from its ramp's distance to the frame's cut that hides its band's other
+    edge (:data:`LONE_CUT_SIGMA`), and a trailing one at least :data:`LONE_EDGE_SIGMA`."""
+    lone_trailing = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
+    lone_leading = (events.edge == Edge.LEADING) & events.has_flag(Flag.TRAILING_HIDDEN)
+    readout = _readout_rows(detection, events)
+    to_cut = np.where(events.edge == Edge.LEADING, detection.height - 1 - readout, readout)
+    rises = np.where(events.rise_rows > 0, to_cut / np.where(events.rise_rows > 0, events.rise_rows, 1.0), np.inf)
+    near = np.clip(LONE_CUT_SIGMA / np.sqrt(np.maximum(rises, 1.0)), 1.0, LONE_CUT_SIGMA)
+    return np.where(lone_trailing, np.maximum(near, LONE_EDGE_SIGMA), np.where(lone_leading, near, 1.0))
 
 
 def _trailing_sigma(detection: CameraDetection, edges: Events) -> np.ndarray:

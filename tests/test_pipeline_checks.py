@@ -23,10 +23,12 @@ from flashsync.model import SyncModel
 from flashsync.pipeline import (
     EDGE_NOISE_FLOOR_ROWS,
     EDGE_NOISE_QUALITY,
+    LONE_CUT_SIGMA,
     LONE_EDGE_SIGMA,
     NOMINAL_ROW_TIME_STD,
     _Attempt,
     _edge_sigma,
+    _lone_sigma,
     _pulse_lengths,
     _readout_doubts,
     _sync_events,
@@ -179,6 +181,32 @@ def test_a_faint_bands_edges_weigh_less_than_a_bright_ones():
     sigma = _edge_sigma(detection, events)
     assert sigma == pytest.approx(noise / noise[0] * [1.0, 1.0, 1.0, SATURATED_EDGE_SIGMA, 1.0])
     assert sigma[1] > 3.0 and 0.7 < sigma[2] < 0.75
+
+
+@pytest.mark.parametrize("flipped", [False, True])
+def test_a_lone_edge_is_weighed_down_as_its_ramp_nears_the_cut(flipped):
+    """A lone edge (its band's other edge hidden beyond the first or last readout row) is
+    noisier the fewer rises of its ramp lie between it and that row: ``LONE_CUT_SIGMA /
+    sqrt(rises)``, between 1 and ``LONE_CUT_SIGMA`` (within two rises of the cut such edges
+    spread 1.4 rows against the truth, beyond sixteen 0.33-0.47); a lone trailing edge at
+    least ``LONE_EDGE_SIGMA``; an edge of a whole band, or of a ramp of no known rise, 1."""
+    hidden = {Edge.LEADING: frozenset({Flag.TRAILING_HIDDEN}), Edge.TRAILING: frozenset({Flag.LEADING_HIDDEN})}
+    rises = np.array([0.5, 1.0, 4.0, 9.0, 25.0])  # from the cut, of a 4-row ramp
+    edges = [(Edge.LEADING, 179.0 - 4.0 * r, hidden[Edge.LEADING], 4.0) for r in rises]
+    edges += [(Edge.TRAILING, 4.0 * r, hidden[Edge.TRAILING], 4.0) for r in rises]
+    edges += [(Edge.LEADING, 60.0, frozenset(), 4.0), (Edge.TRAILING, 80.0, frozenset(), 4.0)]
+    edges += [(Edge.LEADING, 178.0, hidden[Edge.LEADING], math.nan)]
+    n = len(edges)
+    rows = [179.0 - q if flipped else q for _, q, _, _ in edges]
+    events = Events.from_columns(
+        ["cam"] * n, range(n), [3] * n, [120.0] * n, rows, [e[0] for e in edges], [Band.PULSE] * n,
+        [e[3] for e in edges], [0.5] * n, [50.0] * n, [e[2] for e in edges],
+    )  # fmt: skip
+    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, flipped=flipped)
+    near = np.clip(LONE_CUT_SIGMA / np.sqrt(np.maximum(rises, 1.0)), 1.0, LONE_CUT_SIGMA)
+    expected = [*near, *np.maximum(near, LONE_EDGE_SIGMA), 1.0, 1.0, 1.0]
+    assert _lone_sigma(detection, events) == pytest.approx(expected)
+    assert near[:3] == pytest.approx([LONE_CUT_SIGMA, LONE_CUT_SIGMA, LONE_CUT_SIGMA / 2])
 
 
 def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
