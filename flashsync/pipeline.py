@@ -1626,13 +1626,21 @@ def _lone_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
     band; shape (n,)): from its ramp's distance to the frame's cut that hides its band's other
     edge (:data:`LONE_CUT_SIGMA`; a ramp of no known rise counts as far), and a trailing one
     at least :data:`LONE_EDGE_SIGMA`."""
-    lone_trailing = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
-    lone_leading = (events.edge == Edge.LEADING) & events.has_flag(Flag.TRAILING_HIDDEN)
-    readout = _readout_rows(detection, events)
-    to_cut = np.where(events.edge == Edge.LEADING, detection.height - 1 - readout, readout)
+    to_cut = _rows_to_cut(detection, events)
     rises = np.nan_to_num(to_cut / np.where(events.rise_rows > 0, events.rise_rows, np.nan), nan=np.inf)
     near = np.clip(LONE_CUT_SIGMA / np.sqrt(np.maximum(rises, 1.0)), 1.0, LONE_CUT_SIGMA)
-    return np.where(lone_trailing, np.maximum(near, LONE_EDGE_SIGMA), np.where(lone_leading, near, 1.0))
+    lone_trailing = np.isfinite(to_cut) & (events.edge == Edge.TRAILING)
+    return np.where(lone_trailing, np.maximum(near, LONE_EDGE_SIGMA), near)
+
+
+def _rows_to_cut(detection: CameraDetection, events: Events) -> np.ndarray:
+    """Each lone edge's readout rows to the frame's cut that hides its band's other edge: a
+    trailing edge whose leading one is hidden to the first row, a leading edge whose trailing
+    one is hidden to the last; NaN for the other edges. Shape (n,)."""
+    q = _readout_rows(detection, events)
+    lone_trailing = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
+    lone_leading = (events.edge == Edge.LEADING) & events.has_flag(Flag.TRAILING_HIDDEN)
+    return np.where(lone_trailing, q, np.where(lone_leading, detection.height - 1 - q, np.nan))
 
 
 def _trailing_sigma(detection: CameraDetection, edges: Events) -> np.ndarray:
@@ -1728,11 +1736,7 @@ def _outreaching(detection: CameraDetection, events: Events) -> np.ndarray:
     exposure = _exposure_rows(detection)
     if exposure is None:
         return np.zeros(len(events), dtype=bool)
-    q = _readout_rows(detection, events)
-    reach = LONE_REACH * exposure
-    leading_cut = events.has_flag(Flag.LEADING_HIDDEN) & (events.edge == Edge.TRAILING) & (q > reach)
-    trailing_cut = events.has_flag(Flag.TRAILING_HIDDEN) & (events.edge == Edge.LEADING)
-    return leading_cut | (trailing_cut & (detection.height - 1 - q > reach))
+    return np.nan_to_num(_rows_to_cut(detection, events), nan=0.0) > LONE_REACH * exposure
 
 
 def _sync_events(detection: CameraDetection) -> Events:
