@@ -1689,11 +1689,19 @@ LONE_REACH = 1.1
 def _exposure_rows(detection: CameraDetection) -> float | None:
     """The camera's exposure, readout rows: the one its bands share
     (:attr:`~flashsync.detect.CameraDetection.exposure_rows`), else the median length of its
-    timing bands within one frame (fewer than three were fitted); None without either."""
+    timing bands within one frame (fewer than three were fitted), else the least its lone
+    edges allow: a band reaches at least as far as any lone edge lies from the frame's cut
+    (:func:`_rows_to_cut`; an exposure longer than the readout leaves no band whole). None
+    without any. It places a lone trailing edge's flash for matching; the solve fits the
+    exposure itself."""
     if detection.exposure_rows is not None:
         return detection.exposure_rows
     lengths = _whole_bands(detection.events)[1]
-    return float(np.median(lengths)) if len(lengths) else None
+    if len(lengths):
+        return float(np.median(lengths))
+    reach = _rows_to_cut(detection, detection.events)
+    reach = reach[np.isfinite(reach)]
+    return float(reach.max()) if len(reach) else None
 
 
 def _whole_bands(events: Events) -> tuple[Bands, np.ndarray]:
@@ -1743,8 +1751,8 @@ def _sync_events(detection: CameraDetection) -> Events:
     """The synchronisation events, one edge per band: its leading edge, or where that is
     hidden (a flash during the vertical blanking or just before it) the trailing edge of a
     clean pulse band (unclipped, not ``long_pulse``, not :func:`_outreaching`), one exposure
-    after its flash: of a camera whose exposure is known (:func:`_exposure_rows`), which
-    places the flash (:func:`_start_times_ms`)."""
+    after its flash: of a camera with an exposure to place the flash by for matching
+    (:func:`_exposure_rows`, :func:`_start_times_ms`)."""
     events = detection.events
     leading = events.edge == Edge.LEADING
     if _exposure_rows(detection) is None:
