@@ -28,6 +28,7 @@ from flashsync.pipeline import (
     NOMINAL_ROW_TIME_STD,
     _Attempt,
     _edge_sigma,
+    _exposure_rows,
     _lone_sigma,
     _pulse_lengths,
     _readout_doubts,
@@ -114,7 +115,9 @@ def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it
     a leading edge whose trailing one is hidden that far from the last row is weighed down
     as a pulse outlasting the exposure, one nearer counts as any other. Where the detector
     fitted no common exposure, the camera's whole bands' median length stands in; without
-    those, neither rule applies."""
+    those, the least exposure its lone edges allow (79 rows: event 4's leading edge lies 79
+    rows from the last row), so its lone trailing edges are sync events and no lone edge
+    lies further in than the exposure."""
     hidden = {"leading": frozenset({Flag.LEADING_HIDDEN}), "trailing": frozenset({Flag.TRAILING_HIDDEN})}
     edges = [  # (event, readout row, edge, flags)
         (0, 50.0, Edge.LEADING, frozenset()), (0, 70.0, Edge.TRAILING, frozenset()),
@@ -138,10 +141,11 @@ def test_a_band_cut_by_the_readout_end_is_a_sync_event_within_one_exposure_of_it
     assert _edge_sigma(detection, sync).tolist() == [1.0, LONE_EDGE_SIGMA, 1.0, LONG_PULSE_EDGE_SIGMA]
     unfitted = replace(detection, top_down_exposure_rows=None, bottom_up_exposure_rows=None)
     assert _sync_events(unfitted).event.tolist() == [0, 1, 3, 4]  # its whole band's 20 rows stand in
-    partial = events.take(np.arange(n) != 1)  # no whole band: the exposure is unknown
+    partial = events.take(np.arange(n) != 1)  # no whole band: the exposure from its lone edges
     unknown = replace(unfitted, top_down=partial, bottom_up=partial if flipped else None)
-    assert _sync_events(unknown).event.tolist() == [0, 3, 4]
-    assert _edge_sigma(unknown, _sync_events(unknown)).tolist() == [1.0, 1.0, 1.0]
+    assert _exposure_rows(unknown) == 79.0
+    assert _sync_events(unknown).event.tolist() == [0, 1, 2, 3, 4]
+    assert _edge_sigma(unknown, _sync_events(unknown)).tolist() == [1.0, LONE_EDGE_SIGMA, LONE_EDGE_SIGMA, 1.0, 1.0]
 
 
 def test_only_bands_longer_than_the_exposure_others_share_are_taken_for_their_pulses():
