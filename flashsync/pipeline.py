@@ -239,8 +239,7 @@ def synchronize(
 
     Events are matched at each camera's nominal time per row; a sensor that reads its rows
     in part of its frame period may then be left untied, and is matched again at shorter
-    ones (:func:`_tie_fast_readouts`): on the readings chosen, or, where nothing solves at
-    the nominal, in every attempt.
+    ones (:func:`_tie_fast_readouts`), in every attempt the readout search makes.
     """
     reference = reference or detections[0].camera
     names = [d.camera for d in detections]
@@ -251,13 +250,7 @@ def synchronize(
         )
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
-    try:
-        return _synchronized(detections, reference, row_times, anchors, retie=False)
-    except NotEnoughDataError as failure:  # a camera reading fast may not have matched at the nominal
-        try:
-            return _synchronized(detections, reference, row_times, anchors, retie=True)
-        except FlashsyncError:
-            raise failure from None
+    return _synchronized(detections, reference, row_times, anchors)
 
 
 def _synchronized(
@@ -265,12 +258,8 @@ def _synchronized(
     reference: str,
     row_times: dict[str, float] | None,
     anchors: Sequence[str],
-    retie: bool,
 ) -> tuple[SyncModel, SyncReport]:
-    """:func:`synchronize` on checked arguments. ``retie``: every attempt matches the
-    cameras it leaves untied again at shorter times per row (:func:`_tie_fast_readouts`);
-    else only the last, on the readings chosen, and only where that ties more cameras
-    (:func:`_retied`)."""
+    """:func:`synchronize` on checked arguments."""
     names = [d.camera for d in detections]
     as_rolled = [d.read_as_rolled() for d in detections]  # where its flicker's roll tells its readout
     rolled = [d.camera for d, read in zip(detections, as_rolled) if read is not d]
@@ -283,7 +272,7 @@ def _synchronized(
     memo: dict = {}  # pair alignments shared by the attempts (a flip changes only that camera's pairs)
 
     def attempt_on(on: str) -> Callable[[dict[str, CameraDetection]], _Attempt]:
-        return lambda trial: _attempt(trial, on, row_times, anchors, rate_std, memo, retie=retie)
+        return lambda trial: _attempt(trial, on, row_times, anchors, rate_std, memo)
 
     # The choices (readouts, frame times) are made in name order on a reference that neither
     # the camera order nor the reference given decides (:func:`_search_reference`); the
@@ -309,11 +298,9 @@ def _synchronized(
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
-    if not retie:
-        chosen = best.cameras
-        best, retie = _retied(best, lambda: _attempt(chosen, reference, row_times, anchors, rate_std, memo, retie=True))
+    best, backward_warnings = _without_backward_readings(best, attempt_on(reference))
     if any(alignment.others for alignment in best.alignments.values()):
-        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True, retie=retie)
+        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     best = best.with_flash_scatter()
@@ -322,6 +309,7 @@ def _synchronized(
         best.warnings
         + clock_warnings
         + readout_warnings
+        + backward_warnings
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
@@ -339,6 +327,37 @@ def _synchronized(
     for name, clock in model.cameras.items():
         clock.frame_std_ms = frame_std[name]
     return model, report
+
+
+def _without_backward_readings(
+    best: _Attempt, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> tuple[_Attempt, list[str]]:
+    """``best`` solved again without the cameras whose time per row comes out negative, and
+    a warning naming each. Read the wrong way up (an upside-down camera given upright, or an
+    upright one given as ``--flipped``), a camera's bands still fit the other cameras'
+    flashes with its rows running backwards in time, its times wrong by up to a frame under
+    a small sigma. Raises where the reference is one of them (the others' times would be
+    wrong with it), or where too few cameras are left."""
+    warnings = []
+    while True:
+        row_times = {name: camera.row_time_ms for name, camera in zip(best.connected, best.solution.cameras)}
+        backward = [name for name, row_time in row_times.items() if row_time <= 0]
+        if not backward:
+            return best, warnings
+        for name in backward:
+            detection = best.cameras[name]
+            why = (
+                f"read {'bottom-up' if detection.flipped else 'top-down'}, its time per row comes out "
+                f"{row_times[name]:.5f} ms: its rows would run backwards in time, so it is read the wrong way up "
+                "(check --flipped)"
+            )
+            if name == best.reference:
+                raise NotEnoughDataError(f"{detection.video}, the reference: {why}; or give another --reference")
+            warnings.append(f"{detection.video}: {why}; left out")
+        try:
+            best = attempt({name: d for name, d in best.cameras.items() if name not in backward})
+        except NotEnoughDataError as error:
+            raise NotEnoughDataError(f"{'; '.join(warnings)}; then {error}") from None
 
 
 def check_row_times(row_times: dict[str, float], cameras: Sequence[str]) -> None:
@@ -972,15 +991,6 @@ class _Attempt:
         return edge_log_likelihood(sigma, self.n_edges, _uniform_ms(self.cameras))
 
     @cached_property
-    def untied(self) -> list[str]:
-        """Cameras left untied that have the sync events to be matched (:data:`MIN_SYNC_EVENTS`)."""
-        return [
-            name
-            for name, detection in self.cameras.items()
-            if name not in self.connected and len(_sync_events(detection)) >= MIN_SYNC_EVENTS
-        ]
-
-    @cached_property
     def n_edges(self) -> int:
         """Every band edge the cameras' readings hold, fitted or not (what a score counts)."""
         return sum(len(_sync_events(d)) + len(_trailing_edges(d)) for d in self.cameras.values())
@@ -1044,13 +1054,13 @@ def _attempt(
     rate_std: dict[str, float] | None = None,
     memo: dict | None = None,
     other_shifts: bool = False,
-    retie: bool = False,
 ) -> _Attempt:
     """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
     the relative standard error of its frame clock's rate (it and the reference's widen the
     prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`);
-    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`); ``retie``:
-    match the cameras left untied again at shorter times per row (:func:`_tie_fast_readouts`)."""
+    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`). The cameras
+    the nominal time per row leaves untied are matched again at shorter ones
+    (:func:`_tie_fast_readouts`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
     usable = [name for name, events in sync_events.items() if len(events) >= MIN_SYNC_EVENTS]
     warnings = [
@@ -1073,33 +1083,12 @@ def _attempt(
     def matched(times: dict[str, np.ndarray]) -> Matching:
         return match_events(times, tolerance, anchor_events, memo, strengths)
 
-    matching = matched(times)
-    if retie:
-        matching = _tie_fast_readouts(matching, times, reference, cameras, sync_events, matched)
+    matching = _tie_fast_readouts(matched(times), times, reference, cameras, sync_events, matched)
 
     def solved(matching: Matching) -> _Attempt:
         return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)
 
     return _shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts)
-
-
-def _retied(best: _Attempt, retied: Callable[[], _Attempt]) -> tuple[_Attempt, bool]:
-    """The attempt ``retied`` makes (``best``'s readings, the cameras it left untied matched
-    again at shorter times per row: :func:`_tie_fast_readouts`) where that ties more cameras
-    and every one it adds times its rows as a sensor can (:attr:`_Attempt.implausible`: a
-    camera read the wrong way up can be tied so), and whether it was taken; else ``best``.
-    Made once the readings are chosen, whose search compares attempts that tie the same
-    cameras the same way; not made where no camera :attr:`~_Attempt.untied` is left."""
-    if not best.untied:
-        return best, False
-    try:
-        other = retied()
-    except FlashsyncError:
-        return best, False
-    added = set(other.connected) - set(best.connected)
-    if not added or set(best.connected) - set(other.connected) or added & set(other.implausible):
-        return best, False
-    return other, True
 
 
 def _tie_fast_readouts(
@@ -1110,27 +1099,45 @@ def _tie_fast_readouts(
     sync_events: dict[str, Events],
     matched: Callable[[dict[str, np.ndarray]], Matching],
 ) -> Matching:
-    """``matching`` with each camera the nominal time per row leaves untied to ``reference``
-    matched again at the share of it (:data:`FAST_READOUT_SHARES`) that ties it with the
-    most of its events, where one does and no camera tied before comes loose. ``times``: the
-    events' approximate times the matching was made on (:func:`_start_times_ms`); ``matched``
-    matches a set of them. The reference is tried first where it is tied to no camera (and
-    has the events to be matched: ``times`` holds it)."""
-    tied = matching.tied_to(reference)
+    """``matching`` where the nominal time per row leaves cameras untied to ``reference``:
+    first every camera matched at one share of it (:data:`FAST_READOUT_SHARES`; a rig of
+    sensors that all read fast), the share that ties the most cameras where it ties more;
+    then each camera still untied matched again at the share that ties it with the most of
+    its events, where one does and no camera tied before comes loose. ``times``: the events'
+    approximate times the matching was made on (:func:`_start_times_ms`); ``matched``
+    matches a set of them. The reference is tried first where it is tied to no camera. Only
+    cameras with the events to be matched (``times`` holds them) are tried, the reference
+    among them. A camera of an undecided pair counts as tied: the edges' fit decides its
+    shift (:func:`_shifts_by_fit`; matched again, a pre-flash's shift could line up alone,
+    60 ms off with no word)."""
+
+    def reached(matching: Matching) -> set[str]:
+        return matching.tied_to(reference) | {name for pair in matching.undecided for name in pair}
+
+    tied = reached(matching)
+    if reference not in times or len(tied) == len(times):
+        return matching
+    trials = []
+    for share in FAST_READOUT_SHARES:
+        retimed = {name: _start_times_ms(cameras[name], sync_events[name], share) for name in times}
+        trials.append((matched(retimed), retimed))
+    trial, retimed = max(trials, key=lambda entry: len(reached(entry[0])), default=(matching, times))
+    if len(reached(trial)) > len(tied):
+        matching, times, tied = trial, retimed, reached(trial)
     loose = [name for name in times if name not in tied]
-    if loose and len(tied) == 1 and reference in times:
+    if len(tied) == 1:
         loose.insert(0, reference)
     for name in loose:
         best, most = None, 0
         for share in FAST_READOUT_SHARES:
             retimed = {**times, name: _start_times_ms(cameras[name], sync_events[name], share)}
             trial = matched(retimed)
-            now = trial.tied_to(reference)
+            now = reached(trial)
             count = sum(camera == name for camera, _ in trial.flashes)
             if name in now and tied <= now and count > most:
                 best, most = (trial, retimed), count
         if best is not None:
-            (matching, times), tied = best, best[0].tied_to(reference)
+            (matching, times), tied = best, reached(best[0])
     return matching
 
 
