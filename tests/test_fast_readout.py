@@ -29,10 +29,8 @@ def same_row(tmp_path_factory):
     )
     frames_apart = np.random.default_rng(1).choice([7, 8, 9, 11, 12, 13], 16)  # irregular: a pattern to match
     flashes = tuple(FlashSpec(410.0 + 40.0 * float(n), 0.5) for n in np.cumsum(frames_apart))
-    scenario = Scenario("same-row", cameras, duration_ms=6000.0, flashes=flashes, n_players=0, seed=1)
-    folder = tmp_path_factory.mktemp("same-row")
-    truth = render_scenario(scenario, folder)
-    model, report = synchronize(detect_videos([folder / f"{c.name}.mp4" for c in cameras], estimate_readout=False))
+    truth, detections = _rendered(tmp_path_factory, "same-row", cameras, flashes, estimate_readout=False)
+    model, report = synchronize(detections)
     return truth, model, report
 
 
@@ -63,13 +61,23 @@ def fast_and_full(tmp_path_factory):
         CameraSpec("cam1", 320, 180, 25.0, r0=6, r1=227, exposure_ms=4.0, start_ms=500.0, offset_ms=-480.0),
         CameraSpec("cam2", 320, 180, 50.0, r0=8, r1=6, exposure_ms=3.0, start_ms=200.0, offset_ms=150.0),
     )
+    return _rendered(tmp_path_factory, "fast-and-full", cameras, _irregular_flashes(), estimate_readout=False)
+
+
+def _irregular_flashes() -> tuple[FlashSpec, ...]:
+    """Sixteen flashes 150 ms + an exponential of 200 ms mean apart (a pattern to match),
+    strengths 0.4-0.7."""
     rng = np.random.default_rng(1)
     instants = 300.0 + np.cumsum(150.0 + rng.exponential(200.0, 60))
-    flashes = tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.4, 0.7)), 3)) for t in instants)
-    scenario = Scenario("fast-and-full", cameras, 6000.0, flashes=flashes[:16], n_players=0, seed=1)
-    folder = tmp_path_factory.mktemp("fast-and-full")
-    truth = render_scenario(scenario, folder)
-    return truth, detect_videos([folder / f"{c.name}.mp4" for c in cameras], estimate_readout=False)
+    return tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.4, 0.7)), 3)) for t in instants)[:16]
+
+
+def _rendered(tmp_path_factory, name: str, cameras: tuple, flashes: tuple, duration_ms: float = 6000.0, **detect):
+    """The truth and detections (``detect``: options of :func:`detect_videos`) of cameras
+    that see ``flashes`` and nothing else for ``duration_ms``."""
+    folder = tmp_path_factory.mktemp(name)
+    truth = render_scenario(Scenario(name, cameras, duration_ms, flashes=flashes, n_players=0, seed=1), folder)
+    return truth, detect_videos([folder / f"{c.name}.mp4" for c in cameras], **detect)
 
 
 def test_a_camera_that_reads_fast_is_tied_not_left_out(fast_and_full, monkeypatch):
@@ -123,13 +131,7 @@ def all_fast(tmp_path_factory):
         CameraSpec("cam1", 320, 180, 25.0, r0=6, r1=264, exposure_ms=4.0, start_ms=500.0, offset_ms=-480.0),
         CameraSpec("cam2", 320, 180, 50.0, r0=8, r1=264, exposure_ms=3.0, start_ms=200.0, offset_ms=150.0),
     )
-    rng = np.random.default_rng(1)
-    instants = 300.0 + np.cumsum(150.0 + rng.exponential(200.0, 60))
-    flashes = tuple(FlashSpec(round(float(t), 3), round(float(rng.uniform(0.4, 0.7)), 3)) for t in instants)
-    scenario = Scenario("all-fast", cameras, 6000.0, flashes=flashes[:16], n_players=0, seed=1)
-    folder = tmp_path_factory.mktemp("all-fast")
-    truth = render_scenario(scenario, folder)
-    return truth, detect_videos([folder / f"{c.name}.mp4" for c in cameras], estimate_readout=False)
+    return _rendered(tmp_path_factory, "all-fast", cameras, _irregular_flashes(), estimate_readout=False)
 
 
 def test_a_rig_whose_every_camera_reads_fast_is_matched_at_one_share(all_fast):
@@ -166,10 +168,7 @@ def long_bands(tmp_path_factory):
     camera_ms = 500.0 + 20.0 * np.floor((instants + 480.0 - 500.0) / 20.0) + into_frame
     strengths = rng.uniform(0.4, 0.7, 16)
     flashes = tuple(FlashSpec(round(float(t - 480.0), 3), round(float(s), 3)) for t, s in zip(camera_ms, strengths))
-    scenario = Scenario("long-bands", cameras, 6500.0, flashes=flashes, n_players=0, seed=1)
-    folder = tmp_path_factory.mktemp("long-bands")
-    truth = render_scenario(scenario, folder)
-    return truth, detect_videos([folder / f"{c.name}.mp4" for c in cameras])
+    return _rendered(tmp_path_factory, "long-bands", cameras, flashes, duration_ms=6500.0)
 
 
 def test_lone_trailing_edges_tie_a_camera_whose_bands_outlast_its_readout(long_bands):
