@@ -253,7 +253,11 @@ def _parser() -> argparse.ArgumentParser:
     sync = command("sync", "Detect, match and solve: write the model file sync.json.", _run_sync)
     sync.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
     sync.add_argument("-o", "--output", type=Path, default=Path("sync.json"), help="model file (default: sync.json)")
-    sync.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
+    sync.add_argument(
+        "--reference",
+        help="camera whose clock is the global clock (default: the first, or where it shares too few flashes with "
+        "the others, the camera of them with the most matched flashes)",
+    )
     sync.add_argument(
         "--row-time",
         action="append",
@@ -386,7 +390,7 @@ def _parser() -> argparse.ArgumentParser:
         _run_diagnose,
     )
     diagnose.add_argument("videos", nargs="+", type=Path, metavar="VIDEO")
-    diagnose.add_argument("--reference", help="camera whose clock is the global clock (default: first)")
+    diagnose.add_argument("--reference", help="camera whose clock is the global clock (default: as sync)")
     diagnose.add_argument(
         "-o",
         "--output",

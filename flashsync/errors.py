@@ -39,3 +39,19 @@ class ModelFileError(InputError):
 class NotEnoughDataError(FlashsyncError):
     """Valid data that cannot determine the answer: too few flashes, cameras that share too
     few events, a video too short."""
+
+
+class UntiedReferenceError(NotEnoughDataError):
+    """A reference camera that shares too few flashes with any other to be tied to it.
+
+    Parameters
+    ----------
+    message : str
+    instead : str, optional
+        The camera to take as the reference instead: of the largest group of cameras tied
+        among themselves, the one with the most matched events (None: no two are tied).
+    """
+
+    def __init__(self, message: str, *, instead: str | None = None):
+        super().__init__(message)
+        self.instead = instead

@@ -32,7 +32,7 @@ from flashsync.detect import (
     DetectorSettings,
     detect_video,
 )
-from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError
+from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
@@ -232,7 +232,9 @@ def synchronize(
         up has its readout direction chosen here: the way its rolling mains flicker rolls
         where that tells (:meth:`~flashsync.detect.CameraDetection.read_as_rolled`), else the
         way that explains the flashes best.
-    reference : camera whose clock is the global clock; default the first.
+    reference : camera whose clock is the global clock; default the first, or where the first
+        shares too few flashes with the others to be tied to them, the camera with the most
+        matched events of the largest group tied among themselves (with a warning).
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
         the detector's event number, as in the events table and the model's events.
@@ -241,16 +243,28 @@ def synchronize(
     in part of its frame period may then be left untied, and is matched again at shorter
     ones (:func:`_tie_fast_readouts`), in every attempt the readout search makes.
     """
-    reference = reference or detections[0].camera
     names = [d.camera for d in detections]
-    if reference not in names:
+    if reference is not None and reference not in names:
         raise InputError(
             f"{reference}: no such camera among {', '.join(names)}; the reference must be one of them",
             parameter="reference",
         )
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
-    return _synchronized(detections, reference, row_times, anchors)
+    try:
+        return _synchronized(detections, reference or names[0], row_times, anchors)
+    except UntiedReferenceError as untied:
+        if reference is not None or untied.instead is None:
+            raise
+        instead = untied.instead
+    model, report = _synchronized(detections, instead, row_times, anchors)
+    report.warnings.insert(
+        0,
+        f"{detections[0].video}: the first video, the reference unless one is given, shares too few flashes with "
+        f"the other cameras to be tied to them; {instead}'s clock is the global clock instead (of the cameras "
+        "tied among themselves, the one with the most matched flashes; --reference chooses another)",
+    )
+    return model, report
 
 
 def _synchronized(
@@ -1384,10 +1398,12 @@ def _solved(
         if name not in connected
     ]
     if reference not in connected or len(connected) < 2:
-        raise NotEnoughDataError(
+        found = _reference_instead(matching, usable, reference)
+        raise UntiedReferenceError(
             f"no camera shares enough flashes with {reference} to tell them from a chance coincidence (at least "
             f"{MIN_SHARED_FLASHES}, whose intervals match); check that the videos overlap in time and saw the "
-            f"same flashes, or record more flashes{another_reference(matching, usable, reference)}"
+            f"same flashes, or record more flashes{another_reference(matching, usable, reference)}",
+            instead=found[1] if found else None,
         )
     matches = _matches([cameras[name] for name in connected], sync_events, matching.flashes)
     chosen = [cameras[name] for name in connected]
@@ -1446,18 +1462,28 @@ def _solved(
     )
 
 
-def another_reference(matching: Matching, usable: list[str], reference: str) -> str:
-    """Words naming the largest group of two or more ``usable`` cameras tied among
-    themselves without ``reference``, and the one of them with the most matched events as
-    the reference to give instead; empty where there is no such group."""
+def _reference_instead(matching: Matching, usable: list[str], reference: str) -> tuple[list[str], str] | None:
+    """The largest group of two or more ``usable`` cameras tied among themselves without
+    ``reference``, and the one of them with the most matched events; None where there is no
+    such group."""
     largest = max((matching.tied_to(name) for name in usable if name != reference), key=len, default=set())
     if len(largest) < 2:  # the reference is tied to none of them: none of these groups holds it
-        return ""
+        return None
     group = [name for name in usable if name in largest]
     matched = [sum(camera == name for camera, _ in matching.flashes) for name in group]
+    return group, group[int(np.argmax(matched))]
+
+
+def another_reference(matching: Matching, usable: list[str], reference: str) -> str:
+    """Words naming the cameras tied among themselves without ``reference`` and the one to
+    give as the reference instead (:func:`_reference_instead`); empty where there are none."""
+    found = _reference_instead(matching, usable, reference)
+    if found is None:
+        return ""
+    group, instead = found
     return (
         f"; {', '.join(group)} share enough among themselves: make one of them the reference "
-        f"(--reference {group[int(np.argmax(matched))]}) to sync them without {reference}"
+        f"(--reference {instead}) to sync them without {reference}"
     )
 
 

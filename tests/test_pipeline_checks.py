@@ -375,16 +375,47 @@ def test_a_mains_flicker_that_contradicts_the_flashes_is_not_a_prior():
 
 
 def test_a_reference_tied_to_no_camera_names_the_cameras_tied_without_it():
-    """The reference saw two of the flashes, the other cameras all thirty: nothing can be
-    tied to it, and the error names the cameras tied among themselves and the one to give
-    as the reference instead (a random rig's first camera saw two of six flashes); so does
-    diagnose's."""
+    """The first camera saw two of the flashes, the others all thirty: nothing can be tied to
+    it. Given as the reference, the error names the cameras tied among themselves and the
+    one to give as the reference instead (a random rig's first camera saw two of six
+    flashes); so does diagnose's."""
+    detections, *_ = _first_camera_saw_two_flashes()
+    with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
+        synchronize(detections, reference="cam0")
+    with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
+        diagnose(detections, reference="cam0")
+
+
+def test_a_first_video_tied_to_no_camera_leaves_the_reference_to_the_others():
+    """Not given a reference, ``sync`` took the first video and failed where it shares too
+    few flashes with the others (9 of 44 fast-readout random rigs; with another reference 5
+    of them sync). Now the camera the error would name is the reference, and the first
+    line of the report says so; the others' clocks come out right on its clock, and
+    ``diagnose`` takes the same reference."""
+    detections, truth, frames = _first_camera_saw_two_flashes()
+    model, report = synchronize(detections)
+    assert set(model.cameras) == {"cam1", "cam2"} and model.reference in model.cameras
+    assert report.warnings[0].startswith(
+        f"{detections[0].video}: the first video, the reference unless one is given, shares too few flashes"
+    ), report.warnings
+    assert f"{model.reference}'s clock is the global clock instead" in report.warnings[0]
+    other = ({"cam1", "cam2"} - {model.reference}).pop()
+    (a_ref, b_ref, _), (a, b, _) = truth[int(model.reference[3:])], truth[int(other[3:])]
+    start_ref, start = frames[int(model.reference[3:])][0], frames[int(other[3:])][0]  # the stamps' zeros
+    clock = model.cameras[other]
+    assert clock.alpha == pytest.approx(a / a_ref, abs=1e-6)
+    assert clock.beta_ms == pytest.approx((a * start + b - a_ref * start_ref - b_ref) / a_ref, abs=0.05)
+    for c, name in ((1, "cam1"), (2, "cam2")):
+        row_time, std = model.cameras[name].row_time_ms, np.sqrt(model.cameras[name].covariance[2, 2])
+        assert abs(row_time - truth[c, 2]) < 3 * std and std < 0.01 * truth[c, 2]
+    assert diagnose(detections).sync_model.reference == model.reference
+
+
+def _first_camera_saw_two_flashes():
+    """Three synthetic cameras (cam0 first) of thirty flashes of which cam0 saw two: their
+    detections, true (alpha, beta_ms, row_time_ms) on cam0's clock (shape (3, 3)) and frame
+    times on their own clocks (ms; the stamps start at each one's first)."""
     events, truth, frames = synthetic_events(3, 30, seed=1)
     keep = (events.camera != 0) | (events.flash < 2)
     columns = {name: getattr(events, name)[keep] for name in ("camera", "flash", "t_frame_ms", "q")}
-    seen = replace(events, **columns)
-    detections = synthetic_detections(seen, truth, frames)
-    with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
-        synchronize(detections)
-    with pytest.raises(NotEnoughDataError, match=r"cam1, cam2 share enough among themselves: .*\(--reference cam"):
-        diagnose(detections)
+    return synthetic_detections(replace(events, **columns), truth, frames), truth, frames

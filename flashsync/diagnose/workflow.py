@@ -250,7 +250,7 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     Parameters
     ----------
     detections : one per camera, from :func:`flashsync.pipeline.detect_videos`.
-    reference : camera whose clock is the global clock; default the first.
+    reference : camera whose clock is the global clock; default :func:`synchronize`'s.
 
     Returns
     -------
@@ -268,6 +268,8 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     """
     detections = [d.read_as_rolled() for d in detections]  # as sync reads them
     synced = _synchronized(detections, reference)
+    if reference is None and synced:  # sync's, where the first video could not be the reference
+        reference = synced[0].reference
     paired = measure(detections, reference, paired_by=synced[0] if synced else None)
     measurement = _flicker_sync_trusts(paired, synced[1] if synced else None)
     plain = fit_candidate(measurement, frozenset())
