@@ -262,7 +262,7 @@ def synchronize(
         0,
         f"{detections[0].video}: the first video, the reference unless one is given, shares too few flashes with "
         f"the other cameras to be tied to them; {instead}'s clock is the global clock instead (of the cameras "
-        "tied among themselves, the one with the most matched flashes; --reference chooses another)",
+        "tied among themselves, the one with the most matched flashes; name the reference to choose another)",
     )
     return model, report
 
