@@ -198,24 +198,54 @@ def test_fewer_than_two_cameras(tiny_scenario, capsys):
     one_error_line(err, "two or more cameras", "cam1.mp4: 4")
 
 
-def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, capsys):
-    # cam1 sees four flashes, cam2's clip is cut to its first two: 2 shared events
+def _cut(video: Path, until_ms: float, out: Path) -> Path:
+    """The frames of ``video`` up to ``until_ms`` (its own stamps, ms), encoded again to ``out``."""
     import av
 
     from flashsync.simulation.encode import write_video
 
     frames, pts = [], []
-    with av.open(str(tiny_scenario / "cam2.mkv")) as container:
+    with av.open(str(video)) as container:
         time_base = container.streams.video[0].time_base
         for frame in container.decode(video=0):
-            if frame.time * 1000 > 1934 + 40:
+            if frame.time * 1000 > until_ms:
                 break
             frames.append(frame.to_ndarray(format="gray"))
             pts.append(frame.pts)
-    write_video(tmp_path / "short.mkv", frames, pts, time_base)
-    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", tmp_path / "short.mkv", "-o", tmp_path / "sync.json")
+    write_video(out, frames, pts, time_base)
+    return out
+
+
+def test_cameras_sharing_fewer_events_than_unknowns(tiny_scenario, tmp_path, capsys):
+    # cam1 sees four flashes, cam2's clip is cut to its first two: 2 shared events
+    short = _cut(tiny_scenario / "cam2.mkv", 1934 + 40, tmp_path / "short.mkv")
+    code, _, err = run(capsys, "sync", tiny_scenario / "cam1.mp4", short, "-o", tmp_path / "sync.json")
     assert code == 1
     one_error_line(err, "share")
+
+
+def test_a_first_video_tied_to_no_camera_hands_the_reference_to_the_others(three_cameras, tmp_path, capsys):
+    """``a`` cut to its first second sees one of the three flashes. Given first, with no
+    reference, ``sync`` used to stop; now it writes the model on the clock of ``b`` or ``c``
+    (0.058 and 0.042 ms RMS off the truth on ``b``'s) and its first warning line says so.
+    Given as the reference, ``a`` stops it with one line."""
+    short = _cut(three_cameras / "a.mp4", 1000.0, tmp_path / "a.mp4")
+    others = [three_cameras / "b.mkv", three_cameras / "c.mp4"]
+    code, _, err = run(capsys, "sync", short, *others, "-o", tmp_path / "sync.json")
+    assert code == 0, err
+    model = load_model(tmp_path / "sync.json")
+    assert set(model.cameras) == {"b", "c"}
+    warnings = [line for line in err.splitlines() if "warning:" in line]
+    assert (
+        f"{short}: the first video, the reference unless one is given, shares too few flashes" in warnings[0]
+        and f"{model.reference}'s clock is the global clock instead" in warnings[0]
+    ), err
+    errors = sync_errors(model, load_ground_truth(three_cameras / "truth.json"))
+    assert errors["rms_ms"].max() < 0.2, errors
+    code, _, err = run(capsys, "sync", short, *others, "--reference", "a", "-o", tmp_path / "again.json")
+    assert code == 1
+    one_error_line(err, "no camera shares enough flashes with a")
+    assert not (tmp_path / "again.json").exists()
 
 
 def test_detections_without_required_columns(tiny_scenario, tmp_path, capsys):
