@@ -440,8 +440,11 @@ class _Lock:
         the rows) than :data:`MAX_DEVIATION` times the typical distance from the one predicted
         from the frame before (a band the harmonics of a long period would take in moves it
         far), or, without a prediction, no more than :data:`MAX_AMPLITUDE_FACTOR` times the
-        learned amplitude. Keeps the typical distance and residual scale of the frames
-        that pass."""
+        learned amplitude. Keeps the typical distance of the frames that pass, and the
+        residual scale of those fitted without a prediction: the others are fitted at this
+        scale and given it back (:func:`_fit_frame`), so that a band does not widen it
+        (made to follow every frame's own scale, the kept rigs came out worse: README,
+        "Fewer than one period a frame")."""
         if self.last is None:
             if math.hypot(coef[1], coef[2]) > MAX_AMPLITUDE_FACTOR * self.amplitude:
                 return False
@@ -745,7 +748,8 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
     scale is ``scale_hint`` where positive (the scale of recent frames: a band does not
     widen it), else the robust scale of each iteration's residuals.
 
-    Returns (coef, scale, gn_num, gn_den, ok): the robust residual scale; the Gauss-Newton
+    Returns (coef, scale, gn_num, gn_den, ok): the residual scale (``scale_hint`` where
+    positive, else the robust scale of the last iteration's residuals); the Gauss-Newton
     sums (``sum w d e``, ``sum w d^2``) of the residual ``e`` against ``d``, the pattern's
     derivative with respect to nu less what the basis explains of it, in each of ``strips``
     equal bands of rows (shape (strips,)): their totals' ratio is this frame's correction to
