@@ -397,7 +397,7 @@ def _parser() -> argparse.ArgumentParser:
         type=Path,
         metavar="sync.json",
         help="also write a sync model file (the format sync writes; restamp uses it): sync's solve on the "
-        "readouts and stamp-rate choices found, or the final model where it holds an effect sync has no term for",
+        "readouts and stamp-rate choices found, band edges moved back where saturation or a pulse shape moved them",
     )
     diagnose.add_argument("--json", type=Path, metavar="OUT.json", help="also write the steps as JSON")
     diagnose.add_argument(

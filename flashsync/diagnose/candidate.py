@@ -125,6 +125,18 @@ class Candidate:
         """A parameter of the model; 0 where its effect is off."""
         return self.coefficients.get((name, camera), 0.0)
 
+    def edge_shift_ms(self, effects: tuple[str, ...]) -> np.ndarray:
+        """How much later the model's ``effects`` put each measured edge than its flash and
+        clock alone would, ms, shape (n_edges,): their columns times their parameters."""
+        shift = np.zeros(len(self.features.camera))
+        for term in self.terms:
+            if term.effect in effects:
+                values = CATALOGUE[term.effect].column(self.features).reshape(len(shift), -1)
+                parameters = [self.coefficient(_key(term.effect, i), term.camera) for i in range(values.shape[1])]
+                mine = self.features.camera == term.camera
+                shift[mine] += values[mine] @ parameters
+        return shift
+
     def _parameters(self, keys: list[tuple[str, int]]) -> np.ndarray:
         """The named parameters in the order of ``keys``, then the flash times."""
         return np.concatenate([[self.coefficients[key] for key in keys], self.flash_ms])
@@ -176,9 +188,9 @@ class Candidate:
                 nominal_row_time_ms=self.nominal_row_time_ms(c),
                 exposure_ms=self.exposure_ms(c),
                 saturation_ms=self.coefficient(SATURATION, c),
-                saturation_share=self.coefficient(f"{SATURATION}.1", c),
+                saturation_share=self.coefficient(_key(SATURATION, 1), c),
                 pulse_trailing=self.coefficient(PULSE_SHAPE, c),
-                pulse_leading=self.coefficient(f"{PULSE_SHAPE}.1", c),
+                pulse_leading=self.coefficient(_key(PULSE_SHAPE, 1), c),
                 longest_excess_ms=float(np.max(self.features.excess_ms[self.features.camera == c], initial=0.0)),
                 flicker_hz=flicker.hz if flicker else np.nan,
                 flicker_depth=flicker.depth if flicker else np.nan,
@@ -479,8 +491,13 @@ def _design(
         if column is not None:
             values = column(features).reshape(len(features.camera), -1)
             for i, values in enumerate(values.T):
-                keys.append((f"{term.effect}.{i}" if i else term.effect, term.camera))
+                keys.append((_key(term.effect, i), term.camera))
                 columns.append(np.where(features.camera == term.camera, values, 0.0))
     flash = measurement.edges.flash
     columns += list((flash[None, :] == np.arange(measurement.n_flashes)[:, None]).astype(np.float64))
     return keys, np.column_stack(columns)
+
+
+def _key(effect: str, i: int) -> str:
+    """The name of an effect's ``i``-th parameter (its column in the design)."""
+    return f"{effect}.{i}" if i else effect
