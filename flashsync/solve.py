@@ -42,6 +42,7 @@ import scipy.sparse as sparse
 from scipy import linalg
 from threadpoolctl import threadpool_limits
 
+from flashsync.compiled import njit
 from flashsync.errors import NotEnoughDataError
 from flashsync.model import hat_basis
 from flashsync.robust import MIN_SCALE_MS, cauchy_irls, mad_sigma
@@ -566,12 +567,14 @@ class _System:
         if last_weights is not None and np.array_equal(last_weights, weights):
             return last
         w = np.concatenate([weights, np.ones(self.n_priors)])
-        weighted_cams = self.cams.multiply(w[:, None]).tocsr()
-        d = np.asarray(self.flashes.multiply(self.flashes).T @ w).ravel()
+        d = np.bincount(self.flash_of, self.flash_coefficient**2 * weights, minlength=len(self.flash_ids))
         d = np.where(d > 0, d, 1.0)
-        coupling = (weighted_cams.T @ self.flashes).toarray()
+        cams, f = self.cams, self.flash_coefficient
+        schur, coupling = _camera_products(
+            cams.indptr, cams.indices, cams.data, w, self.flash_of, f, (cams.shape[1], len(d))
+        )
         scaled = coupling / np.sqrt(d)
-        schur = (self.cams.T @ weighted_cams).toarray() - scaled @ scaled.T  # a @ a.T: one BLAS syrk
+        schur -= scaled @ scaled.T  # a @ a.T: one BLAS syrk
         right_cams = self.cams.T @ (w * self.rhs)
         right_flashes = self.flashes.T @ (w * self.rhs)
         factor = _cholesky(schur)
@@ -734,6 +737,29 @@ class _System:
             exposure_ms=float(x[exposure]) if exposure >= 0 else float("nan"),
             exposure_std_ms=float(np.sqrt(max(covariance[exposure, exposure], 0.0))) if exposure >= 0 else float("nan"),
         )
+
+
+@njit
+def _camera_products(indptr, columns, values, weights, flash, coefficient, shape):  # pragma: no cover - compiled
+    """The camera block ``C' W C`` (n_columns, n_columns) and the coupling ``C' W F``
+    (``shape``: (n_columns, n_flashes)) of the normal matrix of weights ``W`` (``weights``,
+    one per row). ``C``: the camera columns, CSR (``indptr``, ``columns``, ``values``; the
+    equations' rows, then the priors'); ``F``: the flash columns, each equation's
+    ``coefficient`` on its ``flash`` (shape (n_equations,)). Summed row by row in row order, as scipy's sparse
+    products sum them, and the coupling in Fortran order, as their ``toarray`` gives it (BLAS
+    sums its products in another order in the other): the same values to the last bit."""
+    n_columns, n_flashes = shape
+    gram = np.zeros((n_columns, n_columns))
+    coupling = np.zeros((n_flashes, n_columns))
+    for row in range(len(indptr) - 1):
+        start, stop = indptr[row], indptr[row + 1]
+        for p in range(start, stop):
+            weighted = values[p] * weights[row]
+            for q in range(start, stop):
+                gram[columns[q], columns[p]] += values[q] * weighted
+            if row < len(flash) and coefficient[row] != 0.0:
+                coupling[flash[row], columns[p]] += weighted * coefficient[row]
+    return gram, coupling.T
 
 
 def _cholesky(matrix: np.ndarray, largest: float | None = None) -> tuple[np.ndarray, bool] | None:
