@@ -536,6 +536,9 @@ class _System:
         self.flash_coefficient = np.zeros(self.n_equations)
         self.flash_of = np.zeros(self.n_equations, dtype=np.int64)
         self.flash_coefficient[named.row], self.flash_of[named.row] = named.data, named.col
+        #: each equation's camera columns and their coefficients (scaled), padded with column 0 and
+        #: coefficient 0 to the most an equation has: two arrays of shape (n_equations, width)
+        self.camera_entries = _padded_rows(self.cams[: self.n_equations])
 
     @staticmethod
     def _band_pairs(events: Observations, trailing: np.ndarray) -> np.ndarray:
@@ -689,15 +692,9 @@ class _System:
         moved = coupling / d
         spread = inverse @ moved
         flash_term = 1.0 / d + np.sum(moved * spread, axis=0)
-        cams = self.cams[: self.n_equations]
         f, k = self.flash_coefficient, self.flash_of
-        counts = np.diff(cams.indptr)
-        width = int(counts.max()) if counts.size else 0
-        slot = np.arange(width) < counts[:, None]
-        columns = np.zeros((self.n_equations, width), dtype=np.int64)
-        values = np.zeros((self.n_equations, width))
-        columns[slot], values[slot] = cams.indices, cams.data
-        own = np.einsum("ia,ib,iab->i", values, values, inverse[columns[:, :, None], columns[:, None, :]])
+        columns, values = self.camera_entries
+        own = _quadratic_forms(columns, values, inverse)
         cross = np.einsum("ia,ia->i", values, spread[columns, k[:, None]])
         return w[: self.n_equations] * (own - 2 * f * cross + f**2 * flash_term[k])
 
@@ -760,6 +757,33 @@ def _camera_products(indptr, columns, values, weights, flash, coefficient, shape
             if row < len(flash) and coefficient[row] != 0.0:
                 coupling[flash[row], columns[p]] += weighted * coefficient[row]
     return gram, coupling.T
+
+
+def _padded_rows(matrix: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's column indices and values of a CSR matrix, in its order, padded with
+    column 0 and value 0 to the most a row holds: shapes (n_rows, width)."""
+    counts = np.diff(matrix.indptr)
+    width = int(counts.max()) if counts.size else 0
+    slot = np.arange(width) < counts[:, None]
+    columns = np.zeros((len(counts), width), dtype=np.int64)
+    values = np.zeros((len(counts), width))
+    columns[slot], values[slot] = matrix.indices, matrix.data
+    return columns, values
+
+
+@njit
+def _quadratic_forms(columns, values, matrix):  # pragma: no cover - compiled
+    """``v_i' A v_i`` for every row ``i`` (shape (n,)) of sparse vectors padded as
+    :func:`_padded_rows` gives them (``columns``, ``values``: (n, width)) and a matrix ``A``;
+    summed as ``np.einsum("ia,ib,iab->i", ...)`` sums them: the same values to the last bit."""
+    out = np.zeros(len(values))
+    for i in range(len(values)):
+        total = 0.0
+        for a in range(values.shape[1]):
+            for b in range(values.shape[1]):
+                total += values[i, a] * values[i, b] * matrix[columns[i, a], columns[i, b]]
+        out[i] = total
+    return out
 
 
 def _cholesky(matrix: np.ndarray, largest: float | None = None) -> tuple[np.ndarray, bool] | None:
