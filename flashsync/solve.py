@@ -742,9 +742,10 @@ def _camera_products(indptr, columns, values, weights, flash, coefficient, shape
     (``shape``: (n_columns, n_flashes)) of the normal matrix of weights ``W`` (``weights``,
     one per row). ``C``: the camera columns, CSR (``indptr``, ``columns``, ``values``; the
     equations' rows, then the priors'); ``F``: the flash columns, each equation's
-    ``coefficient`` on its ``flash`` (shape (n_equations,)). Summed row by row in row order, as scipy's sparse
-    products sum them, and the coupling in Fortran order, as their ``toarray`` gives it (BLAS
-    sums its products in another order in the other): the same values to the last bit."""
+    ``coefficient`` on its ``flash`` (shape (n_equations,)). Summed row by row in row order,
+    as scipy's sparse products sum them, and the coupling in Fortran order, as their
+    ``toarray`` gives it (BLAS sums its products in another order in the other): the same
+    values to the last bit."""
     n_columns, n_flashes = shape
     gram = np.zeros((n_columns, n_columns))
     coupling = np.zeros((n_flashes, n_columns))
