@@ -789,9 +789,9 @@ def _run_restamp(args) -> int:
     print(format_summary(summary), file=sys.stderr)
     if "unknown camera" in summary.failed:
         print(
-            f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model} "
-            f"({', '.join(model.cameras)}); their rows are kept without t_global_ms - sync those "
-            "videos too or fix the camera names",
+            f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model}: "
+            f"{', '.join(sorted(summary.unknown_cameras))} (it holds {', '.join(model.cameras)}); their rows are "
+            "kept without t_global_ms - sync those videos too or fix the camera names",
             file=sys.stderr,
         )
         return 1

@@ -267,7 +267,9 @@ def test_camera_missing_from_model(tiny_scenario, tmp_path, capsys):
     )
     assert code == 1
     error_lines = [line for line in err.splitlines() if "error:" in line]
-    assert len(error_lines) == 1 and "not in" in error_lines[0] and "Traceback" not in err
+    assert len(error_lines) == 1 and "Traceback" not in err
+    assert "d.csv names cameras that are not in" in error_lines[0]
+    assert "sync.json: cam7 (it holds cam1, cam2);" in error_lines[0]
     out = pd.read_csv(tmp_path / "out.csv")
     assert list(out["restamp_error"].fillna("")) == ["", "unknown camera"]
 

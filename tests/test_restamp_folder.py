@@ -32,6 +32,7 @@ def test_each_partition_as_restamp_file_makes_it(dataset, tmp_path, model):  # n
     summary = restamp_folder(dataset, tmp_path / "out", model, with_std=True)
     assert (summary.rows, summary.stamped) == (7, 5)
     assert summary.failed == {"unknown camera": 1, "frame past the end of the video": 1}
+    assert summary.unknown_cameras == {"camX"}
     names = sorted(str(p.relative_to(dataset)) for p in dataset.rglob("*.*"))
     assert sorted(str(p.relative_to(tmp_path / "out")) for p in (tmp_path / "out").rglob("*.*")) == names
     for name in names:
@@ -43,7 +44,7 @@ def test_each_partition_as_restamp_file_makes_it(dataset, tmp_path, model):  # n
 def test_command_here_and_on_a_cluster(dataset, tmp_path, model, capsys, local_cluster):  # noqa: F811
     save_model(model, tmp_path / "sync.json")
     code, _, err = run(capsys, "restamp", dataset, "--model", tmp_path / "sync.json")
-    assert code == 1 and "names cameras that are not in" in err  # the unknown camera's row
+    assert code == 1 and "sync.json: camX (it holds cam1, cam2);" in err
     here = tmp_path / "dets.restamped"
     code, _, err = run(
         capsys,

@@ -108,6 +108,8 @@ class RestampSummary:
         Rows given a ``t_global_ms``.
     failed : dict of str to int
         Rows not stamped, by reason (:data:`REASONS`), only reasons that occurred.
+    unknown_cameras : set of str
+        The cameras of the rows not stamped for an ``unknown camera`` (not in the model).
     """
 
     source: str
@@ -115,6 +117,7 @@ class RestampSummary:
     rows: int = 0
     stamped: int = 0
     failed: dict[str, int] = field(default_factory=dict)
+    unknown_cameras: set[str] = field(default_factory=set)
 
 
 def restamp(
@@ -313,6 +316,7 @@ def restamp_folder(
         summary.stamped += part.stamped
         for reason, count in part.failed.items():
             summary.failed[reason] = summary.failed.get(reason, 0) + count
+        summary.unknown_cameras |= part.unknown_cameras
     return summary
 
 
@@ -369,7 +373,7 @@ def _restamp_csv_text(
             if table.num_rows != int(filled.sum()):
                 raise InputError(f"{in_path}: a quoted value spans several lines; remove the line breaks inside values")
             columns, reasons = _stamp([table.column(name) for name in needed], model, exposures, with_std)
-            _count(reasons, summary)
+            _count(reasons, table.column("camera"), summary)
             texts = [pc.cast(pa.array(columns[name], from_pandas=True), pa.string()) for name in names[:-1]]
             texts.append(_reason_texts(reasons))
             joined = pc.binary_join_element_wise(
@@ -444,7 +448,7 @@ def _restamp_batches(
             try:
                 for batch in batches:
                     columns, reasons = _stamp([batch.column(name) for name in needed], model, exposures, with_std)
-                    _count(reasons, summary)
+                    _count(reasons, batch.column("camera"), summary)
                     new = [pa.array(columns[name], from_pandas=True) for name in names[:-1]]
                     old = [_json_texts(column) if i in nested else column for i, column in enumerate(batch.columns)]
                     writer.write_batch(pa.RecordBatch.from_arrays([*old, *new, _reason_texts(reasons)], schema=schema))
@@ -600,7 +604,12 @@ def _reason_texts(reasons: np.ndarray) -> pa.Array:
     return pc.take(pa.array([None, *REASONS], type=pa.string()), pa.array(reasons))
 
 
-def _count(reasons: np.ndarray, summary: RestampSummary) -> None:
+def _count(reasons: np.ndarray, cameras: pa.Array, summary: RestampSummary) -> None:
+    """Add the rows of ``reasons`` (0 stamped, else 1 + the index in :data:`REASONS`) and the
+    ``cameras`` (one per row) of those of an unknown camera to ``summary``."""
+    unknown = np.flatnonzero(reasons == 1 + REASONS.index("unknown camera"))
+    if unknown.size:
+        summary.unknown_cameras |= {str(name) for name in pc.take(cameras, pa.array(unknown)).to_pylist()}
     counts = np.bincount(reasons, minlength=len(REASONS) + 1)
     summary.rows += len(reasons)
     summary.stamped += int(counts[0])
