@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from flashsync.diagnose import diagnose, format_diagnosis
-from flashsync.diagnose.adopt import written_model
+from flashsync.diagnose.adopt import _moved_back, written_model
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, fit_candidate
 from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED
@@ -180,6 +180,26 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     assert 0.2 < d.model[1]["saturation_share"] < 0.6, d.model[1]
     assert d.written == f"sync's solve on the readouts found, band edges moved back by the saturation on {step.camera}"
     assert pooled_error_ms(d.sync_model, truth) <= 1.05 * pooled_error_ms(synchronize(cameras)[0], truth)
+
+
+@pytest.mark.parametrize("name", ["cam0", f"{CAMERA['flipped']}+declared"])
+def test_an_edge_moved_back_goes_towards_the_first_row_read(detections, name):
+    """``diagnose -o`` moves an edge that an effect puts later back by that time over the time
+    per row: up the stored image on a camera read top-down, down it on one read bottom-up
+    (0.5 ms at 0.1 ms a row: 5 rows); no other edge moves."""
+    detection = detections[name]
+    events = detection.events
+    edges = Edges(
+        *(np.array([value]) for value in (0, 0, events.event[0], events.frame[0], events.row[0])),
+        np.array([events.edge[0] == "trailing"]),
+        np.zeros(1, bool),
+        np.zeros(1),
+        np.zeros(1),
+        np.zeros(1, bool),
+    )
+    moved = _moved_back(detection, edges, np.array([0.5]), 0, 0.1).events
+    assert moved.row[0] - events.row[0] == pytest.approx(5.0 if detection.flipped else -5.0)
+    assert np.array_equal(moved.row[1:], events.row[1:])
 
 
 def test_two_hidden_effects_are_found_the_larger_gap_first(detections):
