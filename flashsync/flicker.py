@@ -792,11 +792,14 @@ def _fit_frame(y, basis, init, strips, scale_hint):  # pragma: no cover - compil
         normal = np.zeros((p, p))
         right = np.zeros(p)
         for i in range(n):
+            if weight[i] == 0.0:  # a row far off adds exactly nothing
+                continue
             r = rows[i]
             for j in range(p):
-                right[j] += weight[i] * basis[r, j] * y[r]
+                weighted = weight[i] * basis[r, j]
+                right[j] += weighted * y[r]
                 for k in range(j + 1):
-                    normal[j, k] += weight[i] * basis[r, j] * basis[r, k]
+                    normal[j, k] += weighted * basis[r, k]
         for j in range(p):
             for k in range(j + 1, p):
                 normal[j, k] = normal[k, j]
