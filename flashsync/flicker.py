@@ -572,12 +572,12 @@ def _learn_frequency(logs: np.ndarray, settings: FlickerSettings) -> tuple[float
     valid = np.isfinite(logs)
     centred = np.where(valid, logs - np.nanmean(logs, axis=1, keepdims=True), 0.0)
     pad = 8 * (1 << int(np.ceil(np.log2(height))))
-    power = np.median(np.abs(np.fft.rfft(centred * np.hanning(height), n=pad, axis=1)) ** 2, axis=0)
     grid = np.fft.rfftfreq(pad)
     search = np.flatnonzero((grid >= settings.min_periods / height) & (grid <= settings.max_periods / height))
     if not search.size:
         return None
-    nu = float(grid[search[np.argmax(power[search])]])
+    spectra = np.fft.rfft(centred * np.hanning(height), n=pad, axis=1)[:, search]  # the band searched only
+    nu = float(grid[search[np.argmax(np.median(np.abs(spectra) ** 2, axis=0))]])
     for step in range(LEARNING_STEPS):
         basis = _basis(height, nu, settings.harmonics)
         fits = [_fit_frame(row, basis, np.zeros(basis.shape[1]), 1, 0.0) for row in logs]
