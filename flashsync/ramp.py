@@ -604,7 +604,7 @@ def _f_scale(p: np.ndarray) -> float:
 def _data_cost(x: np.ndarray, y: np.ndarray, p: np.ndarray, f_scale: float, mode: int) -> float:
     """The fit's cost without the blur's prior (the hold, which has none, can stand in for
     the blur: with the prior counted, a hold would win where only the blur is there)."""
-    return _cost(x, y, p, f_scale, mode) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
+    return _cost(x, y, p, f_scale, mode, np.empty(x.size)) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
 
 def _decay_guess(rise: float) -> float:
@@ -671,17 +671,16 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
     p = _clamp(p.copy(), mode, longer)
     if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
         return p, False
-    cost = _cost(x, y, p, f_scale, mode)
+    residual = np.empty(n)
+    cost = _cost(x, y, p, f_scale, mode, residual)
     if not np.isfinite(cost):
         return p, False
     index = np.flatnonzero(free)
     m = index.size
     damping = 1e-3
     jacobian = np.empty((n, m))
-    residual = np.empty(n)
+    trial_residual = np.empty(n)
     for _ in range(300):
-        for i in range(n):
-            residual[i] = _model(x[i], p, mode) - y[i]
         for j in range(m):
             k = index[j]
             moved = p.copy()
@@ -705,7 +704,7 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
             for j in range(m):
                 trial[index[j]] -= delta[j]
             trial = _clamp(trial, mode, longer)
-            trial_cost = _cost(x, y, trial, f_scale, mode)
+            trial_cost = _cost(x, y, trial, f_scale, mode, trial_residual)
             if trial_cost <= cost:
                 break
             damping *= 10.0
@@ -715,6 +714,7 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
             return p, False
         moved_most = np.max(np.abs(trial - p))
         p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
+        residual, trial_residual = trial_residual, residual  # the new p's, from its cost
         if moved_most < 1e-7 * (1.0 + np.max(np.abs(p))):
             return p, True
     return p, False
@@ -737,12 +737,13 @@ def _clamp(p, mode, longer):  # pragma: no cover - compiled
 
 
 @njit
-def _cost(x, y, p, f_scale, mode):  # pragma: no cover - compiled
-    """Soft-L1 cost of the model ``p`` against ``y``, plus the blur's prior."""
+def _cost(x, y, p, f_scale, mode, residual):  # pragma: no cover - compiled
+    """Soft-L1 cost of the model ``p`` against ``y``, plus the blur's prior; ``residual``
+    (shape (n,)) is set to the model less ``y``."""
     total = 0.0
     for i in range(x.size):
-        residual = _model(x[i], p, mode) - y[i]
-        total += 2.0 * f_scale**2 * (math.sqrt(1.0 + (residual / f_scale) ** 2) - 1.0)
+        residual[i] = _model(x[i], p, mode) - y[i]
+        total += 2.0 * f_scale**2 * (math.sqrt(1.0 + (residual[i] / f_scale) ** 2) - 1.0)
     return total + (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
 
