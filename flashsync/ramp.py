@@ -604,7 +604,8 @@ def _f_scale(p: np.ndarray) -> float:
 def _data_cost(x: np.ndarray, y: np.ndarray, p: np.ndarray, f_scale: float, mode: int) -> float:
     """The fit's cost without the blur's prior (the hold, which has none, can stand in for
     the blur: with the prior counted, a hold would win where only the blur is there)."""
-    return _cost(x, y, p, f_scale, mode, np.empty(x.size)) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
+    residual, shape = np.empty(x.size), np.empty(x.size)
+    return _cost(x, y, p, f_scale, mode, residual, shape) - (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
 
 def _decay_guess(rise: float) -> float:
@@ -671,15 +672,15 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
     p = _clamp(p.copy(), mode, longer)
     if not (f_scale > 0.0 and np.isfinite(f_scale)) or n == 0 or not np.all(np.isfinite(p)):
         return p, False
-    residual = np.empty(n)
-    cost = _cost(x, y, p, f_scale, mode, residual)
+    residual, shape = np.empty(n), np.empty(n)
+    cost = _cost(x, y, p, f_scale, mode, residual, shape)
     if not np.isfinite(cost):
         return p, False
     index = np.flatnonzero(free)
     m = index.size
     damping = 1e-3
     jacobian = np.empty((n, m))
-    trial_residual = np.empty(n)
+    trial_residual, trial_shape = np.empty(n), np.empty(n)
     for _ in range(300):
         for j in range(m):
             k = index[j]
@@ -689,8 +690,9 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
             else:  # forward differences
                 moved[k] += 1e-6 * max(1.0, abs(p[k]))
             step = moved[k] - p[k]
-            for i in range(n):
-                jacobian[i, j] = (_model(x[i], moved, mode) - y[i] - residual[i]) / step
+            for i in range(n):  # the level moves the model by its shape alone
+                model = moved[_level_index(x[i], mode)] * shape[i] if k == 5 else _model(x[i], moved, mode)
+                jacobian[i, j] = (model - y[i] - residual[i]) / step
         weight = 1.0 / np.sqrt(1.0 + (residual / f_scale) ** 2)
         normal = jacobian.T @ (jacobian * weight[:, None])
         gradient = jacobian.T @ (weight * residual)
@@ -704,7 +706,7 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
             for j in range(m):
                 trial[index[j]] -= delta[j]
             trial = _clamp(trial, mode, longer)
-            trial_cost = _cost(x, y, trial, f_scale, mode, trial_residual)
+            trial_cost = _cost(x, y, trial, f_scale, mode, trial_residual, trial_shape)
             if trial_cost <= cost:
                 break
             damping *= 10.0
@@ -715,6 +717,7 @@ def _fit(x, y, p, free, f_scale, mode, longer=False):  # pragma: no cover - comp
         moved_most = np.max(np.abs(trial - p))
         p, cost, damping = trial, trial_cost, max(damping * 0.3, 1e-9)
         residual, trial_residual = trial_residual, residual  # the new p's, from its cost
+        shape, trial_shape = trial_shape, shape
         if moved_most < 1e-7 * (1.0 + np.max(np.abs(p))):
             return p, True
     return p, False
@@ -737,12 +740,13 @@ def _clamp(p, mode, longer):  # pragma: no cover - compiled
 
 
 @njit
-def _cost(x, y, p, f_scale, mode, residual):  # pragma: no cover - compiled
+def _cost(x, y, p, f_scale, mode, residual, shape):  # pragma: no cover - compiled
     """Soft-L1 cost of the model ``p`` against ``y``, plus the blur's prior; ``residual``
-    (shape (n,)) is set to the model less ``y``."""
+    and ``shape`` (shape (n,)) are set to the model less ``y`` and to :func:`_shape`."""
     total = 0.0
     for i in range(x.size):
-        residual[i] = _model(x[i], p, mode) - y[i]
+        shape[i] = _shape(x[i], p, mode)
+        residual[i] = p[_level_index(x[i], mode)] * shape[i] - y[i]
         total += 2.0 * f_scale**2 * (math.sqrt(1.0 + (residual[i] / f_scale) ** 2) - 1.0)
     return total + (f_scale * p[3] / BLUR_PRIOR_STD) ** 2
 
@@ -753,16 +757,27 @@ def _model(x, p, mode):  # pragma: no cover - compiled
     width, level): the whole band, its rising edge (the light from 0 to ``level``) or its
     falling edge; split across frames, ``p`` also has (hidden, height, level in the next
     frame, :data:`SPLIT` only) and a row ``x < 0`` is row ``-1 - x`` of the next frame."""
-    level = p[5]
+    return p[_level_index(x, mode)] * _shape(x, p, mode)
+
+
+@njit
+def _level_index(x, mode):  # pragma: no cover - compiled
+    """Where in ``p`` the level of row ``x`` is (:func:`_model`): 8 in the next frame of a
+    :data:`SPLIT` band, else 5."""
+    return 8 if mode == SPLIT and x < 0.0 else 5
+
+
+@njit
+def _shape(x, p, mode):  # pragma: no cover - compiled
+    """:func:`_model` at a level of 1."""
     if (mode == SPLIT or mode == SPLIT_ONE_LEVEL) and x < 0.0:  # row -1 - x of the next frame, height + hidden rows on
         x = -1.0 - x + p[7] + p[6]
-        level = p[8] if mode == SPLIT else p[5]
     share = _share(x - p[0], p[1], p[2], p[3])
     if mode == RISING:
-        return level * share
+        return share
     if mode == FALLING:
-        return level * (1.0 - share)
-    return level * (share - _share(x - p[0] - p[4], p[1], p[2], p[3]))
+        return 1.0 - share
+    return share - _share(x - p[0] - p[4], p[1], p[2], p[3])
 
 
 @njit
