@@ -80,11 +80,10 @@ def written_model(
         for c, name in enumerate(names)
     }
     shift_ms = found.edge_shift_ms(EDGE_EFFECTS)
-    moved = {
-        names[term.camera]: (term.camera, CATALOGUE[term.effect].title)
-        for term in sorted(found.terms)
-        if term.effect in EDGE_EFFECTS and flipped[names[term.camera]] == measurement.cameras[term.camera].flipped
-    }
+    moved = {}  # camera name -> (its index, the titles of the effects that move its edges)
+    for term in sorted(found.terms):
+        if term.effect in EDGE_EFFECTS and flipped[names[term.camera]] == measurement.cameras[term.camera].flipped:
+            moved.setdefault(names[term.camera], (term.camera, []))[1].append(CATALOGUE[term.effect].title)
     chosen = []
     for detection in detections:
         if detection.camera not in flipped:
@@ -106,7 +105,9 @@ def written_model(
         f" and the one-rate frame times found on {', '.join(timed)}" if timed else ""
     )
     if moved:
-        words += ", band edges moved back by the " + ", ".join(f"{t} on {name}" for name, (_, t) in moved.items())
+        words += ", band edges moved back by the " + ", ".join(
+            f"{' and '.join(titles)} on {name}" for name, (_, titles) in moved.items()
+        )
     if synced is not None and not moved and _same_choices(synced[0], flipped, timed):
         return synced[0], words + " (the same as sync's own)"
     try:
