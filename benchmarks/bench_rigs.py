@@ -1,7 +1,7 @@
 """flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
 
 Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12] [--preflash MS]
-                                   [--readout LO:HI]
+                                   [--readout LO:HI] [--flash-powers SHARE]
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
@@ -45,7 +45,14 @@ from flashsync.io.truth import load_ground_truth
 from flashsync.pipeline import edge_noise_rows
 from flashsync.robust import MAD_TO_SIGMA
 from flashsync.simulation import render_scenario
-from flashsync.simulation.rigs import RECIPES, random_rig, recipe, with_fast_readout, with_preflashes
+from flashsync.simulation.rigs import (
+    RECIPES,
+    random_rig,
+    recipe,
+    with_fast_readout,
+    with_flash_powers,
+    with_preflashes,
+)
 from flashsync.simulation.truth import CameraTruth, GroundTruth
 
 #: Targets of the honest-numbers issue, for cameras with >= 8 shared flashes and >= 360 rows.
@@ -499,6 +506,17 @@ def readout_fractions(text: str) -> tuple[float, float]:
     return low, high
 
 
+def power_share(text: str) -> float:
+    """``SHARE`` of ``--flash-powers``: the share of flashes fired at full power."""
+    try:
+        share = float(text)
+    except ValueError:
+        share = float("nan")
+    if not 0.0 <= share <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text}: give a share of the flashes between 0 and 1, e.g. 0.3")
+    return share
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
@@ -522,6 +540,13 @@ def main() -> None:
         metavar="LO:HI",
         help="give the random rigs' sensors a fast readout: each camera reads its rows in a fraction U(LO, HI) of "
         "its frame period (rigs named rig-N-readLO-HI; with_fast_readout)",
+    )
+    parser.add_argument(
+        "--flash-powers",
+        type=power_share,
+        metavar="SHARE",
+        help="fire the random rigs' flashes at two powers: each p SHARE at full power, its pulse 2-3 ms long to a "
+        "tenth of its peak, else at a low power, 0.05-0.3 ms (rigs named rig-N-powerSHARE; with_flash_powers)",
     )
     parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
     parser.add_argument(
@@ -573,6 +598,14 @@ def main() -> None:
             low, high = args.readout
             rigs = [
                 replace(with_fast_readout(rig, (low, high), seed=rig.seed), name=f"{rig.name}-read{low:g}-{high:g}")
+                for rig in rigs
+            ]
+        if args.flash_powers is not None:
+            rigs = [
+                replace(
+                    with_flash_powers(rig, args.flash_powers, seed=rig.seed),
+                    name=f"{rig.name}-power{args.flash_powers:g}",
+                )
                 for rig in rigs
             ]
         scenarios += rigs

@@ -14,7 +14,16 @@ import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.simulation import render_scenario
-from flashsync.simulation.rigs import NTSC_30, NTSC_60, RATES, RECIPES, random_rig, recipe, with_fast_readout
+from flashsync.simulation.rigs import (
+    NTSC_30,
+    NTSC_60,
+    RATES,
+    RECIPES,
+    random_rig,
+    recipe,
+    with_fast_readout,
+    with_flash_powers,
+)
 
 
 def test_same_seed_same_rig_and_other_seeds_differ():
@@ -72,6 +81,33 @@ def test_a_fast_readout_reads_the_rows_in_part_of_the_frame(tmp_path):
         assert 0.45 <= read <= 0.75 and camera.r1 > 0.3 * camera.height
 
 
+def test_flashes_at_two_powers_change_only_their_pulses_lengths(tmp_path):
+    """`with_flash_powers` lengthens a share of the flashes to 2-3 ms and shortens the rest
+    to 0.05-0.3 ms (to a tenth of the peak), a rectangle by its hold and a decaying pulse by
+    its decay, keeping each one's kind, rise, instant and strength; the rendered truth fires
+    them so."""
+    rigs = [random_rig(seed, max_height=180, duration_ms=8000.0) for seed in range(8)]
+    by_kind = {rig.flashes[0].shape: rig for rig in rigs}
+    assert {"rectangular", "exponential"} <= set(by_kind)
+    for rig in by_kind.values():
+        fired = with_flash_powers(rig, share=0.5, seed=3)
+        assert replace(fired, flashes=rig.flashes) == rig
+        for before, after in zip(rig.flashes, fired.flashes):
+            assert (after.world_ms, after.strength, after.rise_ms, after.shape) == (
+                before.world_ms,
+                before.strength,
+                before.rise_ms,
+                before.shape,
+            )
+        lengths = np.array([f.hold_ms if f.decay_ms == 0 else f.decay_ms * np.log(10) for f in fired.flashes])
+        full = (lengths >= 2.0 - 1e-3) & (lengths <= 3.0 + 1e-3)
+        assert np.all(full | ((lengths >= 0.05 - 1e-3) & (lengths <= 0.3 + 1e-3)))
+        assert 0 < full.sum() < len(lengths)
+    led = with_flash_powers(replace(by_kind["rectangular"], cameras=by_kind["rectangular"].cameras[:1]), 0.5, seed=3)
+    truth = render_scenario(replace(led, duration_ms=3000.0), tmp_path)
+    assert [(f["hold_ms"], f["decay_ms"]) for f in truth.flashes] == [(f.hold_ms, f.decay_ms) for f in led.flashes]
+
+
 @pytest.mark.parametrize("fractions", ["0.5", "a:b", "0.7:0.4", "1.2:1.5", "0:0.5"])
 def test_bench_rigs_readout_out_of_range_is_one_line(fractions):
     """``bench_rigs.py --readout`` takes LO:HI with 0 < LO <= HI <= 1; anything else is one
@@ -82,6 +118,20 @@ def test_bench_rigs_readout_out_of_range_is_one_line(fractions):
     )
     assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
     assert f"argument --readout: {fractions}: give LO:HI with 0 < LO <= HI <= 1" in run.stderr.splitlines()[-1]
+
+
+@pytest.mark.parametrize("share", ["-0.1", "1.5", "a"])
+def test_bench_rigs_flash_powers_out_of_range_is_one_line(share):
+    """``bench_rigs.py --flash-powers`` takes a share between 0 and 1; anything else is one
+    line of argparse's and exit 2, before any rig is drawn."""
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_rigs.py"
+    run = subprocess.run(
+        [sys.executable, str(script), f"--flash-powers={share}"], capture_output=True, text=True, timeout=60
+    )
+    assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
+    assert (
+        f"argument --flash-powers: {share}: give a share of the flashes between 0 and 1" in run.stderr.splitlines()[-1]
+    )
 
 
 def test_recipes_rebuild_the_issue_rigs_in_the_second_world():

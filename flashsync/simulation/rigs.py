@@ -47,7 +47,9 @@ pose               looks at a point of the ice from 15-35 m away and 10-18 m up,
 before each, which some cameras do not see. `with_fast_readout` gives a rig's sensors a
 readout faster than their frame period (a sensor built for 50-120 fps run at 25-30 reads
 its rows in a fraction of the frame and idles in a long vertical blanking), which
-`random_rig` never draws.
+`random_rig` never draws. `with_flash_powers` fires a rig's flashes at two powers, some
+pulses 2-3 ms long and the rest 0.05-0.3 ms (a speedlight's power setting, or two
+strobes), where `random_rig` draws each rig's pulse lengths from one range.
 
 `RECIPES` names fixed rigs: the independent-footage rigs of the honest-numbers issue's
 table and the real-light issue's cases, re-created with second-world settings (xenon or
@@ -58,6 +60,7 @@ settings, the flash instants and the scene.
 from __future__ import annotations
 
 import dataclasses
+import math
 import zlib
 from collections.abc import Callable
 
@@ -574,6 +577,41 @@ def with_preflashes(
     )
     fired = dataclasses.replace(scenario, cameras=cameras, flashes=flashes)
     check_scenario(fired, f"{scenario.name} with pre-flashes")
+    return fired
+
+
+def with_flash_powers(
+    scenario: Scenario,
+    share: float = 0.3,
+    full_ms: tuple[float, float] = (2.0, 3.0),
+    low_ms: tuple[float, float] = (0.05, 0.3),
+    seed: int = 0,
+) -> Scenario:
+    """`scenario` with its flashes fired at two powers, as a speedlight's power setting
+    does (the pulse lengthens with the power, about 0.05 ms at 1/32 and 2-4 ms to a tenth
+    at full): each flash p ``share`` at full power, its pulse U(*full_ms*) long, else at a
+    low power, U(*low_ms*) long, lengths in ms to a tenth of the peak (a rectangle's
+    hold; ``ln 10`` decays of a pulse that decays, its hold dropped). The shape's kind,
+    its rise, the instant and the strength (the pulse's integral) are kept: a full-power
+    flash spreads the same light over a longer time.
+
+    Examples
+    --------
+    >>> from flashsync.simulation import preset
+    >>> fired = with_flash_powers(preset("tiny"), share=1.0, full_ms=(2.0, 2.0))
+    >>> {round(f.decay_ms * math.log(10), 3) for f in fired.flashes}
+    {2.0}
+    """
+    rng = np.random.default_rng([seed, zlib.crc32(b"flash powers")])
+    flashes = []
+    for flash in scenario.flashes:
+        length = float(rng.uniform(*(full_ms if rng.random() < share else low_ms)))
+        if flash.decay_ms == 0:
+            flashes.append(dataclasses.replace(flash, hold_ms=round(length, 4)))
+        else:
+            flashes.append(dataclasses.replace(flash, hold_ms=0.0, decay_ms=round(length / math.log(10), 4)))
+    fired = dataclasses.replace(scenario, flashes=tuple(flashes))
+    check_scenario(fired, f"{scenario.name} with flashes at two powers")
     return fired
 
 
