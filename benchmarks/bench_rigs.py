@@ -20,7 +20,8 @@ spread by the encoder's crf, and the lone ones' by their distance from the frame
 every rolling flicker period that named the mains frequency against the true one, over the
 standard deviation flashsync takes (``Flicker.period_rows_sigma``) and over its spread alone.
 
-Prints one line per rig, then the distribution over rigs and cameras, then every failure
+Prints one line per rig, then the distribution over rigs and cameras and a line for each
+camera whose σ understates its error, then every failure
 (an exception is a result: it is counted and shown, the run goes on).
 """
 
@@ -449,6 +450,24 @@ def camera_block(cameras: pd.DataFrame) -> list[str]:
     return lines
 
 
+def overconfident_block(cameras: pd.DataFrame) -> list[str]:
+    """One line per solved camera whose σ understates its error: times over 2σ (error/σ RMS
+    of a non-reference camera), or its time per row or exposure over 3σ."""
+    over = cameras[
+        (cameras["z_rms"] > 2)
+        | (cameras.get("row_time_z", pd.Series(0.0, cameras.index)).abs() > 3)
+        | (cameras.get("exposure_z", pd.Series(0.0, cameras.index)).abs() > 3)
+    ]
+    lines = [f"cameras whose σ understates the error (times over 2σ, time per row or exposure over 3σ): {len(over)}"]
+    for _, c in over.iterrows():
+        lines.append(
+            f"  {c['rig']} {c['camera']}: {c['rms_ms']:.3f} ms RMS at error/σ {c['z_rms']:.1f}, time per row "
+            f"{c['row_time_error_pct']:+.2f} % at {c.get('row_time_z', float('nan')):.1f}σ, exposure "
+            f"{c['exposure_error_ms']:+.3f} ms at {c.get('exposure_z', float('nan')):.1f}σ"
+        )
+    return lines
+
+
 def summary(infos: list[dict], tables: pd.DataFrame) -> str:
     """The distribution over rigs and cameras (exposures split at 6 ms, time per row by
     equal and mixed frame rates), over all solved cameras and over the rigs whose readout
@@ -473,6 +492,7 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
         *camera_block(solved),
         f"cameras of the {clean['rig'].nunique()} rigs with every readout direction right ({len(clean)}):",
         *camera_block(clean),
+        *overconfident_block(solved),
         "detection, every camera:",
         f"  false events             {distribution(tables['false_events'])}",
         f"  missed flashes           {distribution(tables['missed_flashes'])}",
