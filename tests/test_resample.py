@@ -188,3 +188,13 @@ def test_objects_are_tracked_apart_and_every_left_out_detection_is_counted(resam
     assert result.not_used == {"object id missing": 1, "another detection of the object in the frame": 1}
     interpolated = result.tracks[result.tracks["reason"] == ""]
     assert interpolated.groupby("object")["t_global_ms"].agg(["min", "max"]).diff()["min"].iloc[1] > 0
+
+
+def test_a_row_whose_y_is_text_is_counted_not_a_traceback(synced_scenario, tmp_path, capsys):
+    table = pd.read_csv(synced_scenario / "detections.csv").astype({"y": object})
+    table.loc[2, "y"] = "abc"
+    table.to_csv(tmp_path / "text.csv", index=False)
+    model, output = synced_scenario / "sync.json", tmp_path / "tracks.csv"
+    code, _, err = run(capsys, "resample", tmp_path / "text.csv", "--model", model, "--rate", 100, "-o", output)
+    assert code == 0 and "Traceback" not in err, err
+    assert "detections not used: 1 y not a number" in err

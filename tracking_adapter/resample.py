@@ -129,7 +129,7 @@ def resample(
     _require_exposures(stamped, cameras, usable, model)
     t = stamped["t_center_ms"].to_numpy(dtype=np.float64)
     frames = pd.to_numeric(stamped["frame"], errors="coerce").to_numpy(dtype=np.float64)
-    y = pd.to_numeric(stamped["y"]).to_numpy(dtype=np.float64)
+    y = pd.to_numeric(stamped["y"], errors="coerce").to_numpy(dtype=np.float64)
     ticks = np.asarray(ticks_ms, dtype=np.float64)
 
     pieces = []
