@@ -198,3 +198,14 @@ def test_a_row_whose_y_is_text_is_counted_not_a_traceback(synced_scenario, tmp_p
     code, _, err = run(capsys, "resample", tmp_path / "text.csv", "--model", model, "--rate", 100, "-o", output)
     assert code == 0 and "Traceback" not in err, err
     assert "detections not used: 1 y not a number" in err
+
+
+def test_an_infinite_x_is_counted_not_interpolated(resampled):
+    """x = inf is left out as not a number: no infinite or empty x is written as interpolated."""
+    model, detections, _ = resampled
+    table = detections[detections["camera"] == "r"].head(6).copy()
+    table.loc[table.index[2], "x"] = np.inf
+    result = resample(table, model, model_ticks_ms(model, 100.0))
+    assert result.not_used == {"x missing or not a number": 1}
+    interpolated = result.tracks[result.tracks["reason"] == ""]
+    assert len(interpolated) and np.isfinite(interpolated[["x", "y"]].to_numpy()).all()

@@ -107,6 +107,15 @@ def test_unusable_detections_are_counted(two_cameras):
     assert report.pairs == []
 
 
+@pytest.mark.filterwarnings("error")
+def test_an_infinite_x_is_counted_as_not_a_number(two_cameras):
+    """Not as beyond the horizon (where an infinite point lands, with a RuntimeWarning)."""
+    detections, homographies = straight_track(two_cameras, {"a": 30.0, "b": 70.0})
+    detections.loc[0, "x"] = np.inf
+    report = validate(detections, two_cameras, homographies)
+    assert report.not_used == {"x missing or not a number": 1}
+
+
 def test_points_as_shown_of_a_turned_camera_are_timed_by_their_stored_rows(two_cameras):
     """b's video is stored turned -90 degrees for display; its detections and homography in
     the picture as shown (x' = H - 1 - y, y' = x) give, with ``as_shown``, the report of the

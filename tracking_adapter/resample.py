@@ -122,7 +122,7 @@ def resample(
         else (np.zeros(len(detections), dtype=np.int64), pd.Index(["object"]))
     )
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
-    for reason, bad in (("x missing or not a number", np.isnan(x)), ("object id missing", objects < 0)):
+    for reason, bad in (("x missing or not a number", ~np.isfinite(x)), ("object id missing", objects < 0)):
         _count(not_used, reason, int(np.count_nonzero(usable & bad)))
         usable &= ~bad
     cameras = stamped["camera"].astype("str").to_numpy(dtype=object)

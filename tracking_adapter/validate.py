@@ -230,7 +230,7 @@ def validate(
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
     cameras = stamped["camera"].astype("str").to_numpy(dtype=object)
     for reason, bad in (
-        ("x missing or not a number", np.isnan(x)),
+        ("x missing or not a number", ~np.isfinite(x)),
         ("object id missing", objects < 0),
         ("camera without homography", ~np.isin(cameras, list(homographies))),
     ):
