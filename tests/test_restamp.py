@@ -113,6 +113,15 @@ def test_byte_order_mark_quoted_header_and_header_only(tmp_path, model):
     assert (tmp_path / "out.csv").read_text() == ("camera,frame,y,t_global_ms,t_center_ms,restamp_error\n")
 
 
+def test_rows_without_any_camera_name_and_an_empty_table(tmp_path, model):
+    """No camera to look up (every name blank, or no rows): each row kept with its reason."""
+    source = write(tmp_path / "blank.csv", "camera,frame,y\n,2,3\n,4,5\n")
+    summary = restamp_file(source, tmp_path / "out.csv", model)
+    assert (summary.rows, summary.failed) == (2, {"camera missing": 2})
+    empty = pd.DataFrame({"camera": pd.Series([], dtype="str"), "frame": [], "y": []})
+    assert list(restamp(empty, model)["restamp_error"]) == []
+
+
 def test_dataframe_contract(model):
     detections = pd.DataFrame(
         {

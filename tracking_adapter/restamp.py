@@ -502,7 +502,7 @@ def _stamp(
     known = np.array([clock is not None for clock in clocks] + [True])
     n_frames = np.array([clock.n_frames if clock else 0 for clock in clocks] + [0])
     height = np.array([clock.height if clock else 0 for clock in clocks] + [0])
-    sideways = np.array([as_shown and clock is not None and clock.sideways for clock in clocks])
+    sideways = np.array([as_shown and clock is not None and clock.sideways for clock in clocks], dtype=bool)
     from_x = np.append(sideways, False)[codes]  # the stored row comes from x
     with np.errstate(invalid="ignore"):
         checks = [
