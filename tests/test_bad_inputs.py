@@ -285,6 +285,12 @@ CASES = [
     ),
     ("model event of an unknown camera", _restamp_with_model(_event_camera), 1, ["events[0]", "nobody"]),
     (
+        "model event flash 1e308",
+        _restamp_with_model(lambda d: d["events"][0].__setitem__("flash", 1e308)),
+        1,
+        ["events[0]", '"flash" is 1e+308', "below 2**63"],
+    ),
+    (
         "model a folder",
         lambda t: ["restamp", _detections(t), "--model", _folder(t / "m"), "-o", t / "out" / "o.csv"],
         1,

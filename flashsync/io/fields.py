@@ -16,6 +16,9 @@ import numpy as np
 
 from flashsync.errors import InputError
 
+#: Whole numbers are stored as 64-bit integers: their magnitude stays below this.
+_WHOLE_LIMIT = 2**63
+
 
 def describe(value: object) -> str:
     """A JSON value as the reader of an error line sees it: ``the text "false"``, ``the
@@ -99,6 +102,8 @@ class Fields:
             self.fail(name, f"is {describe(value)}, expected a whole number (no quotes)")
         if minimum is not None and value < minimum:
             self.fail(name, f"is {value}, expected at least {minimum}")
+        if abs(value) >= _WHOLE_LIMIT:
+            self.fail(name, f"is {value}, expected a whole number below 2**63")
         return int(value)
 
     def number(self, name: str, minimum: float | None = None, positive: bool = False, optional: bool = False):
