@@ -597,7 +597,7 @@ def parse_anchors(anchors: list[str], event_numbers: dict[str, np.ndarray]) -> d
     result = {}
     for text in anchors:
         camera, _, number = text.rpartition(":")
-        if camera not in event_numbers or not number.isdigit():
+        if camera not in event_numbers or not number.isdecimal():
             raise InputError(
                 f"{text}: expected CAMERA:EVENT with a camera of {', '.join(event_numbers)} and an "
                 "event number (the events table's event column)",

@@ -328,6 +328,12 @@ CASES = [
         ["--anchor", "r:0 and r:2", "one event"],
     ),
     (
+        "--anchor with a superscript digit",
+        lambda t: ["sync", SYNCED / "r.mp4", SYNCED / "f.mkv", "-o", t / "out" / "s.json", "--anchor", "r:\u00b2"],
+        1,
+        ["--anchor r:\u00b2", "expected CAMERA:EVENT"],
+    ),
+    (
         "--exposure inf",
         lambda t: [
             "restamp",
