@@ -1038,6 +1038,6 @@ def _cell(text: str | None) -> tuple[int, int] | None:
     if text is None:
         return None
     width, _, height = text.lower().partition("x")
-    if not (width.isdigit() and height.isdigit() and int(width) >= 16 and int(height) >= 16):
+    if not (width.isdecimal() and height.isdecimal() and int(width) >= 16 and int(height) >= 16):
         raise InputError(f"--cell {text}: expected WIDTHxHEIGHT in px, at least 16x16, e.g. 640x360")
     return int(width), int(height)

@@ -334,6 +334,12 @@ CASES = [
         ["--anchor r:\u00b2", "expected CAMERA:EVENT"],
     ),
     (
+        "montage --cell with superscript digits",
+        lambda t: ["montage", SYNCED / "r.mp4", "--model", SYNCED / "sync.json", "--cell", "\u00b2\u2070x16"],
+        1,
+        ["--cell \u00b2\u2070x16", "expected WIDTHxHEIGHT"],
+    ),
+    (
         "--exposure inf",
         lambda t: [
             "restamp",
