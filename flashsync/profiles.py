@@ -213,7 +213,7 @@ def cut_short(container: av.container.InputContainer, decoded: int, last_times_m
         duration_ms = None
     # the header's end is at least its duration (a Matroska duration runs from time 0, an
     # MP4 stream's from its first frame)
-    step = last_times_ms[-1] - last_times_ms[0] if len(last_times_ms) > 1 else 0.0
+    step = last_times_ms[-1] - last_times_ms[0] if len(last_times_ms) > 1 else _frame_period_ms(stream)
     short_ms = duration_ms - (last_times_ms[-1] + step) if duration_ms is not None and last_times_ms else None
     listed = stream.frames or 0
     if listed and decoded < listed - max(2, 0.01 * listed) and (short_ms is None or short_ms > 1.5 * step):
@@ -224,3 +224,10 @@ def cut_short(container: av.container.InputContainer, decoded: int, last_times_m
             f"cut short: its frames end at {end / 1000.0:.2f} s of the {duration_ms / 1000.0:.2f} s its header states"
         )
     return None
+
+
+def _frame_period_ms(stream: av.video.stream.VideoStream) -> float:
+    """The frame period the stream states, ms (0 where it states no rate): the step after a
+    single decoded frame, which a video of one frame lasts in its header."""
+    rate = stream.average_rate
+    return 1000.0 / float(rate) if rate else 0.0

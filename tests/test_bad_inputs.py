@@ -87,6 +87,20 @@ def _fast_start_cut(tmp: Path) -> Path:
     return tmp / "cut.mp4"
 
 
+def _one_frame(tmp: Path) -> Path:
+    """r.mp4's first frame alone as an MP4 (its header states the one frame's 40 ms)."""
+    import av
+
+    with av.open(str(SYNCED / "r.mp4")) as source, av.open(str(tmp / "one.mp4"), "w") as out:
+        stream = out.add_stream("libx264", rate=25)
+        stream.width, stream.height, stream.pix_fmt = 320, 180, "yuv420p"
+        frame = next(source.decode(video=0))
+        frame.pts = None
+        for packet in [*stream.encode(frame), *stream.encode()]:
+            out.mux(packet)
+    return tmp / "one.mp4"
+
+
 def _raw_stream(tmp: Path) -> Path:
     """r.mp4 as a raw H.264 stream (Annex B, as some IP cameras and recorders export it)."""
     reencode(SYNCED / "r.mp4", tmp / "r.h264", "libx264", "yuv420p", rate=25)
@@ -505,6 +519,12 @@ CASES = [
         lambda t: ["detect", _fast_start_cut(t), "-o", t / "out" / "e.csv"],
         1,
         ["cut.mp4: cut short", "its index lists"],
+    ),
+    (
+        "a video of one frame: not cut short",
+        lambda t: ["detect", _one_frame(t), "-o", t / "out" / "e.csv"],
+        1,
+        ["one.mp4: only 1 frame decoded", "give a longer video"],
     ),
     (
         "a raw H.264 stream: no timestamps",
