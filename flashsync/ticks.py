@@ -68,7 +68,6 @@ def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
     >>> len(tick_times_ms(25.0, 10_000.0, 14_000.0))
     100
     """
-    step_ms = tick_period_ms(rate_hz)
     if not (math.isfinite(start_ms) and math.isfinite(end_ms)):
         raise InputError(f"ticks from {start_ms} to {end_ms} ms: give finite times in ms")
     if not end_ms > start_ms:
@@ -77,19 +76,26 @@ def tick_times_ms(rate_hz: float, start_ms: float, end_ms: float) -> np.ndarray:
             "after the start (ms on the global clock)",
             parameter="end_ms",
         )
-    count = math.ceil((end_ms - start_ms) / step_ms - 1e-6)  # a tick at the end is left out
-    if count > MAX_TICKS:
+    return start_ms + np.arange(_tick_count(rate_hz, start_ms, end_ms)) * tick_period_ms(rate_hz)
+
+
+def _tick_count(rate_hz: float, start_ms: float, end_ms: float) -> int:
+    """How many ticks lie from ``start_ms`` to ``end_ms`` (exclusive, ms; none where the end
+    is not after the start), or a one-line error for more than :data:`MAX_TICKS`."""
+    ticks = (end_ms - start_ms) / tick_period_ms(rate_hz) - 1e-6  # a tick at the end is left out
+    if ticks > MAX_TICKS:
         raise InputError(
-            f"{rate_hz}: {count} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
+            f"{rate_hz}: {ticks:.3g} ticks from {start_ms} to {end_ms} ms at {rate_hz} Hz is more "
             f"than {MAX_TICKS}; lower the rate or give a shorter span",
             parameter="rate_hz",
         )
-    return start_ms + np.arange(count) * step_ms
+    return max(math.ceil(ticks), 0)
 
 
 def tick_period_ms(rate_hz: float) -> float:
-    """``1000 / rate_hz``, ms, or a one-line error unless the rate is a positive number."""
-    if not (math.isfinite(rate_hz) and rate_hz > 0):
+    """``1000 / rate_hz``, ms, or a one-line error unless the rate is a positive number whose
+    period is finite."""
+    if not (math.isfinite(rate_hz) and rate_hz > 0 and math.isfinite(1000.0 / rate_hz)):
         raise InputError(
             f"{rate_hz}: the rate must be a positive number of ticks per second, e.g. 100", parameter="rate_hz"
         )
@@ -124,6 +130,7 @@ def model_ticks_ms(
     if start_ms is None:
         step_ms = tick_period_ms(rate_hz)
         start_ms = math.ceil(first / step_ms - 1e-6) * step_ms
+        _tick_count(rate_hz, start_ms, last)
         start_ms += _best_phase_ms(model, cameras, start_ms, last, step_ms)
     elif end_ms is None and not start_ms < last:
         raise InputError(

@@ -409,6 +409,18 @@ CASES = [
         ["--rate nan"],
     ),
     (
+        "frames --rate 1e308: more ticks than a float counts",
+        lambda t: ["frames", "--model", SYNCED / "sync.json", "--rate", "1e308", "-o", t / "out" / "f.csv"],
+        1,
+        ["--rate 1e+308", "inf ticks", "lower the rate"],
+    ),
+    (
+        "frames --rate 5e-324: an infinite period",
+        lambda t: ["frames", "--model", SYNCED / "sync.json", "--rate", "5e-324", "-o", t / "out" / "f.csv"],
+        1,
+        ["--rate 5e-324", "positive number"],
+    ),
+    (
         "an option that is not a number",
         lambda t: ["frames", "--model", SYNCED / "sync.json", "--rate", "fast"],
         1,
