@@ -122,6 +122,16 @@ def test_rows_without_any_camera_name_and_an_empty_table(tmp_path, model):
     assert list(restamp(empty, model)["restamp_error"]) == []
 
 
+def test_a_whole_frame_number_beyond_2_53_is_past_the_end(tmp_path, model):
+    """Not an error for the whole file (nor a traceback where the table is read whole)."""
+    frames = pa.array([2, 2**64 - 1], pa.uint64())
+    pq.write_table(pa.table({"camera": ["cam1", "cam1"], "frame": frames, "y": [3.0, 3.0]}), tmp_path / "big.parquet")
+    summary = restamp_file(tmp_path / "big.parquet", tmp_path / "out.csv", model)
+    assert (summary.stamped, summary.failed) == (1, {"frame past the end of the video": 1})
+    stamped = restamp(pd.DataFrame({"camera": ["cam1"], "frame": [2**53 + 1], "y": [3.0]}), model)
+    assert list(stamped["restamp_error"]) == ["frame past the end of the video"]
+
+
 def test_dataframe_contract(model):
     detections = pd.DataFrame(
         {

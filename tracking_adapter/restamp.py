@@ -567,7 +567,9 @@ def _to_float(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, np.ndarray
         present = np.asarray(array.is_valid().to_numpy(zero_copy_only=False), dtype=bool)
         return np.full(len(array), np.nan), present
     if pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind):
-        return (array.cast(pa.float64()).to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool))
+        # unsafe: a whole number beyond 2**53 is rounded (it is past any video's end), not refused
+        values = array.cast(pa.float64(), safe=False)
+        return values.to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool)
     try:
         values = pc.cast(array, pa.float64())
         return values.to_numpy(zero_copy_only=False), np.zeros(len(array), dtype=bool)
