@@ -132,6 +132,14 @@ def test_a_whole_frame_number_beyond_2_53_is_past_the_end(tmp_path, model):
     assert list(stamped["restamp_error"]) == ["frame past the end of the video"]
 
 
+def test_durations_are_not_frame_numbers(tmp_path, model):
+    """A duration of 3 s is not frame 3 (as timestamps and dates are not frames either)."""
+    frames = pa.array([3, 4], pa.duration("s"))
+    pq.write_table(pa.table({"camera": ["cam1", "cam1"], "frame": frames, "y": [3.0, 3.0]}), tmp_path / "d.parquet")
+    summary = restamp_file(tmp_path / "d.parquet", tmp_path / "out.csv", model)
+    assert (summary.stamped, summary.failed) == (0, {"frame not a number": 2})
+
+
 def test_dataframe_contract(model):
     detections = pd.DataFrame(
         {

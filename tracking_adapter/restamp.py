@@ -563,7 +563,8 @@ def _to_float(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, np.ndarray
     the values that are present but not numbers."""
     array = _plain(array)
     kind = array.type
-    if pa.types.is_boolean(kind) or pa.types.is_nested(kind):  # true/false, lists: not frame numbers nor rows
+    if pa.types.is_boolean(kind) or pa.types.is_nested(kind) or pa.types.is_temporal(kind):
+        # true/false, lists, dates and durations: not frame numbers nor rows
         present = np.asarray(array.is_valid().to_numpy(zero_copy_only=False), dtype=bool)
         return np.full(len(array), np.nan), present
     if pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_decimal(kind):
