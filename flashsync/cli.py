@@ -764,7 +764,7 @@ def _load_model(path: Path):
 
 
 def _run_restamp(args) -> int:
-    from tracking_adapter.restamp import format_summary, restamp_file, restamp_folder
+    from tracking_adapter.restamp import camera_list, format_summary, restamp_file, restamp_folder
 
     folder = args.detections.is_dir()
     output = args.output or args.detections.with_suffix(".restamped" if folder else ".restamped.csv")
@@ -790,7 +790,7 @@ def _run_restamp(args) -> int:
     if "unknown camera" in summary.failed:
         print(
             f"flashsync restamp: error: {args.detections} names cameras that are not in {args.model}: "
-            f"{', '.join(sorted(summary.unknown_cameras))} (it holds {', '.join(model.cameras)}); their rows are "
+            f"{camera_list(sorted(summary.unknown_cameras))} (it holds {', '.join(model.cameras)}); their rows are "
             "kept without t_global_ms - sync those videos too or fix the camera names",
             file=sys.stderr,
         )

@@ -486,6 +486,21 @@ CASES = [
         1,
         ["d.csv: holds no .parquet or .csv tables"],
     ),
+    (
+        "resample a camera name with a trailing space",
+        lambda t: [
+            "resample",
+            _bytes(t / "sp.csv", b"camera,frame,x,y\nr ,3,1,2\n"),
+            "--model",
+            SYNCED / "sync.json",
+            "--rate",
+            "10",
+            "-o",
+            t / "out" / "r.csv",
+        ],
+        1,
+        ["sp.csv: camera 'r ' is not in the model"],
+    ),
     # timestamps, homographies, scenario, videos
     (
         "timestamps not increasing",

@@ -25,7 +25,7 @@ from flashsync.errors import InputError
 from flashsync.io.detections import require_columns
 from flashsync.model import SyncModel
 from tracking_adapter.interpolate import STATUS, default_gap_ms, interpolate_track
-from tracking_adapter.restamp import restamp
+from tracking_adapter.restamp import camera_list, restamp
 from tracking_adapter.validate import OBJECT_COLUMNS
 
 TRACK_COLUMNS = ("t_global_ms", "camera", "object", "x", "y", "gap_ms", "reason")
@@ -109,7 +109,7 @@ def resample(
     unknown = stamped.loc[stamped["restamp_error"] == "unknown camera", "camera"].unique()
     if len(unknown):
         raise InputError(
-            f"{source}: camera {', '.join(map(str, unknown))} is not in the model "
+            f"{source}: camera {camera_list(unknown)} is not in the model "
             f"(it has {', '.join(model.cameras)}); sync its video too or fix the "
             "camera names"
         )

@@ -33,7 +33,7 @@ from __future__ import annotations
 import json
 import shutil
 import tempfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
@@ -545,6 +545,12 @@ def _stamp(
     for values in columns.values():
         values[reasons != 0] = np.nan
     return columns, reasons
+
+
+def camera_list(names: Iterable[object]) -> str:
+    """Camera names for an error line, comma-separated; a name that spaces begin or end is
+    quoted (``'cam1 '``), where they would not show."""
+    return ", ".join(repr(name) if name != name.strip() else name for name in map(str, names))
 
 
 def _camera_codes(array: pa.Array | pa.ChunkedArray) -> tuple[np.ndarray, list[str]]:
