@@ -530,6 +530,12 @@ CASES = [
         ["s.yaml", "'seed' is the text \"abc\""],
     ),
     (
+        "scenario duration 1e308 ms: no frame count",
+        lambda t: ["simulate", _bytes(t / "s.yaml", b"preset: tiny\nduration_ms: 1.0e+308\n"), "-o", t / "out" / "sim"],
+        1,
+        ["s.yaml", "duration_ms times fps is too large"],
+    ),
+    (
         "video a folder",
         lambda t: ["detect", _folder(t / "v.mp4"), "-o", t / "out" / "e.csv"],
         1,

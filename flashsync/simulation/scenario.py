@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import re
 from dataclasses import dataclass
 
@@ -403,6 +404,10 @@ def check_scenario(scenario: Scenario, source: str) -> None:
         require(0 <= c.drop_fraction < 1, f"{where}: drop_fraction must be in [0, 1)")
         require(0 <= c.miss_probability <= 1, f"{where}: miss_probability must be in [0, 1]")
         require(c.n_frames is None or c.n_frames > 0, f"{where}: n_frames must be positive")
+        require(
+            c.n_frames is not None or math.isfinite(scenario.duration_ms * c.fps),
+            f"{where}: duration_ms times fps is too large to count its frames; lower duration_ms or fps",
+        )
         require(scenario.frame_count(c) > 0, f"{where}: records no frame; raise duration_ms")
         require(0 <= c.crf <= 51, f"{where}: crf must be in 0..51")
         require(c.keyint is None or c.keyint >= 1, f"{where}: keyint must be >= 1")
