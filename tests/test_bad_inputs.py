@@ -536,6 +536,17 @@ CASES = [
         ["s.yaml", "duration_ms times fps is too large"],
     ),
     (
+        "scenario camera wider than x264 encodes",
+        lambda t: [
+            "simulate",
+            _bytes(t / "w.yaml", b"preset: tiny\ncameras: [{name: a, width: 16386, height: 180, fps: 25.0}]\n"),
+            "-o",
+            t / "out" / "sim",
+        ],
+        1,
+        ["w.yaml", "camera a", "at most 16384", "16386x180"],
+    ),
+    (
         "video a folder",
         lambda t: ["detect", _folder(t / "v.mp4"), "-o", t / "out" / "e.csv"],
         1,

@@ -36,6 +36,8 @@ from flashsync.errors import FlashsyncError
 from flashsync.simulation.scene import rink_to_image
 
 CONTAINERS = ("mp4", "mkv")
+#: The widest and tallest frame libx264 encodes, px.
+MAX_SIDE_PX = 16384
 RISES = ("linear", "cosine")
 TONES = ("linear", "srgb", "gamma")
 FLICKER_WAVEFORMS = ("sine", "rectified")
@@ -390,6 +392,10 @@ def check_scenario(scenario: Scenario, source: str) -> None:
         require(
             c.width > 0 and c.height > 0 and c.width % 2 == 0 and c.height % 2 == 0,
             f"{where}: width and height must be positive and even, got {c.width}x{c.height}",
+        )
+        require(
+            c.width <= MAX_SIDE_PX and c.height <= MAX_SIDE_PX,
+            f"{where}: width and height must be at most {MAX_SIDE_PX} (x264's limit), got {c.width}x{c.height}",
         )
         require(c.fps > 0, f"{where}: fps must be positive")
         require(c.r0 >= 0 and c.r1 >= 0, f"{where}: r0 and r1 must be >= 0")
