@@ -198,12 +198,12 @@ RECOPY = "copy the whole file again, or remux the part that is there (ffmpeg -i 
 
 
 def cut_short(container: av.container.InputContainer, decoded: int, last_times_ms: list[float]) -> str | None:
-    """What shows a video is cut short, or None: frames that end well before the duration its
-    header states (a Matroska file), or fewer frames decoded than its index lists (an MP4
-    whose index is at the front) where they also end more than a frame and a half before
-    that duration or it states none: an AVI lists a dropped frame as an empty entry of its
-    index, and one with drops ends where its header says. ``last_times_ms``: the last one
-    or two frame times."""
+    """What shows a video is cut short, or None: no frame where its header states a duration,
+    frames that end well before that duration (a Matroska file), or fewer frames decoded
+    than its index lists (an MP4 whose index is at the front) where they also end more than
+    a frame and a half before that duration or it states none: an AVI lists a dropped frame
+    as an empty entry of its index, and one with drops ends where its header says.
+    ``last_times_ms``: the last one or two frame times."""
     stream = video_stream(container)
     if stream.duration and stream.time_base:
         duration_ms = float(stream.duration * stream.time_base) * 1000.0
@@ -215,6 +215,8 @@ def cut_short(container: av.container.InputContainer, decoded: int, last_times_m
     # MP4 stream's from its first frame)
     step = last_times_ms[-1] - last_times_ms[0] if len(last_times_ms) > 1 else _frame_period_ms(stream)
     short_ms = duration_ms - (last_times_ms[-1] + step) if duration_ms is not None and last_times_ms else None
+    if not last_times_ms and duration_ms:
+        return f"cut short: no frame decoded of the {duration_ms / 1000.0:.2f} s its header states"
     listed = stream.frames or 0
     if listed and decoded < listed - max(2, 0.01 * listed) and (short_ms is None or short_ms > 1.5 * step):
         return f"cut short: {decoded} frames decoded of the {listed} its index lists"

@@ -559,6 +559,12 @@ CASES = [
         ["cut.mkv: cut short", "header states"],
     ),
     (
+        "MKV cut before its first whole frame",
+        lambda t: ["detect", _truncated(t, "f.mkv", 0.1), "-o", t / "out" / "e.csv"],
+        1,
+        ["cut.mkv: cut short: no frame decoded", "header states", "copy the whole file again"],
+    ),
+    (
         "MP4 with its index at the front cut short",
         lambda t: ["detect", _fast_start_cut(t), "-o", t / "out" / "e.csv"],
         1,
