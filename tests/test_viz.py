@@ -461,6 +461,23 @@ def test_detections_drawn_on_their_frames_at_pixel_centres(tiny, recording):
     np.testing.assert_allclose(positions, expected, atol=1e-3)
 
 
+def test_detections_off_their_cameras_frames_are_not_drawn(synced_scenario, tmp_path, capsys):
+    """A frame that is text, fractional, negative or past the video's end (a table made by
+    hand) is not drawn: before, text raised a ValueError, 3.5 was drawn on frame 3, -1 on
+    the last frame and 80 (r has 80) raised an IndexError."""
+    frames = ["2", "abc", "3.5", "-1", "80"]
+    table = pd.DataFrame({"camera": "r", "frame": frames, "x": 5.0, "y": 6.0, "t_global_ms": 100.0})
+    table.to_csv(tmp_path / "d.csv", index=False)
+    inputs = ["--model", synced_scenario / "sync.json", "--videos", synced_scenario / "r.mp4"]
+    inputs += ["--detections", tmp_path / "d.csv"]
+    code = main([str(arg) for arg in ["view", *inputs, "--save", tmp_path / "v.rrd"]])
+    err = capsys.readouterr().err
+    assert code == 0 and "Traceback" not in err, err
+    temporal, _ = read_recording(tmp_path / "v.rrd")
+    drawn = temporal["/cameras/r/detections"]
+    assert list(drawn.loc[[len(p) > 0 for p in drawn["Points2D:positions"]], "frame_r"]) == [2]
+
+
 def test_plane_observations_are_projected_detections(tiny, recording):
     temporal, _ = recording
     detections = tiny["detections"]

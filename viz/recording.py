@@ -136,7 +136,7 @@ def log_sync(
     log_instants = log_events(recording, model, table, timeline)
     log_residuals(recording, model, timeline)
     named = camera_videos(videos, model) if videos is not None else {}
-    stamped_detections = stamped(detections) if detections is not None else None
+    stamped_detections = stamped(detections, model) if detections is not None else None
     colors = camera_colors(model.cameras)
     for name, path in named.items():
         camera = model.cameras[name]

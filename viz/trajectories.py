@@ -49,17 +49,23 @@ def detections_entity(camera: str) -> str:
     return f"{camera_entity(camera)}/detections"
 
 
-def stamped(detections: pd.DataFrame) -> pd.DataFrame:
+def stamped(detections: pd.DataFrame, model: SyncModel, source: str = "restamped detections") -> pd.DataFrame:
     """The detections restamp gave a global time, with ``object`` and ``t_plane_ms``.
 
     Rows without a finite ``t_global_ms``, ``x`` or ``y`` (restamp says why in
-    ``restamp_error``) are left out. ``object`` is the object id column (``object`` or
+    ``restamp_error``), or not on a frame of a camera of ``model`` (a whole number from 0
+    to its frame count - 1) are left out. ``object`` is the object id column (``object`` or
     ``id``, as in :mod:`tracking_adapter.validate`), or :data:`NO_OBJECT` for all rows
     without one; ``t_plane_ms`` is ``t_center_ms`` where finite, else ``t_global_ms``.
+    ``source`` names the table in errors.
     """
-    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"), "restamped detections")
+    require_columns(detections.columns, ("camera", "frame", "x", "y", "t_global_ms"), source)
     numbers = detections[["x", "y", "t_global_ms"]].apply(pd.to_numeric, errors="coerce")
-    table = detections[np.isfinite(numbers).all(axis=1)]
+    frame = pd.to_numeric(detections["frame"], errors="coerce")
+    n_frames = detections["camera"].astype("str").map({name: c.n_frames for name, c in model.cameras.items()})
+    on_a_frame = (frame % 1 == 0) & (frame >= 0) & (frame < n_frames)
+    shown = (np.isfinite(numbers).all(axis=1) & on_a_frame).to_numpy()
+    table = detections[shown]
     id_column = next((name for name in OBJECT_COLUMNS if name in table), None)
     objects = table[id_column] if id_column else NO_OBJECT
     center = (
@@ -69,7 +75,7 @@ def stamped(detections: pd.DataFrame) -> pd.DataFrame:
     )
     return table.assign(
         object=objects,
-        frame=table["frame"].astype(np.int64),
+        frame=frame[shown].to_numpy(dtype=np.int64),
         t_plane_ms=center.where(np.isfinite(center), table["t_global_ms"]),
     )
 
