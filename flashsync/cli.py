@@ -845,7 +845,6 @@ def _run_view(args) -> None:
     import viz
     from flashsync.io import (
         events_to_frame,
-        load_detections,
         load_events,
         load_homographies,
         load_plane_outline,
@@ -862,7 +861,7 @@ def _run_view(args) -> None:
     data = {
         "videos": args.videos or None,
         "events": events_to_frame(load_events(args.events)) if args.events else None,
-        "detections": load_detections(args.detections) if args.detections else None,
+        "detections": _detections_to_view(args.detections, model) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
         "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
         "validation": load_validation(args.validation) if args.validation else None,
@@ -887,6 +886,24 @@ def _run_view(args) -> None:
             viz.spawn(model, grpc_port=args.grpc_port, **data)
         else:
             viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
+
+
+def _detections_to_view(path: Path, model):
+    """The re-stamped detections ``view`` draws, its columns checked naming the file, and a
+    warning where rows that restamp gave no reason for are not drawn."""
+    from flashsync.io import load_detections
+    from viz.trajectories import stamped
+
+    table = load_detections(path)
+    shown = stamped(table, model, source=str(path))
+    explained = int(table["restamp_error"].notna().sum()) if "restamp_error" in table else 0
+    if len(table) - len(shown) > explained:
+        print(
+            f"flashsync view: warning: {path}: {len(table) - len(shown) - explained} rows are not drawn: no finite "
+            f"t_global_ms, x or y, or not on a frame of a camera of the model ({', '.join(model.cameras)})",
+            file=sys.stderr,
+        )
+    return table
 
 
 def _view_files(args) -> dict[str, Path | None]:

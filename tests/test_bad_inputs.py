@@ -501,6 +501,20 @@ CASES = [
         1,
         ["sp.csv: camera 'r ' is not in the model"],
     ),
+    (
+        "view --detections not re-stamped",
+        lambda t: [
+            "view",
+            "--model",
+            SYNCED / "sync.json",
+            "--detections",
+            _detections(t),
+            "--save",
+            t / "out" / "v.rrd",
+        ],
+        1,
+        ["d.csv: missing column t_global_ms"],
+    ),
     # timestamps, homographies, scenario, videos
     (
         "timestamps not increasing",

@@ -473,6 +473,7 @@ def test_detections_off_their_cameras_frames_are_not_drawn(synced_scenario, tmp_
     code = main([str(arg) for arg in ["view", *inputs, "--save", tmp_path / "v.rrd"]])
     err = capsys.readouterr().err
     assert code == 0 and "Traceback" not in err, err
+    assert "d.csv: 4 rows are not drawn" in err
     temporal, _ = read_recording(tmp_path / "v.rrd")
     drawn = temporal["/cameras/r/detections"]
     assert list(drawn.loc[[len(p) > 0 for p in drawn["Points2D:positions"]], "frame_r"]) == [2]
