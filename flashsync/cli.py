@@ -851,6 +851,13 @@ def _run_view(args) -> None:
         load_validation,
     )
 
+    if args.plane:
+        x0, y0, x1, y1 = args.plane
+        if not (all(map(math.isfinite, args.plane)) and x0 != x1 and y0 != y1):
+            raise InputError(
+                f"--plane {' '.join(f'{v:g}' for v in args.plane)}: expected two opposite corners of a rectangle, "
+                "finite metres, e.g. 0 0 60 30"
+            )
     inputs = {
         "--model": [args.model],
         "--videos": args.videos,
