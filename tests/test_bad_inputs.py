@@ -564,6 +564,12 @@ CASES = [
         ["ts.csv", "not increasing", "fix the CSV"],
     ),
     (
+        "timestamps without a header line",
+        lambda t: ["detect", SYNCED / "r.mp4", "--timestamps", "r=" + str(_bytes(t / "ts.csv", b"0\n40\n80\n"))],
+        1,
+        ["ts.csv: its first line, 0, is not a header", "add a header line"],
+    ),
+    (
         "homography of text numbers",
         lambda t: _validate(
             t, homographies=_homographies(t, lambda d: d.__setitem__("r", [["1", 0, 0], [0, 1, 0], [0, 0, 1]]))

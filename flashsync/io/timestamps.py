@@ -33,6 +33,12 @@ def load_timestamps(path: str | Path, column: str | None = None) -> np.ndarray:
         raise InputError(f"{path}: cannot read it as CSV ({first_line(error)}); {FIX}") from None
     candidates = [column] if column else ["t_ms", "timestamp_ms", "time_ms", "rtp"]
     found = [name for name in candidates if name in table.columns]
+    header_is_a_time = len(table.columns) > 0 and pd.notna(pd.to_numeric(str(table.columns[0]), errors="coerce"))
+    if not found and header_is_a_time:
+        raise InputError(
+            f"{path}: its first line, {table.columns[0]}, is not a header; add a header line naming the column "
+            f"({', '.join(candidates)})"
+        )
     if not found:
         raise InputError(
             f"{path}: no timestamp column (it has {', '.join(map(str, table.columns)) or 'none'}); "
