@@ -481,6 +481,19 @@ CASES = [
         ["l.csv: line 3 is not UTF-8", "save the file as UTF-8"],
     ),
     (
+        "CSV with classic Mac line endings",
+        lambda t: [
+            "restamp",
+            _bytes(t / "mac.csv", b"camera,frame,y\rr,1,2\rr,2,3\r"),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.csv",
+        ],
+        1,
+        ["mac.csv: its lines end with \\r alone", "convert the line endings"],
+    ),
+    (
         "detections a folder without tables",
         lambda t: ["restamp", _folder(t / "d.csv"), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv"],
         1,

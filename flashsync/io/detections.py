@@ -237,6 +237,11 @@ def read_csv_header(path: str | Path) -> CsvHeader:
         )
     eol = b"\r\n" if line.endswith(b"\r\n") else b"\n"
     raw = line[: -len(eol)] if line.endswith(eol) else line
+    if b"\r" in raw:
+        raise InputError(
+            f"{path}: its lines end with \\r alone (a classic Mac CSV); convert the line endings to \\n or "
+            "\\r\\n, e.g. with mac2unix"
+        )
     text = raw[len(_UTF8_BOM) :] if raw.startswith(_UTF8_BOM) else raw
     try:
         names = next(csv.reader([text.decode("utf-8")]))
