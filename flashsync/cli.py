@@ -45,6 +45,7 @@ EXAMPLES = {
 #: is shown after its option.
 OPTIONS = {
     "anchors": "--anchor",
+    "cell": "--cell",
     "end_ms": "--end-ms",
     "exposure_ms": "--exposure",
     "flipped": "--flipped",

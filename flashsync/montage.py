@@ -35,6 +35,8 @@ from flashsync.timestamps import median_step_ms, open_video, video_stream, video
 
 #: Output containers by file extension.
 CONTAINERS = {".mp4": "mp4", ".mkv": "matroska", ".mov": "mov"}
+#: The widest and tallest frame libx264 encodes, px.
+X264_MAX_SIDE_PX = 16384
 #: Colour of the exposed-row line, BGR.
 LINE_COLOR = (255, 0, 255)
 BACKGROUND = 24
@@ -217,6 +219,12 @@ def write_montage(
     tiles = layout({name: (model.cameras[name].width, model.cameras[name].height) for name in named}, cell)
     width = max(t.cell_left + t.cell_width for t in tiles)
     height = max(t.cell_top + t.cell_height for t in tiles)
+    if max(width, height) > X264_MAX_SIDE_PX:
+        raise InputError(
+            f"{tiles[0].cell_width}x{tiles[0].cell_height}: cells of this size make a montage of {width}x{height} "
+            f"px, over the {X264_MAX_SIDE_PX} px a side x264 encodes; give smaller cells",
+            parameter="cell",
+        )
     located = {name: locate_ticks(model.cameras[name], ticks) for name in named}
     update = progress("montage", len(ticks)) if progress else None
     with ExitStack() as stack:

@@ -354,6 +354,21 @@ CASES = [
         ["--cell \u00b2\u2070x16", "expected WIDTHxHEIGHT"],
     ),
     (
+        "montage --cell wider than x264 encodes",
+        lambda t: [
+            "montage",
+            SYNCED / "r.mp4",
+            "--model",
+            SYNCED / "sync.json",
+            "--cell",
+            "20000x16",
+            "-o",
+            t / "out" / "m.mp4",
+        ],
+        1,
+        ["--cell 20000x16", "montage of 20000x16 px", "give smaller cells"],
+    ),
+    (
         "--exposure inf",
         lambda t: [
             "restamp",

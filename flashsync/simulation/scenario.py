@@ -33,11 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from flashsync.errors import FlashsyncError
+from flashsync.montage import X264_MAX_SIDE_PX
 from flashsync.simulation.scene import rink_to_image
 
 CONTAINERS = ("mp4", "mkv")
-#: The widest and tallest frame libx264 encodes, px.
-MAX_SIDE_PX = 16384
 RISES = ("linear", "cosine")
 TONES = ("linear", "srgb", "gamma")
 FLICKER_WAVEFORMS = ("sine", "rectified")
@@ -394,8 +393,8 @@ def check_scenario(scenario: Scenario, source: str) -> None:
             f"{where}: width and height must be positive and even, got {c.width}x{c.height}",
         )
         require(
-            c.width <= MAX_SIDE_PX and c.height <= MAX_SIDE_PX,
-            f"{where}: width and height must be at most {MAX_SIDE_PX} (x264's limit), got {c.width}x{c.height}",
+            c.width <= X264_MAX_SIDE_PX and c.height <= X264_MAX_SIDE_PX,
+            f"{where}: width and height must be at most {X264_MAX_SIDE_PX} (x264's limit), got {c.width}x{c.height}",
         )
         require(c.fps > 0, f"{where}: fps must be positive")
         require(c.r0 >= 0 and c.r1 >= 0, f"{where}: r0 and r1 must be >= 0")
