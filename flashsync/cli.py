@@ -872,7 +872,7 @@ def _run_view(args) -> None:
         "detections": _detections_to_view(args.detections, model) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
         "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
-        "validation": load_validation(args.validation) if args.validation else None,
+        "validation": load_validation(args.validation, model.cameras) if args.validation else None,
     }
     if args.plane:
         data["plane_outline_m"] = viz.rectangle_outline(*args.plane)

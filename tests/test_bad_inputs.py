@@ -101,6 +101,14 @@ def _one_frame(tmp: Path) -> Path:
     return tmp / "one.mp4"
 
 
+def _validation_of(tmp: Path, camera_b: str) -> Path:
+    """A validation JSON of one triple, camera r against ``camera_b``."""
+    triple = {"camera_a": "r", "camera_b": camera_b, "object": "puck", "t_global_ms": 100.0}
+    triple |= {"x_b": 1.0, "y_b": 2.0, "x_a": 1.0, "y_a": 2.5, "error_m": 0.5}
+    (tmp / "v.json").write_text(json.dumps({"triples": [triple]}))
+    return tmp / "v.json"
+
+
 def _raw_stream(tmp: Path) -> Path:
     """r.mp4 as a raw H.264 stream (Annex B, as some IP cameras and recorders export it)."""
     reencode(SYNCED / "r.mp4", tmp / "r.h264", "libx264", "yuv420p", rate=25)
@@ -562,6 +570,20 @@ CASES = [
         ],
         1,
         ["--plane 0 0 nan 5", "finite metres"],
+    ),
+    (
+        "view --validation of a camera not in the model",
+        lambda t: [
+            "view",
+            "--model",
+            SYNCED / "sync.json",
+            "--validation",
+            _validation_of(t, "x"),
+            "--save",
+            t / "v.rrd",
+        ],
+        1,
+        ["v.json: triples[0]", "\"camera_b\" is 'x', not a camera of the model (r, f, s)"],
     ),
     (
         "view --detections not re-stamped",

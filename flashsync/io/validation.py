@@ -4,6 +4,7 @@ with its per-pair statistics and every triple."""
 from __future__ import annotations
 
 import json
+from collections.abc import Collection
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,10 +24,11 @@ def save_validation(report: ValidationReport, path: str | Path) -> None:
     write_text(path, json.dumps(report.to_dict(), indent=1))
 
 
-def load_validation(path: str | Path) -> pd.DataFrame:
+def load_validation(path: str | Path, cameras: Collection[str] | None = None) -> pd.DataFrame:
     """The triples of a validation JSON file: B's detection, A's interpolated position and
     the distance (columns :data:`tracking_adapter.validate.TRIPLE_COLUMNS`), every value
-    checked: camera names as text, finite times, positions and distances."""
+    checked: camera names as text (one of ``cameras`` where given: the model's), finite
+    times, positions and distances."""
     path = existing_file(path)
     try:
         document = json.loads(path.read_text(encoding="utf-8"))
@@ -38,6 +40,9 @@ def load_validation(path: str | Path) -> pd.DataFrame:
     records = []
     for triple in Fields(document, str(path), fix=fix).objects("triples", "triples[{}]"):
         record = {name: triple.text(name) for name in ("camera_a", "camera_b")}
+        for name, camera in record.items():
+            if cameras is not None and camera not in cameras:
+                triple.fail(name, f"is {camera!r}, not a camera of the model ({', '.join(cameras)})")
         value = triple.value("object")
         if not isinstance(value, (str, int, float)) or isinstance(value, bool):
             triple.fail("object", "is not an object id (text or a number)")
