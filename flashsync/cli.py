@@ -845,8 +845,6 @@ def _run_view(args) -> None:
 
     import viz
     from flashsync.io import (
-        events_to_frame,
-        load_events,
         load_homographies,
         load_plane_outline,
         load_validation,
@@ -868,7 +866,7 @@ def _run_view(args) -> None:
     model = _load_model(args.model)
     data = {
         "videos": args.videos or None,
-        "events": events_to_frame(load_events(args.events)) if args.events else None,
+        "events": _events_to_view(args.events, model) if args.events else None,
         "detections": _detections_to_view(args.detections, model) if args.detections else None,
         "homographies": load_homographies(args.homographies) if args.homographies else None,
         "plane_outline_m": load_plane_outline(args.homographies) if args.homographies else None,
@@ -894,6 +892,22 @@ def _run_view(args) -> None:
             viz.spawn(model, grpc_port=args.grpc_port, **data)
         else:
             viz.serve(model, bind=args.bind, web_port=args.port, grpc_port=args.grpc_port, **data)
+
+
+def _events_to_view(path: Path, model):
+    """The events table ``view`` draws, each event's camera and frame checked against the model."""
+    from flashsync.io import events_to_frame, load_events
+
+    events = events_to_frame(load_events(path))
+    for camera, frame in zip(events["camera"], events["frame"]):
+        if camera not in model.cameras:
+            problem = f"events of camera {camera}, which is not in the model (it has {', '.join(model.cameras)})"
+        elif frame >= model.cameras[camera].n_frames:
+            problem = f"an event of camera {camera} on frame {frame}, past its {model.cameras[camera].n_frames} frames"
+        else:
+            continue
+        raise InputError(f"{path}: {problem}; give the events of the videos the model was made from")
+    return events
 
 
 def _detections_to_view(path: Path, model):

@@ -101,6 +101,17 @@ def _one_frame(tmp: Path) -> Path:
     return tmp / "one.mp4"
 
 
+def _events_changed(tmp: Path, **last) -> Path:
+    """The events of f.mkv, the last one's columns set to ``last``."""
+    from flashsync.io import events_to_frame
+    from flashsync.pipeline import all_events, detect_videos
+
+    events = events_to_frame(all_events(detect_videos([SYNCED / "f.mkv"])))
+    events.loc[events.index[-1], list(last)] = list(last.values())
+    events.to_csv(tmp / "events.csv", index=False)
+    return tmp / "events.csv"
+
+
 def _validation_of(tmp: Path, camera_b: str) -> Path:
     """A validation JSON of one triple, camera r against ``camera_b``."""
     triple = {"camera_a": "r", "camera_b": camera_b, "object": "puck", "t_global_ms": 100.0}
@@ -584,6 +595,34 @@ CASES = [
         ],
         1,
         ["v.json: triples[0]", "\"camera_b\" is 'x', not a camera of the model (r, f, s)"],
+    ),
+    (
+        "view --events past the end of a video",
+        lambda t: [
+            "view",
+            "--model",
+            SYNCED / "sync.json",
+            "--events",
+            _events_changed(t, frame=99999, t_frame_ms=1e7),
+            "--save",
+            t / "v.rrd",
+        ],
+        1,
+        ["events.csv: an event of camera f on frame 99999, past its", "give the events of the videos"],
+    ),
+    (
+        "view --events of a camera not in the model",
+        lambda t: [
+            "view",
+            "--model",
+            SYNCED / "sync.json",
+            "--events",
+            _events_changed(t, camera="x"),
+            "--save",
+            t / "v.rrd",
+        ],
+        1,
+        ["events.csv: events of camera x, which is not in the model"],
     ),
     (
         "view --detections not re-stamped",
