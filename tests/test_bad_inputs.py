@@ -230,6 +230,19 @@ CASES = [
         ["--json", "is also an input (--homographies"],
     ),
     (
+        "restamp a folder -o inside it",
+        lambda t: [
+            "restamp",
+            _detections(_folder(t / "d")).parent,
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "d" / "out",
+        ],
+        1,
+        ["d/out: is inside the detections folder", "give a folder outside it"],
+    ),
+    (
         "-o an existing folder",
         lambda t: ["restamp", _detections(t), "--model", SYNCED / "sync.json", "-o", _folder(t / "out" / "dir")],
         1,

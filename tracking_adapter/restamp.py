@@ -290,6 +290,11 @@ def restamp_folder(
     files = sorted(p.relative_to(in_folder) for p in in_folder.rglob("*") if p.suffix.lower() in FOLDER_TABLES)
     if not files:
         raise InputError(f"{in_folder}: holds no .parquet or .csv tables; give a folder of detections tables")
+    if out_folder.resolve().is_relative_to(in_folder.resolve()):
+        raise InputError(
+            f"{out_folder}: is inside the detections folder {in_folder}, whose tables it would join; give a folder "
+            "outside it for the output"
+        )
     if out_folder.exists() and (not out_folder.is_dir() or any(out_folder.iterdir())):
         raise InputError(f"{out_folder}: exists and is not an empty folder; give a new folder for the output")
     out_folder.parent.mkdir(parents=True, exist_ok=True)
