@@ -279,6 +279,9 @@ CASES = [
         ['"frame_times_ms" [5]', "NaN"],
     ),
     ("model exposure NaN", _restamp_with_model(_set("exposure_ms", math.nan)), 1, ['"exposure_ms"', "finite"]),
+    # rows that run backwards in time (sync leaves such a reading out; a model edited by hand)
+    ("model time per row 0", _restamp_with_model(_set("row_time_ms", 0.0)), 1, ['"row_time_ms"', "positive"]),
+    ("model time per row below 0", _restamp_with_model(_set("row_time_ms", -0.1)), 1, ['"row_time_ms"', "positive"]),
     ("model exposure as text", _restamp_with_model(_set("exposure_ms", "8")), 1, ['"exposure_ms"', 'text "8"']),
     ("model exposure sigma below 0", _restamp_with_model(_set("exposure_std_ms", -0.1)), 1, ['"exposure_std_ms"']),
     ("model exposure sigma NaN", _restamp_with_model(_set("exposure_std_ms", math.nan)), 1, ['"exposure_std_ms"']),

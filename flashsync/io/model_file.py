@@ -148,7 +148,7 @@ def _camera_from_fields(entry: Fields) -> CameraClock:
         flipped=entry.boolean("flipped"),
         alpha=entry.number("alpha", positive=True),
         beta_ms=entry.number("beta_ms"),
-        row_time_ms=entry.number("row_time_ms"),
+        row_time_ms=entry.number("row_time_ms", positive=True),
         covariance=entry.matrix("covariance", (3 + interior, 3 + interior)),
         drift_knots_ms=knots,
         drift_warp_ms=warp,
