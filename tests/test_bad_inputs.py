@@ -56,6 +56,25 @@ def _restamp_with_model(change, *options):
     return prepare
 
 
+def _resample(table):
+    """``resample`` at 10 Hz of the table ``table(tmp)`` writes, with the synced model."""
+    return lambda tmp: [
+        "resample",
+        table(tmp),
+        "--model",
+        SYNCED / "sync.json",
+        "--rate",
+        "10",
+        "-o",
+        tmp / "out" / "r.csv",
+    ]
+
+
+def _view_plane(*corners: str):
+    """``view`` of the synced model with ``--plane`` at these corners, saved to a recording."""
+    return lambda tmp: ["view", "--model", SYNCED / "sync.json", "--plane", *corners, "--save", tmp / "out" / "v.rrd"]
+
+
 def _copy(tmp: Path, name: str) -> Path:
     (tmp / name).write_bytes((SYNCED / name).read_bytes())
     return tmp / name
@@ -491,16 +510,7 @@ CASES = [
     ),
     (
         "parquet true/false in frame, read whole",
-        lambda t: [
-            "resample",
-            _parquet(t, frame=[True, False]),
-            "--model",
-            SYNCED / "sync.json",
-            "--rate",
-            "10",
-            "-o",
-            t / "out" / "r.csv",
-        ],
+        _resample(lambda t: _parquet(t, frame=[True, False])),
         1,
         ["column frame holds true/false"],
     ),
@@ -551,53 +561,12 @@ CASES = [
     ),
     (
         "resample a camera name with a trailing space",
-        lambda t: [
-            "resample",
-            _bytes(t / "sp.csv", b"camera,frame,x,y\nr ,3,1,2\n"),
-            "--model",
-            SYNCED / "sync.json",
-            "--rate",
-            "10",
-            "-o",
-            t / "out" / "r.csv",
-        ],
+        _resample(lambda t: _bytes(t / "sp.csv", b"camera,frame,x,y\nr ,3,1,2\n")),
         1,
         ["sp.csv: camera 'r ' is not in the model"],
     ),
-    (
-        "view --plane of no area",
-        lambda t: [
-            "view",
-            "--model",
-            SYNCED / "sync.json",
-            "--plane",
-            "0",
-            "0",
-            "60",
-            "0",
-            "--save",
-            t / "out" / "v.rrd",
-        ],
-        1,
-        ["--plane 0 0 60 0", "corners of a rectangle"],
-    ),
-    (
-        "view --plane nan",
-        lambda t: [
-            "view",
-            "--model",
-            SYNCED / "sync.json",
-            "--plane",
-            "0",
-            "0",
-            "nan",
-            "5",
-            "--save",
-            t / "out" / "v.rrd",
-        ],
-        1,
-        ["--plane 0 0 nan 5", "finite metres"],
-    ),
+    ("view --plane of no area", _view_plane("0", "0", "60", "0"), 1, ["--plane 0 0 60 0", "corners of a rectangle"]),
+    ("view --plane nan", _view_plane("0", "0", "nan", "5"), 1, ["--plane 0 0 nan 5", "finite metres"]),
     (
         "view --validation of a camera not in the model",
         lambda t: [
