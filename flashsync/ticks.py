@@ -130,7 +130,7 @@ def model_ticks_ms(
     if start_ms is None:
         step_ms = tick_period_ms(rate_hz)
         start_ms = math.ceil(first / step_ms - 1e-6) * step_ms
-        _tick_count(rate_hz, start_ms, last)
+        _tick_count(rate_hz, start_ms, last)  # too many ticks: one error line before the phase search
         start_ms += _best_phase_ms(model, cameras, start_ms, last, step_ms)
     elif end_ms is None and not start_ms < last:
         raise InputError(
