@@ -205,6 +205,7 @@ class EventDetector:
         self._whole: list[tuple[BandFit, int]] = []  # bands fitted whole that passed the recurrence
         # filter, with where their two edges start in ``_edges``
         self.exposure_rows: float | None = None
+        self.pulse_rows = np.empty(0)
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
         self.n_faint = 0
@@ -288,18 +289,24 @@ class EventDetector:
         from the pulse's decay only to a row or two, and a rectangular pulse from the
         exposure not at all where the pulse is the longer), or None with fewer than three;
         where some of the pulses are longer than it, those bands' edges are the ones fitted
-        with that exposure, and every other flash edge is flagged ``long_pulse``."""
+        with that exposure, and every other flash edge is flagged ``long_pulse``. Sets
+        :attr:`pulse_rows`: per event, the pulse of its band fitted whole with that exposure
+        (:attr:`BandFit.pulse`; the pulse may be the longer), NaN for the others."""
         if self._open is not None:
             self._emit(self._open, Band.PULSE, trailing_visible=False)
             self._open = None
         self._number(self._recurrence.release())
         common = common_width([fit for fit, _ in self._whole])
         self.exposure_rows, pulses_longer = common if common is not None else (None, False)
-        if pulses_longer:
-            settled = set()
-            for fit, at in self._whole:
-                if self._refit(fit, at, self.exposure_rows):
+        self.pulse_rows = np.full(self._n_events, np.nan)
+        settled = set()
+        for fit, at in self._whole if self.exposure_rows is not None else ():
+            refit = fit.with_width(self.exposure_rows, longer=True)
+            if refit is not None:
+                self.pulse_rows[self._edges[at][1]] = refit[0].pulse
+                if pulses_longer and self._settle(fit, refit[0], at):
                     settled |= {at, at + 1}
+        if pulses_longer:
             self._edges = [
                 edge if k in settled or edge[6] is not Band.PULSE else (*edge[:-1], edge[-1] | {Flag.LONG_PULSE})
                 for k, edge in enumerate(self._edges)
@@ -324,18 +331,14 @@ class EventDetector:
             self._edges += [(camera, self._n_events, *rest) for camera, *rest in edges]
             self._n_events += 1
 
-    def _refit(self, fit: BandFit, at: int, width: float) -> bool:
+    def _settle(self, fit: BandFit, band: BandFit, at: int) -> bool:
         """Settle the two edges of a band fitted whole, ``_edges[at]`` and ``_edges[at + 1]``,
-        in a camera whose exposure, ``width`` rows, some pulses outlast: where its fit with
-        that exposure finds the pulse the longer (alone the band was read the other way
-        round), they move to that fit; where it finds it the shorter, they stay. Unsettled
-        (False) where that fit does not converge or would move the band's middle (the same
-        whichever rectangle is the exposure) further than its ramp could explain."""
-        refit = fit.with_width(width, longer=True)
-        if refit is None:
-            return False
-        band = refit[0]
-        if band.p[1] <= width:
+        in a camera whose exposure some pulses outlast, given ``band``, its ``fit`` again with
+        that exposure: where it finds the pulse the longer (alone the band was read the
+        other way round), they move to it; where it finds it the shorter, they stay.
+        Unsettled (False) where it would move the band's middle (the same whichever
+        rectangle is the exposure) further than its ramp could explain."""
+        if band.p[1] <= band.width:
             return True
         reach = 2.0 + 2.0 * float(fit.p[2])
         if abs(band.leading + band.trailing - fit.leading - fit.trailing) > 2.0 * reach:
@@ -665,6 +668,10 @@ class CameraDetection:
         each reading fitted them (:attr:`EventDetector.exposure_rows`); None where fewer
         than three were fitted or not read that way (:attr:`exposure_rows`: the reading
         in use).
+    top_down_pulse_rows, bottom_up_pulse_rows : float arrays of shape (n_events,) or None
+        Per event number, the pulse of its band fitted whole, readout rows, as each reading
+        fitted it (:attr:`EventDetector.pulse_rows`; NaN for the other events; None where
+        not read that way or not recorded).
     display_rotation_deg : int
         Degrees counterclockwise that the video's display matrix turns its stored frames
         for showing (:func:`~flashsync.profiles.display_rotation_deg`); rows here are always
@@ -684,6 +691,8 @@ class CameraDetection:
     n_degenerate: int = 0
     top_down_exposure_rows: float | None = None
     bottom_up_exposure_rows: float | None = None
+    top_down_pulse_rows: np.ndarray | None = None
+    bottom_up_pulse_rows: np.ndarray | None = None
     display_rotation_deg: int = 0
 
     @property
@@ -695,6 +704,12 @@ class CameraDetection:
     def exposure_rows(self) -> float | None:
         """The exposure, readout rows, that the bands of the reading in use share."""
         return self.bottom_up_exposure_rows if self.flipped else self.top_down_exposure_rows
+
+    @property
+    def pulse_rows(self) -> np.ndarray | None:
+        """Per event number, the pulse of its band fitted whole, readout rows, in the reading
+        in use (NaN for the other events)."""
+        return self.bottom_up_pulse_rows if self.flipped else self.top_down_pulse_rows
 
     @property
     def undecided(self) -> bool:
@@ -721,6 +736,23 @@ class CameraDetection:
         else this detection."""
         roll = self.flicker.bottom_up if self.flicker is not None else None
         return self.read_only(roll) if self.undecided and roll is not None else self
+
+    def with_longer_exposure(self, rows: float) -> CameraDetection:
+        """This detection with the exposure of the reading in use ``rows`` readout rows longer
+        and each band fitted whole split again around its middle: its leading edge half of
+        that earlier, its trailing edge half later, its pulse that much shorter (a band is the
+        exposure convolved with the pulse, so a rectangle's band is the same whichever of the
+        two is taken the longer; its leading edge lies half a pulse in, its trailing edge one
+        exposure after that)."""
+        events, pulses = self.events, self.pulse_rows
+        whole = np.isfinite(pulses[events.event])
+        later = np.where(events.edge == Edge.TRAILING, 0.5, -0.5) * rows * whole
+        moved = replace(events, row=events.row + (-later if self.flipped else later))
+        side = "bottom_up" if self.flipped else "top_down"
+        return replace(
+            self,
+            **{side: moved, f"{side}_exposure_rows": self.exposure_rows + rows, f"{side}_pulse_rows": pulses - rows},
+        )
 
     def retimed(self, frame_times_ms: np.ndarray) -> CameraDetection:
         """This detection with other frame times (ms, one per decoded frame), its events' too."""
@@ -809,6 +841,7 @@ class VideoDetection:
             raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
         readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
         exposures = {direction: detector.exposure_rows for direction, detector in zip(self.directions, self._detectors)}
+        pulses = {direction: detector.pulse_rows for direction, detector in zip(self.directions, self._detectors)}
         return CameraDetection(
             self.info.camera,
             self.info.path,
@@ -823,6 +856,8 @@ class VideoDetection:
             n_degenerate=self._detectors[0].n_degenerate,
             top_down_exposure_rows=exposures.get(False),
             bottom_up_exposure_rows=exposures.get(True),
+            top_down_pulse_rows=pulses.get(False),
+            bottom_up_pulse_rows=pulses.get(True),
             display_rotation_deg=self._rotation_deg or 0,
         )
 

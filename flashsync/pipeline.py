@@ -80,6 +80,32 @@ NOMINAL_ROW_TIME_STD = 0.35
 #: 0.98 and 93 %, in milliseconds whatever the time per row (0.043-0.22 ms).
 EXPOSURE_FLOOR_MS = 0.02
 
+#: A camera whose bands read as a short exposure under pulses longer than it
+#: (:func:`~flashsync.ramp.common_width`) was read the other way round where the other cameras
+#: see :data:`MIN_PULSE_FLASHES` or more of its flashes shorter than it does, each by
+#: :data:`SHORTER_PULSE_SHARE` of its pulse or more, and its pulses of those flashes agree
+#: (:data:`PULSES_AGREE`) on a length :data:`MIN_EXPOSURE_GAIN` times its exposure or more: a
+#: band is the exposure convolved with the pulse, and blur mimics a short rectangle's ramps, so
+#: each band of a short flash was read as a pulse as long as the exposure
+#: (:func:`_exposures_by_pulses`). rig-415's 9.4-row cam5 at two flash powers
+#: (`bench_rigs.py --seeds 412:428 --flash-powers 0.3`), read as 1.2 rows (0.11 ms), saw 8
+#: flashes 0.84 ms long (median) that the others saw 0.3 ms long or less. Over its 117
+#: cameras, the same 16 rigs with their own pulses and 29 pairs at two powers, no camera read
+#: right passed the first two tests; of the five misread that did, the two whose pulses
+#: scatter by 0.67 and 0.91 of their median (the others' by 0.02-0.19) would have been read
+#: as 0.58 and 1.22 ms against 0.5.
+SHORTER_PULSE_SHARE = 0.5
+MIN_EXPOSURE_GAIN = 1.5
+PULSES_AGREE = 0.25
+MIN_PULSE_FLASHES = 3
+
+#: A camera's pulses (:attr:`~flashsync.detect.CameraDetection.pulse_rows`) are fitted at the
+#: exposure its bands share; they count in :func:`_exposures_the_others_tell` only where the
+#: solve's exposure is within this share of it. A 0.5 ms camera whose bands read as 1.53 ms
+#: (the solve: 0.61) saw every flash shorter than its exposure, and the other camera of the
+#: pair was read as 1.6 ms against 0.5, its times 0.5 ms off.
+READINGS_AGREE = 0.25
+
 #: Shares of the nominal time per row at which a camera that matching at the nominal leaves
 #: untied is matched again (:func:`_tie_fast_readouts`): a sensor that reads its rows in part
 #: of its frame period puts its lower rows' flashes up to half a frame later than the nominal
@@ -313,17 +339,20 @@ def _synchronized(
         spreads.update(more_spreads)
         readout_warnings += more_warnings
     best, backward_warnings = _without_backward_readings(best, attempt_on(reference))
+    best, pulse_warnings, exposure_spreads = _exposures_by_pulses(best, attempt_on(reference))
     if any(alignment.others for alignment in best.alignments.values()):
         best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
-    for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
+    half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
+    for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
-    best = best.with_flash_scatter()
+    best = best.with_flash_scatter(exposure_spreads)
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
         + clock_warnings
         + readout_warnings
         + backward_warnings
+        + pulse_warnings
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
@@ -372,6 +401,66 @@ def _without_backward_readings(
             best = attempt({name: d for name, d in best.cameras.items() if name not in backward})
         except NotEnoughDataError as error:
             raise NotEnoughDataError(f"{'; '.join(warnings)}; then {error}") from None
+
+
+def _exposures_by_pulses(
+    best: _Attempt, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
+) -> tuple[_Attempt, list[str], dict[str, float]]:
+    """``best`` solved again with each camera read the other way round by the flashes the
+    other cameras see shorter (:func:`_exposures_the_others_tell`) given that exposure
+    (:meth:`~flashsync.detect.CameraDetection.with_longer_exposure`), a warning naming each,
+    and per such camera the exposure's standard error (ms; its times take half of it)."""
+    told = _exposures_the_others_tell(best)
+    if not told:
+        return best, [], {}
+    cameras = dict(best.cameras)
+    warnings = []
+    for name, (exposure_ms, _, n_flashes) in told.items():
+        camera = best.solution.cameras[best.connected.index(name)]
+        cameras[name] = cameras[name].with_longer_exposure((exposure_ms - camera.exposure_ms) / camera.row_time_ms)
+        warnings.append(
+            f"{cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer pulses, but "
+            f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: read the other way "
+            f"round, its exposure is {exposure_ms:.2f} ms; check it against the camera's shutter setting"
+        )
+    return attempt(cameras), warnings, {name: std_ms for name, (_, std_ms, _) in told.items()}
+
+
+def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, int]]:
+    """Per camera whose bands read with some pulses longer than its exposure and that the
+    other cameras show was read the other way round (:data:`SHORTER_PULSE_SHARE`,
+    :data:`PULSES_AGREE`, :data:`MIN_EXPOSURE_GAIN`): its exposure (ms), the median of its
+    pulses of the flashes that the cameras whose bands of them are one exposure long (the
+    pulse measured by the band's ramps) see shorter, that median's standard error (ms) and
+    the number of those flashes."""
+    matches = best.matches
+    pulse_of = np.full(len(matches), np.nan)  # per matched sync event, ms: its band's pulse, its camera's exposure
+    exposure_of = np.full(len(matches), np.nan)
+    for detection, camera in zip((best.cameras[name] for name in best.connected), best.solution.cameras):
+        mine = matches.camera == detection.camera
+        read_ms = (detection.exposure_rows or np.nan) * camera.row_time_ms
+        agree = abs(read_ms - camera.exposure_ms) <= READINGS_AGREE * camera.exposure_ms
+        if detection.pulse_rows is not None and agree:
+            pulse_of[mine] = detection.pulse_rows[matches.event[mine]] * camera.row_time_ms
+        exposure_of[mine] = camera.exposure_ms
+    ramp_read = pulse_of < exposure_of
+    told = {}
+    for name in best.connected:
+        mine = (matches.camera == name) & np.isfinite(pulse_of)
+        if not np.any(pulse_of[mine] > exposure_of[mine]) or not exposure_of[mine][0] > 0:
+            continue
+        longer = []
+        for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
+            others = (matches.flash == flash) & (matches.camera != name) & ramp_read
+            if others.any() and pulse - float(np.median(pulse_of[others])) >= SHORTER_PULSE_SHARE * pulse:
+                longer.append(pulse)
+        if len(longer) < MIN_PULSE_FLASHES:
+            continue
+        exposure_ms = float(np.median(longer))
+        spread_ms = 1.4826 * float(np.median(np.abs(np.array(longer) - exposure_ms)))
+        if exposure_ms >= MIN_EXPOSURE_GAIN * exposure_of[mine][0] and spread_ms <= PULSES_AGREE * exposure_ms:
+            told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
+    return told
 
 
 def check_row_times(row_times: dict[str, float], cameras: Sequence[str]) -> None:
@@ -1015,12 +1104,13 @@ class _Attempt:
         readings are compared by (:func:`_best_readout`, :func:`_readout_doubts`)."""
         return self.score - UPSIDE_DOWN_PRIOR * sum(d.flipped for d in self.cameras.values())
 
-    def with_flash_scatter(self) -> _Attempt:
+    def with_flash_scatter(self, exposure_spreads: dict[str, float]) -> _Attempt:
         """This attempt with the scatter its flashes make added to every camera's
         covariance and exposure variance (:func:`~flashsync.jackknife.flash_scatter`): the
         errors a flash brings to all its edges, which the residuals do not show, in the
-        cameras' sigma; and :data:`EXPOSURE_FLOOR_MS` in the exposure's (without the scatter
-        where a solve left an exposure unread)."""
+        cameras' sigma; and :data:`EXPOSURE_FLOOR_MS` and the camera's ``exposure_spreads``
+        (ms, where given) in the exposure's (without the scatter where a solve left an
+        exposure unread)."""
         scatter = flash_scatter(
             self.observations, len(self.connected), self.connected.index(self.reference), self.solution, self.priors
         )
@@ -1029,10 +1119,15 @@ class _Attempt:
                 camera,
                 covariance=camera.covariance + extra[:-1, :-1],
                 exposure_std_ms=float(
-                    np.sqrt(camera.exposure_std_ms**2 + np.nan_to_num(extra[-1, -1]) + EXPOSURE_FLOOR_MS**2)
+                    np.sqrt(
+                        camera.exposure_std_ms**2
+                        + np.nan_to_num(extra[-1, -1])
+                        + EXPOSURE_FLOOR_MS**2
+                        + exposure_spreads.get(name, 0.0) ** 2
+                    )
                 ),
             )
-            for camera, extra in zip(self.solution.cameras, scatter)
+            for name, camera, extra in zip(self.connected, self.solution.cameras, scatter)
         ]
         return replace(self, solution=replace(self.solution, cameras=cameras))
 

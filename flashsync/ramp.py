@@ -199,6 +199,11 @@ class BandFit:
         return float(self.p[4])
 
     @property
+    def pulse(self) -> float:
+        """The pulse's length, rows: its hold and its decay (its light over its peak's)."""
+        return float(self.p[1] + self.p[2])
+
+    @property
     def variance(self) -> float:
         """The cost per degree of freedom (about the variance of a row's change)."""
         return _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)

@@ -19,14 +19,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_diagnose import DURATION_MS, flashes
 
 from flashsync import detect_videos, synchronize
+from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.measure import _length_excess_ms, _pulses
 from flashsync.evaluate import camera_accuracy, sync_errors
-from flashsync.events import Edge, Flag
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
-from flashsync.simulation.rigs import random_rig
+from flashsync.simulation.rigs import random_rig, second_world, with_flash_powers
 
 #: Real H.264 clips of rendered cameras, kept as rendered.
 CLIPS = Path(__file__).parent / "clips"
@@ -289,3 +291,84 @@ def test_diagnose_measures_the_lengths_of_a_camera_without_a_common_exposure(led
     assert np.isfinite(excess).sum() >= 6
     unknown = replace(ref, top_down_exposure_rows=None)
     np.testing.assert_array_equal(_length_excess_ms(unknown, _pulses(unknown)), excess)
+
+
+def two_powers_pair(folder: Path, seed: int, exposure_ms: float, full_ms: tuple[float, float]):
+    """A pair at two flash powers (:func:`~flashsync.simulation.rigs.with_flash_powers`: 30 %
+    of the flashes LED rectangles ``full_ms`` long, the rest 0.05-0.3 ms), 320x180 at 25 and
+    30 fps, one exposure: rendered, detected and synchronised. Returns the detections, the
+    sync report, the cameras' accuracy and the truth."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=exposure_ms),
+        CameraSpec("cam1", 320, 180, 30.0, exposure_ms=exposure_ms, start_ms=3000.0, offset_ms=-2830.0),
+    )
+    scenario = Scenario("two-powers", cameras, duration_ms=DURATION_MS, flashes=flashes(seed), n_players=0, seed=seed)
+    fired = with_flash_powers(second_world(scenario, seed=seed, pulses=("led",)), full_ms=full_ms, seed=seed)
+    truth = render_scenario(fired, folder)
+    detections = detect_videos([folder / "cam0.mp4", folder / "cam1.mp4"])
+    model, report = synchronize(detections)
+    return detections, report, camera_accuracy(model, truth).set_index("camera"), truth
+
+
+def turned(report) -> list[str]:
+    """The sync warnings of cameras read the other way round by the others' flashes."""
+    return [warning for warning in report.warnings if "read the other way round" in warning]
+
+
+def test_a_camera_that_read_its_bands_the_other_way_round_is_read_by_the_flashes_the_others_see(tmp_path):
+    """Full-power pulses of 2-3 ms under a 1 ms exposure at 180 rows: alone, cam1's bands
+    read as a 0.26 ms exposure under pulses about 1 ms long (blur mimics the short
+    rectangle's ramps), its exposure then 0.74 ms short (34 sigmas) and its times 0.40 ms
+    off at error/sigma 7.9. cam0 sees 12 of those flashes at most half as long, so cam1 is
+    read the other way round: its exposure the length it saw them (1.03 ms), its times then
+    0.02 ms off, with a warning."""
+    detections, report, accuracy, truth = two_powers_pair(tmp_path, 3, 1.0, (2.0, 3.0))
+    assert detections[1].exposure_rows * truth.cameras["cam1"].row_time_ms < 0.3  # the reading this is about
+    assert (np.abs(accuracy.exposure_error_ms) < 0.1).all(), accuracy
+    assert accuracy.loc["cam1", "rms_ms"] < 0.05 and accuracy.loc["cam1", "z_rms"] < 1.5, accuracy
+    assert len(turned(report)) == 1 and turned(report)[0].startswith(str(tmp_path / "cam1.mp4")), report.warnings
+
+
+@pytest.mark.parametrize(
+    "seed, bound_ms",
+    [
+        pytest.param(2, 0.06, id="its-pulses-disagree"),
+        pytest.param(8, 0.25, id="the-other-camera's-readings-disagree"),
+    ],
+)
+def test_a_camera_is_not_read_the_other_way_round_on_evidence_that_does_not_hold(tmp_path, seed, bound_ms):
+    """0.5 ms exposures under full-power pulses of 1.5-2.25 ms; cam1's bands read as a
+    0.27-0.29 ms exposure under longer pulses. Seed 2: the three flashes cam0 sees at most
+    half as long cam1 saw 0.39-0.89 ms long, no one length (read so, cam1's times came out
+    0.17 ms off against 0.03). Seed 8: cam0's pulses were fitted at the 1.53 ms its bands share, which
+    its solve does not confirm (0.61 ms): read so, cam1's exposure came out 1.1 ms long and
+    its times 0.51 ms off against 0.16."""
+    detections, report, accuracy, truth = two_powers_pair(tmp_path, seed, 0.5, (1.5, 2.25))
+    assert detections[1].exposure_rows * truth.cameras["cam1"].row_time_ms < 0.3
+    assert turned(report) == [], report.warnings
+    assert accuracy.loc["cam1", "rms_ms"] < bound_ms, accuracy
+
+
+@pytest.mark.parametrize("flipped", [False, True])
+def test_a_longer_exposure_splits_each_whole_band_again_around_its_middle(flipped):
+    """Two bands fitted whole (pulses 9 and 30 rows at a 1-row exposure) and a lone leading
+    edge, read top-down or bottom-up: an exposure 8 rows longer moves each whole band's
+    leading edge 4 readout rows earlier and its trailing edge 4 later, shortens its pulse by
+    8 rows, and leaves the lone edge where it was."""
+    readout = [40.0, 41.0, 100.0, 101.0, 150.0]  # readout rows: two whole bands, then a lone leading edge
+    n = len(readout)
+    events = Events.from_columns(
+        ["cam"] * n, [0, 0, 1, 1, 2], [3] * n, [120.0] * n, [179.0 - q if flipped else q for q in readout],
+        [Edge.LEADING, Edge.TRAILING] * 2 + [Edge.LEADING], [Band.PULSE] * n, [1.0] * n, [0.5] * n, [50.0] * n,
+        [frozenset()] * n,
+    )  # fmt: skip
+    side = "bottom_up" if flipped else "top_down"
+    reading = {"top_down": None, side: events, f"{side}_exposure_rows": 1.0}
+    reading[f"{side}_pulse_rows"] = np.array([9.0, 30.0, np.nan])
+    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, flipped=flipped, **reading)
+    longer = detection.with_longer_exposure(8.0)
+    moved = 179.0 - longer.events.row if flipped else longer.events.row
+    np.testing.assert_allclose(moved, [36.0, 45.0, 96.0, 105.0, 150.0])
+    assert longer.exposure_rows == 9.0
+    np.testing.assert_allclose(longer.pulse_rows, [1.0, 22.0, np.nan])
+    assert longer.flipped == flipped and (longer.top_down is None) == flipped
