@@ -834,10 +834,30 @@ def _run_validate(args) -> None:
         as_shown=args.as_shown,
         source=", ".join(map(str, args.detections)),
     )
+    _check_compared(report, len(detections), ", ".join(map(str, args.detections)))
     print(format_report(report), flush=True)
     if args.json:
         save_validation(report, args.json)
         _PLAN.did(args.json)
+
+
+def _check_compared(report, rows: int, source: str) -> None:
+    """An error where no two cameras have usable detections: an empty table measures nothing
+    (a run that validates nothing fails rather than passes quietly)."""
+    if report.pairs:
+        return
+    reasons = ", ".join(f"{count} {reason}" for reason, count in report.not_used.items())
+    usable = rows - sum(report.not_used.values())
+    if not usable:
+        raise InputError(
+            f"{source}: none of its {rows} detections can be used ({reasons}); nothing to validate - fix those "
+            "rows or give the detections of the cameras in the model and the homographies"
+        )
+    left_out = f" ({reasons} left out)" if reasons else ""
+    raise InputError(
+        f"{source}: its {usable} usable detections are all of one camera{left_out}; validate compares cameras with "
+        "each other - give the detections of two cameras or more"
+    )
 
 
 def _run_view(args) -> None:

@@ -161,10 +161,10 @@ def _homographies(tmp: Path, change) -> Path:
     return tmp / "h.json"
 
 
-def _validate(tmp, *options, homographies=None):
+def _validate(tmp, *options, homographies=None, detections=None):
     return [
         "validate",
-        _detections(tmp),
+        detections or _detections(tmp),
         "--model",
         SYNCED / "sync.json",
         "--homographies",
@@ -451,6 +451,23 @@ CASES = [
         ],
         1,
         ["--exposure z"],
+    ),
+    (
+        "validate no detection usable",
+        lambda t: _validate(
+            t,
+            "--json",
+            t / "out" / "v.json",
+            detections=_bytes(t / "n.csv", b"camera,frame,x,y\nz,3,1,2\nr,99999,1,2\n"),
+        ),
+        1,
+        ["n.csv: none of its 2 detections can be used", "1 unknown camera", "nothing to validate"],
+    ),
+    (
+        "validate detections of one camera",
+        lambda t: _validate(t, detections=_bytes(t / "one.csv", b"camera,frame,x,y\nr,3,1,2\nr,4,1,2\n")),
+        1,
+        ["one.csv: its 2 usable detections are all of one camera", "two cameras or more"],
     ),
     ("validate --max-gap-ms -5", lambda t: _validate(t, "--max-gap-ms", "-5"), 1, ["--max-gap-ms -5", "positive"]),
     ("validate --max-gap-ms nan", lambda t: _validate(t, "--max-gap-ms", "nan"), 1, ["--max-gap-ms nan"]),
