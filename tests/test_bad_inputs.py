@@ -681,6 +681,42 @@ CASES = [
         ["s.yaml", "duration_ms times fps is too large"],
     ),
     (
+        "scenario n_frames 1e30",
+        lambda t: [
+            "simulate",
+            _bytes(
+                t / "n.yaml",
+                b"preset: tiny\ncameras: [{name: a, width: 64, height: 48, fps: 25.0, n_frames: 1"
+                + b"0" * 30
+                + b"}]\n",
+            ),
+            "-o",
+            t / "out" / "sim",
+        ],
+        1,
+        ["n.yaml", "camera a: n_frames 1" + "0" * 30, "limit of 1000000 frames"],
+    ),
+    (
+        "scenario lasting 1e15 ms",
+        lambda t: ["simulate", _bytes(t / "s.yaml", b"preset: tiny\nduration_ms: 1.0e+15\n"), "-o", t / "out" / "sim"],
+        1,
+        ["s.yaml", "duration_ms 1e+15 at 25 fps is 2.5e+13 frames", "limit of 1000000 frames"],
+    ),
+    (
+        "scenario starting at 1e20 ms: stamps a container cannot hold",
+        lambda t: [
+            "simulate",
+            _bytes(
+                t / "s.yaml",
+                b"preset: tiny\ncameras: [{name: a, width: 64, height: 48, fps: 25.0, start_ms: 1.0e+20}]\n",
+            ),
+            "-o",
+            t / "out" / "sim",
+        ],
+        1,
+        ["s.yaml", "camera a: start_ms 1e+20", "limit of 1e+12 ms"],
+    ),
+    (
         "scenario camera wider than x264 encodes",
         lambda t: [
             "simulate",

@@ -41,6 +41,13 @@ RISES = ("linear", "cosine")
 TONES = ("linear", "srgb", "gamma")
 FLICKER_WAVEFORMS = ("sine", "rectified")
 X264_PRESETS = ("ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow")
+#: Most sensor frames a simulated camera records (11 hours at 25 fps): the simulator holds
+#: per-frame arrays, and a longer render is a typo, not a test.
+MAX_FRAMES = 1_000_000
+#: Latest camera time a simulated recording reaches, ms (about 31 years): later stamps lose
+#: their fraction of a ms or overflow a container's time base.
+MAX_STAMP_MS = 1e12
+
 _NAME = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
 
 
@@ -413,7 +420,19 @@ def check_scenario(scenario: Scenario, source: str) -> None:
             c.n_frames is not None or math.isfinite(scenario.duration_ms * c.fps),
             f"{where}: duration_ms times fps is too large to count its frames; lower duration_ms or fps",
         )
-        require(scenario.frame_count(c) > 0, f"{where}: records no frame; raise duration_ms")
+        count = scenario.frame_count(c)
+        length = f"n_frames {c.n_frames}" if c.n_frames is not None else f"duration_ms {scenario.duration_ms:g}"
+        require(
+            count <= MAX_FRAMES,
+            f"{where}: {length} at {c.fps:g} fps is {count:.3g} frames, over the simulator's limit of {MAX_FRAMES} "
+            "frames a camera; lower it",
+        )
+        require(
+            c.start_ms + count * c.frame_period_ms <= MAX_STAMP_MS,
+            f"{where}: start_ms {c.start_ms:g} and {length} end at {c.start_ms + count * c.frame_period_ms:.3g} ms, "
+            f"past the simulator's limit of {MAX_STAMP_MS:g} ms; lower start_ms",
+        )
+        require(count > 0, f"{where}: records no frame; raise duration_ms")
         require(0 <= c.crf <= 51, f"{where}: crf must be in 0..51")
         require(c.keyint is None or c.keyint >= 1, f"{where}: keyint must be >= 1")
         require(c.bframes is None or 0 <= c.bframes <= 16, f"{where}: bframes must be in 0..16")
