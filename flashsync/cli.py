@@ -41,6 +41,10 @@ EXAMPLES = {
     "montage": "flashsync montage cam1.mp4 cam2.mkv --model sync.json --rate 25 -o synced.mp4",
 }
 
+#: Plausible values of --exposure (a 1/125 s shutter) and --row-time (1080 rows of 1/30 s), ms.
+EXPOSURE_EXAMPLE = "cam1=8"
+ROW_TIME_EXAMPLE = "cam1=0.0296"
+
 #: The library's parameters and the options that set them: an error about a parameter's value
 #: is shown after its option.
 OPTIONS = {
@@ -264,7 +268,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="CAMERA=MS",
-        help="known time per row of a camera in ms (datasheet); repeatable",
+        help=f"known time per row of a camera in ms (datasheet), e.g. {ROW_TIME_EXAMPLE}; repeatable",
     )
     sync.add_argument(
         "--anchor",
@@ -317,7 +321,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="CAMERA=MS",
-        help="exposure time of a camera in ms: adds t_center_ms; repeatable",
+        help=f"exposure time of a camera in ms, e.g. {EXPOSURE_EXAMPLE}: adds t_center_ms; repeatable",
     )
     restamp.add_argument("--std", action="store_true", help="add t_global_std_ms (and t_center_std_ms) from the solve")
     _as_shown_option(restamp)
@@ -341,7 +345,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="CAMERA=MS",
-        help="exposure time of a camera in ms; repeatable",
+        help=f"exposure time of a camera in ms, e.g. {EXPOSURE_EXAMPLE}; repeatable",
     )
     validate.add_argument("--json", type=Path, metavar="OUT.json", help="also write the report as JSON")
     _as_shown_option(validate)
@@ -451,7 +455,7 @@ def _parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="CAMERA=MS",
-        help="exposure time of a camera in ms (mid-exposure instants); repeatable",
+        help=f"exposure time of a camera in ms, e.g. {EXPOSURE_EXAMPLE} (mid-exposure instants); repeatable",
     )
     resample.add_argument("--camera", help="camera name of a MOTChallenge .txt file (default: its stem)")
     resample.add_argument(
@@ -669,7 +673,7 @@ def _run_sync(args) -> None:
     )
 
     timestamps = _timestamp_files(args.timestamps)
-    options = {"row_times": _per_camera_ms("--row-time", args.row_time), "anchors": args.anchor}
+    options = {"row_times": _per_camera_ms("--row-time", args.row_time, ROW_TIME_EXAMPLE), "anchors": args.anchor}
     check_row_times(options["row_times"], [video.stem for video in args.videos])
     check_anchors(args.anchor)
     outputs = {"--events": args.events, "-o": args.output, "--json": args.json, "--rrd": args.rrd}
@@ -726,9 +730,9 @@ def _run_sync(args) -> None:
     print(f"model -> {args.output}", file=sys.stderr)
 
 
-def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
+def _per_camera_ms(option: str, values: list[str], example: str) -> dict[str, float]:
     """``['cam1=0.03', ...]`` -> ``{'cam1': 0.03}``: finite, positive milliseconds, each
-    camera once (the same value twice is allowed)."""
+    camera once (the same value twice is allowed); ``example`` (``cam1=8``) is shown in the error."""
     result = {}
     for text in values:
         camera, _, value = text.partition("=")
@@ -737,7 +741,7 @@ def _per_camera_ms(option: str, values: list[str]) -> dict[str, float]:
         except ValueError:
             number = None
         if not camera or number is None:
-            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. cam1=0.0296")
+            raise InputError(f"{option} {text}: expected CAMERA=MILLISECONDS, e.g. {example}")
         if not (math.isfinite(number) and number > 0):
             raise InputError(f"{option} {text}: the value must be a positive, finite number of ms")
         if result.get(camera, number) != number:
@@ -769,7 +773,7 @@ def _run_restamp(args) -> int:
 
     folder = args.detections.is_dir()
     output = args.output or args.detections.with_suffix(".restamped" if folder else ".restamped.csv")
-    exposures = _per_camera_ms("--exposure", args.exposure)
+    exposures = _per_camera_ms("--exposure", args.exposure, EXPOSURE_EXAMPLE)
     if args.scheduler is not None and not folder:
         raise InputError(f"--scheduler {args.scheduler}: re-stamps a folder of tables; {args.detections} is a file")
     if args.scheduler is not None:
@@ -818,7 +822,7 @@ def _run_validate(args) -> None:
     from flashsync.io import load_detections, load_homographies, save_validation
     from tracking_adapter.validate import format_report, validate
 
-    exposures = _per_camera_ms("--exposure", args.exposure)
+    exposures = _per_camera_ms("--exposure", args.exposure, EXPOSURE_EXAMPLE)
     max_gap_ms = _positive_ms("--max-gap-ms", args.max_gap_ms)
     inputs = {"DETECTIONS": args.detections, "--model": [args.model], "--homographies": [args.homographies]}
     _files(inputs, {"--json": args.json})
@@ -1049,7 +1053,7 @@ def _run_resample(args) -> None:
     from tracking_adapter.resample import format_resampled, resample
 
     table_format(args.output)
-    exposures = _per_camera_ms("--exposure", args.exposure)
+    exposures = _per_camera_ms("--exposure", args.exposure, EXPOSURE_EXAMPLE)
     max_gap_ms = _positive_ms("--max-gap-ms", args.max_gap_ms)
     _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": args.output})
     model = _load_model(args.model)

@@ -438,6 +438,12 @@ CASES = [
         ["--exposure r=inf"],
     ),
     (
+        "--exposure without a value: an exposure as the example",
+        _restamp_with_model(None, "--exposure", "r"),
+        1,
+        ["--exposure r: expected CAMERA=MILLISECONDS, e.g. cam1=8"],
+    ),
+    (
         "--exposure of an unknown camera",
         lambda t: [
             "restamp",
