@@ -214,11 +214,18 @@ class SyncModel:
         In the order the videos were given.
     events : DataFrame
         Matched events, columns :data:`MATCHED_EVENT_COLUMNS`.
+    source : str
+        The model file it was read from, named by errors about the model ('' when made in memory).
     """
 
     reference: str
     cameras: dict[str, CameraClock]
     events: pd.DataFrame = field(default_factory=pd.DataFrame)
+    source: str = field(default="", compare=False)
+
+    def named(self, message: str) -> str:
+        """``message`` after the model file's name, where it was read from one."""
+        return f"{self.source}: {message}" if self.source else message
 
     def camera(self, name: str) -> CameraClock:
         """The camera called ``name``, or an error listing the known ones."""

@@ -29,7 +29,7 @@ from av.video.reformatter import VideoReformatter
 from flashsync.atomic import atomic_output
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.io.files import existing_file
-from flashsync.model import CameraClock, SyncModel
+from flashsync.model import SyncModel
 from flashsync.ticks import AFTER, BEFORE, LOCATED, REASONS, locate_ticks, model_ticks_ms, tick_period_ms
 from flashsync.timestamps import median_step_ms, open_video, video_stream, video_timestamps
 
@@ -127,12 +127,13 @@ def layout(sizes: dict[str, tuple[int, int]], cell: tuple[int, int] | None = Non
     return tiles
 
 
-def frame_rate_hz(clock: CameraClock) -> float:
-    """A camera's frame rate on the global clock (median step between frames), Hz, to
+def frame_rate_hz(model: SyncModel, name: str) -> float:
+    """Camera ``name``'s frame rate on the global clock (median step between frames), Hz, to
     0.001 Hz."""
+    clock = model.camera(name)
     if clock.n_frames < 2:
         raise NotEnoughDataError(
-            f"camera {clock.name} has one frame in the model: no frame rate to take; give the rate of the ticks"
+            model.named(f"camera {name} has one frame in the model: no frame rate to take; give the rate of the ticks")
         )
     return round(1000.0 / (clock.alpha * median_step_ms(clock.frame_times_ms)), 3)
 
@@ -214,7 +215,7 @@ def write_montage(
         tick_period_ms(rate_hz)  # a bad rate fails before decoding
     named = named_videos(videos, model)
     if rate_hz is None:
-        rate_hz = max(frame_rate_hz(model.cameras[name]) for name in named)
+        rate_hz = max(frame_rate_hz(model, name) for name in named)
     ticks = model_ticks_ms(model, rate_hz, start_ms, end_ms, cameras=list(named))
     tiles = layout({name: (model.cameras[name].width, model.cameras[name].height) for name in named}, cell)
     width = max(t.cell_left + t.cell_width for t in tiles)

@@ -56,13 +56,14 @@ def _restamp_with_model(change, *options):
     return prepare
 
 
-def _resample(table):
-    """``resample`` at 10 Hz of the table ``table(tmp)`` writes, with the synced model."""
+def _resample(table, model=lambda tmp: SYNCED / "sync.json"):
+    """``resample`` at 10 Hz of the table ``table(tmp)`` writes, with the model ``model(tmp)``
+    writes (default the synced one)."""
     return lambda tmp: [
         "resample",
         table(tmp),
         "--model",
-        SYNCED / "sync.json",
+        model(tmp),
         "--rate",
         "10",
         "-o",
@@ -187,6 +188,23 @@ def _duplicate(document):
 
 def _knots(document):
     _camera(document)["drift_knots_ms"] = [0.0, 100.0, 200.0]
+
+
+def _one_frame_camera(document, name: str = "f"):
+    """Camera f with its first frame alone (and none of its events)."""
+    _camera(document)["frame_times_ms"] = _camera(document)["frame_times_ms"][:1]
+    _camera(document)["name"] = name
+    document["events"] = [event for event in document["events"] if event["camera"] != "f"]
+
+
+def _one_frame_r_model(tmp: Path) -> Path:
+    """A model whose camera "one" is r.mp4's size with one frame, as :func:`_one_frame` writes."""
+
+    def change(document):
+        _one_frame_camera(document, "one")
+        _camera(document).update(width=320, height=180, flipped=False)
+
+    return _model(tmp, change)
 
 
 def _event_camera(document):
@@ -350,6 +368,21 @@ CASES = [
         lambda t: ["restamp", _parquet(t), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv", "--as-shown"],
         1,
         ["d.parquet", "missing column x"],
+    ),
+    (
+        "resample a camera of one frame in the model, no gap limit",
+        _resample(
+            lambda t: _bytes(t / "d.csv", b"camera,frame,x,y\nr,3,1,2\nf,0,1,2\n"),
+            lambda t: _model(t, _one_frame_camera),
+        ),
+        1,
+        ["bad.json: camera f has 1 frame in the model", "give the longest gap"],
+    ),
+    (
+        "montage of a camera of one frame in the model, no rate",
+        lambda t: ["montage", _one_frame(t), "--model", _one_frame_r_model(t), "-o", t / "out" / "m.mp4"],
+        1,
+        ["bad.json: camera one has one frame in the model", "give the rate of the ticks"],
     ),
     ("model event of an unknown camera", _restamp_with_model(_event_camera), 1, ["events[0]", "nobody"]),
     (

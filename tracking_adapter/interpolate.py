@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flashsync.errors import NotEnoughDataError
-from flashsync.model import CameraClock
+from flashsync.model import SyncModel
 from flashsync.timestamps import median_step_ms
 
 #: Why an instant has no value; code 0 (interpolated) has none.
@@ -95,13 +95,15 @@ def interpolate_track(
     return TrackSample(result, status, nearest)
 
 
-def default_gap_ms(clock: CameraClock) -> float:
-    """:data:`DEFAULT_GAP_FRAMES` frame periods of a camera (median step), ms of the
+def default_gap_ms(model: SyncModel, name: str) -> float:
+    """:data:`DEFAULT_GAP_FRAMES` frame periods of camera ``name`` (median step), ms of the
     reference clock."""
+    clock = model.camera(name)
     if clock.n_frames < 2:
         raise NotEnoughDataError(
-            f"camera {clock.name} has {clock.n_frames} frame in the model; give the "
-            "longest gap between two detections to interpolate over, or sync a "
-            "longer video"
+            model.named(
+                f"camera {clock.name} has {clock.n_frames} frame in the model; give the longest gap between two "
+                "detections to interpolate over, or sync a longer video"
+            )
         )
     return DEFAULT_GAP_FRAMES * clock.alpha * median_step_ms(clock.frame_times_ms)

@@ -134,7 +134,7 @@ def resample(
 
     pieces = []
     for camera_index, name in enumerate(model.cameras):
-        gap_limit = max_gap_ms if max_gap_ms is not None else default_gap_ms(model.camera(name))
+        gap_limit = max_gap_ms if max_gap_ms is not None else default_gap_ms(model, name)
         for obj in pd.unique(objects[usable & (cameras == name)]):
             rows = np.flatnonzero(usable & (cameras == name) & (objects == obj))
             first = rows[np.unique(frames[rows], return_index=True)[1]]

@@ -271,7 +271,7 @@ def validate(
     object_names = pd.factorize(detections[id_column])[1] if id_column else pd.Index(["object"])
     triples = []
     for a in used:
-        gap = max_gap_ms if max_gap_ms is not None else default_gap_ms(model.camera(a))
+        gap = max_gap_ms if max_gap_ms is not None else default_gap_ms(model, a)
         in_a = names == a
         for b in used:
             if a == b:

@@ -94,7 +94,7 @@ def load_model(path: str | Path) -> SyncModel:
             "defines the global clock: alpha 1, beta_ms 0, no drift warp",
         )
     events = _events_from_fields(top, clocks)
-    return SyncModel(reference=reference, cameras=clocks, events=events)
+    return SyncModel(reference=reference, cameras=clocks, events=events, source=str(path))
 
 
 def _camera_to_dict(camera: CameraClock) -> dict:
