@@ -785,6 +785,7 @@ def _run_restamp(args) -> int:
     _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": output}, ["-o"] if folder else [])
     model = _load_model(args.model)
     _note_turned("restamp", model, args.as_shown)
+    _note_long_exposures("restamp", model, exposures)
     options = {"exposure_ms": exposures, "with_std": args.std, "as_shown": args.as_shown}
     if folder:
         summary = restamp_folder(args.detections, output, model, scheduler=args.scheduler, **options)
@@ -829,6 +830,7 @@ def _run_validate(args) -> None:
     detections = pd.concat([load_detections(path) for path in args.detections], ignore_index=True)
     model = _load_model(args.model)
     _note_turned("validate", model, args.as_shown)
+    _note_long_exposures("validate", model, exposures)
     report = validate(
         detections,
         model,
@@ -843,6 +845,25 @@ def _run_validate(args) -> None:
     if args.json:
         save_validation(report, args.json)
         _PLAN.did(args.json)
+
+
+def _note_long_exposures(command: str, model, given: dict[str, float]) -> None:
+    """A warning per camera whose exposure in the model (not given by --exposure) is longer
+    than its frame period: a model edited by hand, or a long exposure read wrong by sync (its
+    mid-exposure times t_center_ms are then wrong; its t_global_ms are not)."""
+    from tracking_adapter.restamp import longer_than_frame
+
+    for clock in model.cameras.values():
+        if clock.name in given or clock.exposure_ms is None:
+            continue
+        period = longer_than_frame(clock, clock.exposure_ms)
+        if period is not None:
+            print(
+                f"flashsync {command}: warning: {model.source}: camera {clock.name}'s exposure_ms, "
+                f"{clock.exposure_ms:g}, is longer than its frame period ({period:.2f} ms), so its t_center_ms are "
+                f"wrong - give its exposure with --exposure {clock.name}=MS",
+                file=sys.stderr,
+            )
 
 
 def _check_compared(report, rows: int, source: str) -> None:
@@ -1058,6 +1079,7 @@ def _run_resample(args) -> None:
     _files({"DETECTIONS": [args.detections], "--model": [args.model]}, {"-o": args.output})
     model = _load_model(args.model)
     _note_turned("resample", model, args.as_shown)
+    _note_long_exposures("resample", model, exposures)
     ticks = model_ticks_ms(model, args.rate, args.start_ms, args.end_ms)
     result = resample(
         load_detections(args.detections, camera=args.camera),

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cli_run import one_error_line
+from cli_run import one_error_line, run
 
 from flashsync.cli import main
 from flashsync.simulation.encode import reencode
@@ -477,6 +477,12 @@ CASES = [
         ["--exposure r: expected CAMERA=MILLISECONDS, e.g. cam1=8"],
     ),
     (
+        "--exposure longer than the frame period",
+        _restamp_with_model(None, "--exposure", "r=50"),
+        1,
+        ["--exposure r=50: longer than camera r's frame period (40.00 ms)", "give the exposure in ms"],
+    ),
+    (
         "--exposure of an unknown camera",
         lambda t: [
             "restamp",
@@ -889,6 +895,21 @@ def _parquet_with_boxes(folder: Path) -> Path:
     table["bbox"] = [np.array([1.0, 2.0, 3.0, 4.0]), np.array([5.0, 6.0, 7.0, 8.0])]
     table.to_parquet(folder / "boxes.parquet")
     return folder / "boxes.parquet"
+
+
+def test_a_model_exposure_longer_than_the_frame_period_is_a_warning(synced_scenario, tmp_path, capsys):
+    """A model's exposure longer than its camera's frame period (33.3 ms) is stamped with one warning
+    naming the file; --exposure of that camera replaces it without one."""
+    model = _model(tmp_path, _set("exposure_ms", 50.0))
+    argv = ["restamp", _detections(tmp_path), "--model", model, "-o", tmp_path / "o.csv"]
+    code, _, err = run(capsys, *argv)
+    assert code == 0 and (tmp_path / "o.csv").exists()
+    warning, summary = err.splitlines()
+    assert warning.startswith("flashsync restamp: warning: ") and "Traceback" not in err
+    assert "bad.json: camera f's exposure_ms, 50, is longer than its frame period (33.33 ms)" in warning
+    assert "--exposure f=MS" in warning and summary.endswith("2 rows, 2 stamped")
+    code, _, err = run(capsys, *argv, "--exposure", "f=8")
+    assert code == 0 and "warning" not in err
 
 
 def test_restamp_strict_fails_where_the_model_gives_no_finite_time(synced_scenario, tmp_path, capsys):

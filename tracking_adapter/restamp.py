@@ -57,7 +57,8 @@ from flashsync.io.detections import (
     require_columns,
 )
 from flashsync.io.files import first_line
-from flashsync.model import SyncModel
+from flashsync.model import CameraClock, SyncModel
+from flashsync.timestamps import median_step_ms
 
 #: Why a row was not stamped, in the order the checks run (the first failing one is reported).
 REASONS = (
@@ -77,6 +78,9 @@ REASONS = (
     "no finite time from the model",
 )
 NEW_COLUMNS = ("t_global_ms", "t_global_std_ms", "t_center_ms", "t_center_std_ms", "restamp_error")
+#: How far an exposure may exceed its camera's frame period before it is called longer, ms: the
+#: rounding of 1 ms stamps (a period read from them can come out up to 1 ms short).
+PERIOD_SLACK_MS = 1.0
 _MISSING_TEXT = ["", "nan", "-nan", "na", "n/a", "null", "none"]
 _BATCH_ROWS = 1 << 20
 
@@ -645,12 +649,27 @@ def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dic
     for name, value in given.items():
         if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
             raise InputError(f"exposure of camera {name} is {value!r}; give a time >= 0 in ms")
+        period = longer_than_frame(model.cameras[name], value)
+        if period is not None:
+            raise InputError(
+                f"{name}={value:g}: longer than camera {name}'s frame period ({period:.2f} ms); a video camera exposes "
+                "each frame within its period - give the exposure in ms",
+                parameter="exposure_ms",
+            )
     exposures = {name: Exposure(value, 0.0) for name, value in given.items()}
     for name, clock in model.cameras.items():
         if name not in exposures and clock.exposure_ms is not None:
             std = clock.exposure_std_ms
             exposures[name] = Exposure(clock.exposure_ms, std if std is not None else float("nan"))
     return {name: exposures.get(name) for name in model.cameras}
+
+
+def longer_than_frame(clock: CameraClock, exposure_ms: float) -> float | None:
+    """The camera's frame period (median step of its frame times, ms) where ``exposure_ms`` is
+    longer than it by over :data:`PERIOD_SLACK_MS`, else None: no video camera exposes a frame
+    for longer than its period."""
+    period = median_step_ms(clock.frame_times_ms)
+    return period if clock.n_frames > 1 and exposure_ms > period + PERIOD_SLACK_MS else None
 
 
 def _new_columns(exposures: dict[str, Exposure | None], with_std: bool) -> list[str]:
