@@ -200,12 +200,21 @@ def test_a_row_whose_y_is_text_is_counted_not_a_traceback(synced_scenario, tmp_p
     assert "detections not used: 1 y not a number" in err
 
 
-def test_an_infinite_x_is_counted_not_interpolated(resampled):
-    """x = inf is left out as not a number: no infinite or empty x is written as interpolated."""
+@pytest.mark.parametrize(
+    "xs, not_used",
+    [([np.inf], {"x missing or not a number": 1}), ([1e308, -1e308], {"x beyond 1e+09 px": 2})],
+    ids=["inf", "1e308 then -1e308"],
+)
+def test_an_infinite_or_huge_x_is_counted_not_interpolated(resampled, xs, not_used):
+    """x = inf is left out as not a number, and x beyond 1e9 px as beyond any image (between 1e308
+    and -1e308 the difference overflowed to -inf): no infinite, empty or absurd x is written as
+    interpolated."""
     model, detections, _ = resampled
     table = detections[detections["camera"] == "r"].head(6).copy()
-    table.loc[table.index[2], "x"] = np.inf
+    table.loc[table.index[2 : 2 + len(xs)], "x"] = xs
     result = resample(table, model, model_ticks_ms(model, 100.0))
-    assert result.not_used == {"x missing or not a number": 1}
+    assert result.not_used == not_used
     interpolated = result.tracks[result.tracks["reason"] == ""]
     assert len(interpolated) and np.isfinite(interpolated[["x", "y"]].to_numpy()).all()
+    kept = table["x"].drop(table.index[2 : 2 + len(xs)])
+    assert interpolated["x"].between(kept.min(), kept.max()).all()

@@ -29,6 +29,9 @@ from tracking_adapter.restamp import camera_list, restamp
 from tracking_adapter.validate import OBJECT_COLUMNS
 
 TRACK_COLUMNS = ("t_global_ms", "camera", "object", "x", "y", "gap_ms", "reason")
+#: Largest |x| of a detection that is interpolated, px: far beyond any image, and far below
+#: where the difference of two x overflows (1.8e308).
+MAX_X_PX = 1e9
 
 
 @dataclass
@@ -49,7 +52,8 @@ class Resampled:
         Detections read.
     not_used : dict of str to int
         Detections left out, by reason (restamp's reasons, ``x missing or not a number``,
-        ``object id missing``, ``another detection of the object in the frame``).
+        ``x beyond 1e+09 px`` (:data:`MAX_X_PX`), ``object id missing``, ``another detection of
+        the object in the frame``).
     """
 
     tracks: pd.DataFrame
@@ -122,7 +126,11 @@ def resample(
         else (np.zeros(len(detections), dtype=np.int64), pd.Index(["object"]))
     )
     x = pd.to_numeric(detections["x"], errors="coerce").to_numpy(dtype=np.float64)
-    for reason, bad in (("x missing or not a number", ~np.isfinite(x)), ("object id missing", objects < 0)):
+    for reason, bad in (
+        ("x missing or not a number", ~np.isfinite(x)),
+        (f"x beyond {MAX_X_PX:g} px", np.abs(x) > MAX_X_PX),
+        ("object id missing", objects < 0),
+    ):
         _count(not_used, reason, int(np.count_nonzero(usable & bad)))
         usable &= ~bad
     cameras = stamped["camera"].astype("str").to_numpy(dtype=object)
