@@ -616,6 +616,19 @@ CASES = [
         ["mac.csv: its lines end with \\r alone", "convert the line endings"],
     ),
     (
+        "MOTChallenge frame as text, not called missing",
+        lambda t: [
+            "restamp",
+            _bytes(t / "r.txt", b"4,1,10,10,5,5,1\nfour,1,10,10,5,5,1\n"),
+            "--model",
+            SYNCED / "sync.json",
+            "-o",
+            t / "out" / "o.csv",
+        ],
+        1,
+        ["r.txt: row 2, column frame is 'four', not a number", "fix the file"],
+    ),
+    (
         "detections a folder without tables",
         lambda t: ["restamp", _folder(t / "d.csv"), "--model", SYNCED / "sync.json", "-o", t / "out" / "o.csv"],
         1,

@@ -188,6 +188,14 @@ def load_mot(path: str | Path, camera: str | None = None) -> pd.DataFrame:
             f"columns {', '.join(MOT_COLUMNS)} or remove the header line"
         )
     numbers = {name: pd.to_numeric(table[name], errors="coerce") for name in require_mot}
+    for name in ("frame", "bb_left", "bb_top", "bb_width", "bb_height"):  # the id may be text
+        text = table[name][numbers[name].isna() & table[name].notna()]
+        if len(text):
+            row = table.index.get_loc(text.index[0]) + 1
+            raise InputError(
+                f"{path}: row {row}{' after the header' if has_header else ''}, column {name} is {text.iloc[0]!r}, "
+                "not a number; a MOTChallenge file holds numbers there - fix the file"
+            )
     new = pd.DataFrame(
         {
             "camera": camera if camera is not None else path.stem,
