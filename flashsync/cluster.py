@@ -78,15 +78,34 @@ def connect(scheduler: str) -> Iterator:
             yield client
         return
     try:
+        _handshake(scheduler)
         client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
     except (OSError, TimeoutError) as error:
+        why = str(error) or f"no Dask handshake within {CONNECT_TIMEOUT_S + 1} s: something else listens there"
         raise InputError(
-            f"{scheduler}: no Dask scheduler answers there ({error}); start one with 'dask scheduler' "
+            f"{scheduler}: no Dask scheduler answers there ({why}); start one with 'dask scheduler' "
             "and workers with 'dask worker ADDRESS', or give local:N",
             parameter="scheduler",
         ) from None
     with client:
         yield client
+
+
+def _handshake(scheduler: str) -> None:
+    """Connect to ``scheduler`` and exchange Dask's handshake within ``CONNECT_TIMEOUT_S + 1`` s,
+    else an OSError or TimeoutError: distributed's own connect waits for the handshake without a
+    limit, so a server of another kind on the port (an HTTP server) would hang the Client."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.comm import connect as open_comm
+
+    async def exchange():
+        comm = await asyncio.wait_for(open_comm(scheduler, timeout=CONNECT_TIMEOUT_S), CONNECT_TIMEOUT_S + 1)
+        await comm.close()
+
+    with ThreadPoolExecutor(1) as pool:  # an event loop of its own, wherever this is called from
+        pool.submit(asyncio.run, exchange()).result()
 
 
 def detect_on_cluster(

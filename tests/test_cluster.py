@@ -249,12 +249,21 @@ def test_bad_cluster_options(clips, tmp_path, capsys, options, words):
     one_error_line(err, *words)
 
 
-def test_no_scheduler_answers(clips, tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("listening", [False, True], ids=["nothing listens", "a server that never answers"])
+def test_no_scheduler_answers(clips, tmp_path, capsys, monkeypatch, listening):
+    """Nothing on the port, or a server of another kind that takes the connection and says nothing
+    (distributed's handshake waited for it without a limit): one line after the timeout."""
     monkeypatch.setattr("flashsync.cluster.CONNECT_TIMEOUT_S", 1)
-    code, _, err = run(
-        capsys, "detect", clips[0], "-o", tmp_path / "e.csv", "--scheduler", f"tcp://127.0.0.1:{free_port()}"
-    )
-    assert code == 1 and not (tmp_path / "e.csv").exists()
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        if listening:
+            server.listen()  # the kernel completes connections; nothing reads or writes them
+        port = server.getsockname()[1]
+        started = time.monotonic()
+        code, _, err = run(
+            capsys, "detect", clips[0], "-o", tmp_path / "e.csv", "--scheduler", f"tcp://127.0.0.1:{port}"
+        )
+    assert code == 1 and not (tmp_path / "e.csv").exists() and time.monotonic() - started < 30
     one_error_line(err, "no Dask scheduler answers", "dask scheduler", "local:N")
 
 
