@@ -47,10 +47,17 @@ def check_scheduler(scheduler: str) -> None:
     """Raise an :class:`~flashsync.errors.InputError` (parameter ``scheduler``) unless the
     address is ``tcp://HOST:PORT`` or ``local:N`` (N >= 1); imports nothing."""
     local = re.fullmatch(r"local:(\d+)", scheduler)
-    if not (re.fullmatch(r"tcp://[^\s:/]+:\d+", scheduler) or (local and int(local.group(1)) >= 1)):
+    tcp = re.fullmatch(r"tcp://[^\s:/]+:(\d+)", scheduler)
+    if not (tcp or (local and int(local.group(1)) >= 1)):
         raise InputError(
             f"{scheduler}: expected tcp://HOST:PORT of a running Dask scheduler or local:N for N worker "
             "processes on this machine",
+            parameter="scheduler",
+        )
+    if tcp and not 1 <= int(tcp.group(1)) <= 65535:
+        raise InputError(
+            f"{scheduler}: port {tcp.group(1)} is not a TCP port (1-65535); give the port the scheduler listens on "
+            "(dask scheduler's default is 8786)",
             parameter="scheduler",
         )
 
