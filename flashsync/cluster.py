@@ -21,6 +21,7 @@ extra (``pip install 'flashsync[cluster]'``), imported here only.
 
 from __future__ import annotations
 
+import os
 import re
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -36,6 +37,9 @@ from flashsync.segments import SEGMENT_MS, check_complete, plan_segments, read_s
 
 #: How long to wait for a scheduler to answer, s.
 CONNECT_TIMEOUT_S = 10
+#: Most worker processes local:N starts per CPU of this machine: more only fight for the CPUs
+#: and memory (local:100000 would start 100000 Python processes).
+LOCAL_WORKERS_PER_CPU = 4
 #: Dask priority of a video's chain of detection steps over the decoding of segments (0): a
 #: segment's step runs as soon as the segment and the step before are done, overlapping the
 #: decoding of the later segments, instead of queueing behind every segment's decoding and
@@ -52,6 +56,13 @@ def check_scheduler(scheduler: str) -> None:
         raise InputError(
             f"{scheduler}: expected tcp://HOST:PORT of a running Dask scheduler or local:N for N worker "
             "processes on this machine",
+            parameter="scheduler",
+        )
+    cpus = os.cpu_count() or 1
+    if local and int(local.group(1)) > LOCAL_WORKERS_PER_CPU * cpus:
+        raise InputError(
+            f"{scheduler}: {local.group(1)} worker processes on this machine of {cpus} CPUs; give at most "
+            f"local:{LOCAL_WORKERS_PER_CPU * cpus} (each worker is a Python process decoding video)",
             parameter="scheduler",
         )
     if tcp and not 1 <= int(tcp.group(1)) <= 65535:

@@ -240,6 +240,7 @@ def test_dask_scheduler_and_worker_processes_give_the_plain_events(clips, plain,
     [
         (["--scheduler", "tcp://127.0.0.1"], ["--scheduler tcp://127.0.0.1", "tcp://HOST:PORT", "local:N"]),
         (["--scheduler", "local:0"], ["--scheduler local:0", "local:N"]),
+        (["--scheduler", "local:100000"], ["--scheduler local:100000", "100000 worker processes", "give at most"]),
         (["--scheduler", "tcp://127.0.0.1:99999"], ["--scheduler tcp://127.0.0.1:99999", "not a TCP port (1-65535)"]),
         (["--scheduler", "local:1", "--segment", "-5"], ["--segment -5", "positive"]),
     ],
