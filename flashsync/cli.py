@@ -53,6 +53,7 @@ OPTIONS = {
     "end_ms": "--end-ms",
     "exposure_ms": "--exposure",
     "flipped": "--flipped",
+    "grpc_port": "--grpc-port",
     "max_gap_ms": "--max-gap-ms",
     "rate_hz": "--rate",
     "reference": "--reference",
@@ -61,6 +62,7 @@ OPTIONS = {
     "scheduler": "--scheduler",
     "start_ms": "--start-ms",
     "timestamps": "--timestamps",
+    "web_port": "--port",
 }
 
 
@@ -902,6 +904,8 @@ def _run_view(args) -> None:
                 f"--plane {' '.join(f'{v:g}' for v in args.plane)}: expected two opposite corners of a rectangle, "
                 "finite metres, e.g. 0 0 60 30"
             )
+    if args.serve or args.spawn:
+        viz.check_ports(args.port if args.serve else None, args.grpc_port)
     inputs = {
         "--model": [args.model],
         "--videos": args.videos,

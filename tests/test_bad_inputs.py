@@ -76,6 +76,11 @@ def _view_plane(*corners: str):
     return lambda tmp: ["view", "--model", SYNCED / "sync.json", "--plane", *corners, "--save", tmp / "out" / "v.rrd"]
 
 
+def _view_serve(*options: str):
+    """``view --serve`` of the synced model with these options (refused before any server starts)."""
+    return lambda tmp: ["view", "--model", SYNCED / "sync.json", "--serve", *options]
+
+
 def _copy(tmp: Path, name: str) -> Path:
     (tmp / name).write_bytes((SYNCED / name).read_bytes())
     return tmp / name
@@ -642,6 +647,20 @@ CASES = [
     ),
     ("view --plane of no area", _view_plane("0", "0", "60", "0"), 1, ["--plane 0 0 60 0", "corners of a rectangle"]),
     ("view --plane nan", _view_plane("0", "0", "nan", "5"), 1, ["--plane 0 0 nan 5", "finite metres"]),
+    ("view --serve --port 99999", _view_serve("--port", "99999"), 1, ["--port 99999: not a TCP port", "1-65535"]),
+    ("view --serve --port 0: no port to wait on", _view_serve("--port", "0"), 1, ["--port 0: not a TCP port"]),
+    (
+        "view --serve --port the same as --grpc-port",
+        _view_serve("--port", "9876"),
+        1,
+        ["--port 9876: the web viewer's port is also the recording stream's", "give each its own port"],
+    ),
+    (
+        "view --spawn --grpc-port 70000",
+        lambda t: ["view", "--model", SYNCED / "sync.json", "--spawn", "--grpc-port", "70000"],
+        1,
+        ["--grpc-port 70000: not a TCP port"],
+    ),
     (
         "view --validation of a camera not in the model",
         lambda t: [

@@ -18,7 +18,18 @@ Examples
 from viz.blueprint import sync_blueprint
 from viz.diagnosis import log_diagnosis, save_diagnosis
 from viz.plane import PlaneWarning, rectangle_outline
-from viz.recording import APPLICATION_ID, BIND, GRPC_PORT, WEB_PORT, log_sync, save_recording, serve, spawn, viewer_url
+from viz.recording import (
+    APPLICATION_ID,
+    BIND,
+    GRPC_PORT,
+    WEB_PORT,
+    check_ports,
+    log_sync,
+    save_recording,
+    serve,
+    spawn,
+    viewer_url,
+)
 
 __all__ = [
     "APPLICATION_ID",
@@ -26,6 +37,7 @@ __all__ = [
     "GRPC_PORT",
     "PlaneWarning",
     "WEB_PORT",
+    "check_ports",
     "log_diagnosis",
     "log_sync",
     "rectangle_outline",

@@ -53,7 +53,7 @@ import pandas as pd
 import rerun as rr
 
 from flashsync.atomic import atomic_output
-from flashsync.errors import FlashsyncError
+from flashsync.errors import FlashsyncError, InputError
 from flashsync.model import SyncModel
 from viz.blueprint import sync_blueprint
 from viz.events import event_table, log_events, log_start
@@ -227,6 +227,7 @@ def spawn(model: SyncModel, *, grpc_port: int = GRPC_PORT, **data) -> rr.Recordi
     **data
         The keyword arguments of :func:`log_sync` but ``recording``.
     """
+    check_ports(None, grpc_port)
     if not _listening(BIND, grpc_port):
         if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
             raise FlashsyncError(
@@ -262,6 +263,19 @@ def viewer_url(web_port: int = WEB_PORT, grpc_port: int = GRPC_PORT, host: str =
     """Address of the web viewer of :func:`serve`, connected to its recording."""
     source = f"rerun+http://{host}:{grpc_port}/proxy"
     return f"http://{host}:{web_port}/?url={urllib.parse.quote(source, safe='')}"
+
+
+def check_ports(web_port: int | None, grpc_port: int) -> None:
+    """An :class:`~flashsync.errors.InputError` (parameter ``web_port`` or ``grpc_port``) unless
+    each port is a TCP port, 1-65535, and the two differ (``web_port`` None: not served)."""
+    for parameter, port in (("web_port", web_port), ("grpc_port", grpc_port)):
+        if port is not None and not 1 <= port <= 65535:
+            raise InputError(f"{port}: not a TCP port; give one of 1-65535", parameter=parameter)
+    if web_port == grpc_port:
+        raise InputError(
+            f"{web_port}: the web viewer's port is also the recording stream's; give each its own port",
+            parameter="web_port",
+        )
 
 
 def url_host(bind: str) -> str:
@@ -303,6 +317,7 @@ def serve(
     **data
         The keyword arguments of :func:`log_sync` but ``recording``.
     """
+    check_ports(web_port, grpc_port)
     with tempfile.TemporaryDirectory(prefix="flashsync-serve-") as folder, _stopped_as_by_ctrl_c():
         recording = Path(folder) / "recording.rrd"
         save_recording(recording, model, **data)
