@@ -640,6 +640,12 @@ CASES = [
         ["d.csv: holds no .parquet or .csv tables"],
     ),
     (
+        "resample a folder of tables (only restamp takes one)",
+        _resample(lambda t: _parquet(_folder(t / "parts")).parent),
+        1,
+        ["parts: is a folder, not a detections table", "give the tables in it by their file names"],
+    ),
+    (
         "resample a camera name with a trailing space",
         _resample(lambda t: _bytes(t / "sp.csv", b"camera,frame,x,y\nr ,3,1,2\n")),
         1,

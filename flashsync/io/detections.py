@@ -111,10 +111,15 @@ def load_detections(path: str | Path, *, camera: str | None = None, input_format
     >>> tables = [load_detections(p) for p in ["cam1.txt", "cam2.txt"]]  # doctest: +SKIP
     >>> detections = pd.concat(tables, ignore_index=True)                  # doctest: +SKIP
     """
+    if Path(path).is_dir():
+        raise InputError(
+            f"{path}: is a folder, not a detections table; give the tables in it by their file names "
+            "(.csv, .parquet or .txt)"
+        )
+    path = existing_file(path)
     kind = detections_format(path, input_format)
     if kind == "mot":
         return load_mot(path, camera=camera)
-    path = existing_file(path)
     try:
         if kind == "parquet":
             schema = pq.read_schema(path)
