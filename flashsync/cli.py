@@ -877,12 +877,12 @@ def _check_compared(report, rows: int, source: str) -> None:
     usable = rows - sum(report.not_used.values())
     if not usable:
         raise InputError(
-            f"{source}: none of its {rows} detections can be used ({reasons}); nothing to validate - fix those "
+            f"{source}: none of the {rows} detections can be used ({reasons}); nothing to validate - fix those "
             "rows or give the detections of the cameras in the model and the homographies"
         )
     left_out = f" ({reasons} left out)" if reasons else ""
     raise InputError(
-        f"{source}: its {usable} usable detections are all of one camera{left_out}; validate compares cameras with "
+        f"{source}: the {usable} usable detections are all of one camera{left_out}; validate compares cameras with "
         "each other - give the detections of two cameras or more"
     )
 
