@@ -59,6 +59,7 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.ramp import MAX_BLUR
 from flashsync.segments import SEGMENT_MS
 from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
@@ -105,6 +106,16 @@ MIN_PULSE_FLASHES = 3
 #: (the solve: 0.61) saw every flash shorter than its exposure, and the other camera of the
 #: pair was read as 1.6 ms against 0.5, its times 0.5 ms off.
 READINGS_AGREE = 0.25
+
+#: Two more guards in :func:`_exposures_the_others_tell`, for the others' pulses measured by
+#: ramps that the fit's blur can absorb: a flash counts as seen shorter only where no other
+#: camera sees it :data:`PULSES_AGREE` as long or longer, and a camera is read the other way
+#: round only where its bands' shared exposure is this many readout rows or fewer (the ramp
+#: fits' largest blur, :data:`~flashsync.ramp.MAX_BLUR`; the misread exposures were 1.2-1.7
+#: rows). rig-4 of `bench_diagnose.py --seeds 0:12` has a 0.65 ms cam5 read right at 14.8
+#: rows whose 1.0-1.9 ms pulses two long exposures saw 0.06-0.47 ms long (their ramps taken
+#: for blur); without the guards it was read as 1.68 ms.
+MAX_TURNED_ROWS = MAX_BLUR
 
 #: Shares of the nominal time per row at which a camera that matching at the nominal leaves
 #: untied is matched again (:func:`_tie_fast_readouts`): a sensor that reads its rows in part
@@ -427,9 +438,10 @@ def _exposures_by_pulses(
 
 
 def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, int]]:
-    """Per camera whose bands read with some pulses longer than its exposure and that the
-    other cameras show was read the other way round (:data:`SHORTER_PULSE_SHARE`,
-    :data:`PULSES_AGREE`, :data:`MIN_EXPOSURE_GAIN`): its exposure (ms), the median of its
+    """Per camera whose bands read with some pulses longer than its exposure of at most
+    :data:`MAX_TURNED_ROWS` rows and that the other cameras show was read the other way round
+    (:data:`SHORTER_PULSE_SHARE`, :data:`PULSES_AGREE`, :data:`MIN_EXPOSURE_GAIN`; no other
+    camera sees such a flash about as long): its exposure (ms), the median of its
     pulses of the flashes that the cameras whose bands of them are one exposure long (the
     pulse measured by the band's ramps) see shorter, that median's standard error (ms) and
     the number of those flashes."""
@@ -447,12 +459,15 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
     told = {}
     for name in best.connected:
         mine = (matches.camera == name) & np.isfinite(pulse_of)
-        if not np.any(pulse_of[mine] > exposure_of[mine]) or not exposure_of[mine][0] > 0:
+        short = (best.cameras[name].exposure_rows or np.inf) <= MAX_TURNED_ROWS
+        if not (short and np.any(pulse_of[mine] > exposure_of[mine]) and exposure_of[mine][0] > 0):
             continue
         longer = []
         for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
-            others = (matches.flash == flash) & (matches.camera != name) & ramp_read
-            if others.any() and pulse - float(np.median(pulse_of[others])) >= SHORTER_PULSE_SHARE * pulse:
+            seen = (matches.flash == flash) & (matches.camera != name)
+            others, as_long = seen & ramp_read, seen & (pulse_of >= (1 - PULSES_AGREE) * pulse)
+            shorter = others.any() and pulse - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse
+            if shorter and not as_long.any():
                 longer.append(pulse)
         if len(longer) < MIN_PULSE_FLASHES:
             continue

@@ -29,6 +29,7 @@ from flashsync.pipeline import (
     _Attempt,
     _edge_sigma,
     _exposure_rows,
+    _exposures_the_others_tell,
     _lone_sigma,
     _pulse_lengths,
     _readout_doubts,
@@ -419,3 +420,53 @@ def _first_camera_saw_two_flashes():
     keep = (events.camera != 0) | (events.flash < 2)
     columns = {name: getattr(events, name)[keep] for name in ("camera", "flash", "t_frame_ms", "q")}
     return synthetic_detections(replace(events, **columns), truth, frames), truth, frames
+
+
+class _Matched(SimpleNamespace):
+    """Matched sync events: ``flash``, ``camera`` and ``event`` arrays of one length."""
+
+    def __len__(self) -> int:
+        return len(self.flash)
+
+
+def _told(**changes) -> dict:
+    """:func:`_exposures_the_others_tell` on three flashes of 0.05-0.1 ms and one of 3 ms seen
+    by a camera whose bands read as a 1.2-row exposure (0.12 ms) that every pulse outlasts
+    (0.83-0.85 ms, 3 ms) and by one whose 2 ms exposure outlasts them (pulses read by its
+    ramps); ``changes`` per camera: ``rows`` (its bands' exposure), ``pulses`` (ms), ``solved``
+    (its solve's exposure, ms); a third camera where given."""
+    cameras = {
+        "short": dict(rows=1.2, pulses=[0.84, 0.83, 0.85, 3.0], solved=0.12),
+        "ramps": dict(rows=20.0, pulses=[0.05, 0.1, 0.08, np.nan], solved=2.0),
+    }
+    for name, change in changes.items():
+        cameras[name] = {**cameras.get(name, cameras["ramps"]), **change}
+    names = list(cameras)
+    best = SimpleNamespace(
+        connected=names,
+        matches=_Matched(
+            flash=np.tile(np.arange(4), len(names)), camera=np.repeat(names, 4), event=np.tile(np.arange(4), len(names))
+        ),
+        cameras={
+            n: SimpleNamespace(camera=n, exposure_rows=c["rows"], pulse_rows=np.array(c["pulses"]) / 0.1)
+            for n, c in cameras.items()
+        },
+        solution=SimpleNamespace(
+            cameras=[SimpleNamespace(row_time_ms=0.1, exposure_ms=c["solved"]) for c in cameras.values()]
+        ),
+    )
+    return _exposures_the_others_tell(best)
+
+
+def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
+    """The short camera's three flashes the ramp-reading camera sees at most half as long,
+    its pulses of them 0.83-0.85 ms: read as a 0.84 ms exposure. Not where its pulses of them
+    disagree, where another camera sees them as long, where its exposure was read longer
+    than the fits' largest blur, nor where the ramp-reading camera's pulses were fitted at an
+    exposure its solve does not confirm."""
+    exposure_ms, std_ms, n_flashes = _told()["short"]
+    assert (round(exposure_ms, 3), n_flashes) == (0.84, 3) and 0 < std_ms < 0.01
+    assert _told(short=dict(pulses=[0.84, 0.4, 1.3, 3.0])) == {}
+    assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5)) == {}
+    assert _told(short=dict(rows=3.5, solved=0.35)) == {}
+    assert _told(ramps=dict(rows=40.0)) == {}
