@@ -457,10 +457,10 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
         exposure_of[mine] = camera.exposure_ms
     ramp_read = pulse_of < exposure_of
     told = {}
-    for name in best.connected:
+    for name, camera in zip(best.connected, best.solution.cameras):
         mine = (matches.camera == name) & np.isfinite(pulse_of)
         short = (best.cameras[name].exposure_rows or np.inf) <= MAX_TURNED_ROWS
-        if not (short and np.any(pulse_of[mine] > exposure_of[mine]) and exposure_of[mine][0] > 0):
+        if not (short and camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)):
             continue
         longer = []
         for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
@@ -473,7 +473,7 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
             continue
         exposure_ms = float(np.median(longer))
         spread_ms = 1.4826 * float(np.median(np.abs(np.array(longer) - exposure_ms)))
-        if exposure_ms >= MIN_EXPOSURE_GAIN * exposure_of[mine][0] and spread_ms <= PULSES_AGREE * exposure_ms:
+        if exposure_ms >= MIN_EXPOSURE_GAIN * camera.exposure_ms and spread_ms <= PULSES_AGREE * exposure_ms:
             told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
     return told
 
