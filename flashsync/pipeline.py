@@ -240,6 +240,10 @@ class SyncReport:
         contradict it (:func:`~flashsync.solve.solve_with_drift_model`).
     distrusted_flicker : cameras whose rolling mains flicker's time per row the events
         contradict: no prior is taken from it (:func:`_contradicted_flicker`).
+    longer_exposures : cameras read the other way round by the flashes the others see
+        (:func:`_exposures_by_pulses`): the readout rows by which their exposure was made
+        longer in the reading the model uses
+        (:meth:`~flashsync.detect.CameraDetection.with_longer_exposure`).
     warnings : cameras left out and why; stamps that follow no steady clock or change rate;
         datasheet times per row the events contradict.
     sigma_ms : robust residual scale of the solve, ms.
@@ -251,6 +255,7 @@ class SyncReport:
     flipped_found: list[str] = field(default_factory=list)
     free_drift: list[str] = field(default_factory=list)
     distrusted_flicker: list[str] = field(default_factory=list)
+    longer_exposures: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
 
@@ -350,7 +355,9 @@ def _synchronized(
         spreads.update(more_spreads)
         readout_warnings += more_warnings
     best, backward_warnings = _without_backward_readings(best, attempt_on(reference))
-    best, pulse_warnings, exposure_spreads = _exposures_by_pulses(best, attempt_on(reference))
+    best, pulse_warnings, longer = _exposures_by_pulses(best, attempt_on(reference))
+    report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
+    exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     if any(alignment.others for alignment in best.alignments.values()):
         best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
@@ -416,25 +423,27 @@ def _without_backward_readings(
 
 def _exposures_by_pulses(
     best: _Attempt, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
-) -> tuple[_Attempt, list[str], dict[str, float]]:
+) -> tuple[_Attempt, list[str], dict[str, tuple[float, float]]]:
     """``best`` solved again with each camera read the other way round by the flashes the
     other cameras see shorter (:func:`_exposures_the_others_tell`) given that exposure
     (:meth:`~flashsync.detect.CameraDetection.with_longer_exposure`), a warning naming each,
-    and per such camera the exposure's standard error (ms; its times take half of it)."""
+    and per such camera the readout rows its exposure was made longer by and the exposure's
+    standard error (ms; its times take half of it)."""
     told = _exposures_the_others_tell(best)
     if not told:
         return best, [], {}
     cameras = dict(best.cameras)
-    warnings = []
-    for name, (exposure_ms, _, n_flashes) in told.items():
+    warnings, longer = [], {}
+    for name, (exposure_ms, std_ms, n_flashes) in told.items():
         camera = best.solution.cameras[best.connected.index(name)]
-        cameras[name] = cameras[name].with_longer_exposure((exposure_ms - camera.exposure_ms) / camera.row_time_ms)
+        longer[name] = ((exposure_ms - camera.exposure_ms) / camera.row_time_ms, std_ms)
+        cameras[name] = cameras[name].with_longer_exposure(longer[name][0])
         warnings.append(
             f"{cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer pulses, but "
             f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: read the other way "
             f"round, its exposure is {exposure_ms:.2f} ms; check it against the camera's shutter setting"
         )
-    return attempt(cameras), warnings, {name: std_ms for name, (_, std_ms, _) in told.items()}
+    return attempt(cameras), warnings, longer
 
 
 def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, int]]:

@@ -315,18 +315,42 @@ def turned(report) -> list[str]:
     return [warning for warning in report.warnings if "read the other way round" in warning]
 
 
-def test_a_camera_that_read_its_bands_the_other_way_round_is_read_by_the_flashes_the_others_see(tmp_path):
+@pytest.fixture(scope="module")
+def read_otherwise(tmp_path_factory):
+    """Seed 3's pair at a 1 ms exposure under full-power pulses of 2-3 ms, and its folder."""
+    folder = tmp_path_factory.mktemp("read-otherwise")
+    return two_powers_pair(folder, 3, 1.0, (2.0, 3.0)), folder
+
+
+def test_a_camera_that_read_its_bands_the_other_way_round_is_read_by_the_flashes_the_others_see(read_otherwise):
     """Full-power pulses of 2-3 ms under a 1 ms exposure at 180 rows: alone, cam1's bands
     read as a 0.26 ms exposure under pulses about 1 ms long (blur mimics the short
     rectangle's ramps), its exposure then 0.74 ms short (34 sigmas) and its times 0.40 ms
     off at error/sigma 7.9. cam0 sees 12 of those flashes at most half as long, so cam1 is
     read the other way round: its exposure the length it saw them (1.03 ms), its times then
     0.02 ms off, with a warning."""
-    detections, report, accuracy, truth = two_powers_pair(tmp_path, 3, 1.0, (2.0, 3.0))
+    (detections, report, accuracy, truth), folder = read_otherwise
     assert detections[1].exposure_rows * truth.cameras["cam1"].row_time_ms < 0.3  # the reading this is about
     assert (np.abs(accuracy.exposure_error_ms) < 0.1).all(), accuracy
     assert accuracy.loc["cam1", "rms_ms"] < 0.05 and accuracy.loc["cam1", "z_rms"] < 1.5, accuracy
-    assert len(turned(report)) == 1 and turned(report)[0].startswith(str(tmp_path / "cam1.mp4")), report.warnings
+    assert len(turned(report)) == 1 and turned(report)[0].startswith(str(folder / "cam1.mp4")), report.warnings
+    assert report.longer_exposures["cam1"] == pytest.approx((1.0 - 0.26) / truth.cameras["cam1"].row_time_ms, abs=1)
+
+
+def test_diagnose_measures_a_camera_read_the_other_way_round_as_sync_reads_it(read_otherwise):
+    """The same pair: ``sync`` makes cam1's exposure 4.3 rows longer, which moves each of its
+    whole bands' edges 2.1 rows. Measured as detected, none of cam1's bands lay within
+    2 rows of an event of ``sync``'s flashes, so ``diagnose`` found no band seen by two
+    cameras and stopped with an error where ``sync`` had solved. Measured as ``sync`` reads
+    it, the workflow pairs the 19 flashes both saw, says why cam1 is measured so, and
+    ``-o`` writes ``sync``'s model."""
+    (detections, report, _, truth), _ = read_otherwise
+    d = diagnose(detections)
+    assert d.n_flashes >= 10, format_diagnosis(d)
+    assert any("measured with its exposure" in warning and "cam1" in warning for warning in d.warnings), d.warnings
+    sync_ms = d.sync_model.cameras["cam1"].exposure_ms
+    assert sync_ms == pytest.approx(truth.cameras["cam1"].exposure_ms, abs=0.1)
+    assert d.written.endswith("(the same as sync's own)"), d.written
 
 
 @pytest.mark.parametrize(

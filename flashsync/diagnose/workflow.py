@@ -270,8 +270,11 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     synced = _synchronized(detections, reference)
     if reference is None and synced:  # sync's, where the first video could not be the reference
         reference = synced[0].reference
-    paired = measure(detections, reference, paired_by=synced[0] if synced else None)
-    measurement = _flicker_sync_trusts(paired, synced[1] if synced else None)
+    measured, lengthened = _exposures_as_sync_reads(detections, synced)
+    paired = measure(measured, reference, paired_by=synced[0] if synced else None)
+    measurement = _flicker_sync_trusts(
+        replace(paired, warnings=paired.warnings + lengthened), synced[1] if synced else None
+    )
     plain = fit_candidate(measurement, frozenset())
     if plain is None:
         raise NotEnoughDataError(
@@ -349,6 +352,30 @@ def _synchronized(detections: Sequence[CameraDetection], reference: str | None) 
         return synchronize(detections, reference)
     except FlashsyncError:
         return None
+
+
+def _exposures_as_sync_reads(
+    detections: Sequence[CameraDetection], synced: tuple[SyncModel, SyncReport] | None
+) -> tuple[list[CameraDetection], tuple[str, ...]]:
+    """The detections with each exposure ``sync`` made longer made so in the reading its
+    model uses (:attr:`~flashsync.pipeline.SyncReport.longer_exposures`: a camera read the
+    other way round by the flashes the others see), so that the edges measured are the ones
+    ``sync`` solved on, and a warning each. Measured as detected, such a camera's edges lay
+    a few rows off ``sync``'s (2.1 rows where 0.26 ms became 1.05), none of its bands was
+    paired by ``sync``'s flashes and the workflow found no band seen by two cameras."""
+    longer = synced[1].longer_exposures if synced else {}
+    measured, warnings = [], []
+    for detection in detections:
+        rows = longer.get(detection.camera)
+        if rows is not None:
+            way = synced[0].cameras[detection.camera].flipped
+            detection = detection.read_flipped(way).with_longer_exposure(rows).read_flipped(detection.flipped)
+            warnings.append(
+                f"{detection.video}: measured with its exposure {rows:.1f} rows longer than its bands read, as sync "
+                "reads it (the flashes the other cameras see tell it)"
+            )
+        measured.append(detection)
+    return measured, tuple(warnings)
 
 
 def _flicker_sync_trusts(measurement: Measurement, report: SyncReport | None) -> Measurement:
