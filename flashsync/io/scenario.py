@@ -48,6 +48,7 @@ def _camera(data: object, where: str, source: str) -> CameraSpec:
             dropped_frames=tuple(_whole(f) for f in cam.dropped_frames),
             frame_gaps=tuple((_whole(g[0]), _whole(g[1])) for g in cam.frame_gaps),
             stamp_rate_changes=tuple((_whole(c[0]), float(c[1])) for c in cam.stamp_rate_changes),
+            exposure_changes=tuple((_whole(e[0]), float(e[1])) for e in cam.exposure_changes),
             missed_flashes=tuple(_whole(k) for k in cam.missed_flashes),
             gain_steps=tuple(tuple(float(v) for v in step) for step in cam.gain_steps),
             position_m=tuple(float(v) for v in cam.position_m),

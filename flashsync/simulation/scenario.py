@@ -178,12 +178,18 @@ class CameraSpec:
         ``(sensor frame, factor)``: from that frame's time on, the stamps advance
         ``factor`` times as fast as the camera's clock (a muxer bug; cumulative). The
         sensor keeps its rate.
+    exposure_changes : tuple of (int, float)
+        ``(sensor frame, exposure_ms)``: from that frame on, each row is exposed that many
+        ms (auto-exposure; at most one frame period). Flash light is scaled by
+        ``exposure_ms / exposure``: the camera's gain keeps the ambient level, so a flash
+        stands out more in a shorter exposure.
     drop_fraction : float
         Fraction of further frames dropped at random.
     n_frames : int or None
         Number of sensor frames; None takes the scenario's duration.
     flash_gain : float
-        Response of the camera to flash light, relative to its ambient exposure.
+        Response of the camera to flash light, relative to its ambient exposure (at
+        ``exposure_ms``; see `exposure_changes`).
     noise_std : float
         Sensor noise, DN.
     crf : int
@@ -239,6 +245,7 @@ class CameraSpec:
     dropped_frames: tuple = ()
     frame_gaps: tuple = ()
     stamp_rate_changes: tuple = ()
+    exposure_changes: tuple = ()
     drop_fraction: float = 0.0
     n_frames: int | None = None
     flash_gain: float = 1.0
@@ -277,6 +284,16 @@ class CameraSpec:
     def world_ms(self, t_ms: float | np.ndarray) -> np.ndarray:
         """World time (ms) of camera time `t_ms` (ms); see `clock_world_ms`."""
         return clock_world_ms(t_ms, self.offset_ms, self.drift_ppm, self.drift_rate_ppm_per_s)
+
+    def exposure_at_ms(self, t_frame_ms: float | np.ndarray) -> np.ndarray:
+        """Exposure (ms) of the frames whose true camera times are `t_frame_ms` (ms), same
+        shape: ``exposure_ms``, then each of ``exposure_changes`` from its sensor frame on
+        (frame ``f`` at ``start_ms + f * frame_period_ms``; half a period of slack)."""
+        t = np.asarray(t_frame_ms, dtype=float)
+        exposure = np.full(t.shape, float(self.exposure_ms))
+        for frame, exposure_ms in sorted(self.exposure_changes):
+            exposure[t >= self.start_ms + (frame - 0.5) * self.frame_period_ms] = exposure_ms
+        return exposure
 
 
 @dataclass(frozen=True)
@@ -453,6 +470,15 @@ def check_scenario(scenario: Scenario, source: str) -> None:
         require(
             all(len(s) == 2 and s[1] > 0 for s in c.stamp_rate_changes),
             f"{where}: stamp_rate_changes must be pairs [sensor frame, factor > 0]",
+        )
+        require(
+            all(len(e) == 2 and e[0] >= 0 and float(e[0]).is_integer() for e in c.exposure_changes)
+            and len({e[0] for e in c.exposure_changes}) == len(c.exposure_changes),
+            f"{where}: exposure_changes must be pairs [sensor frame >= 0, exposure_ms], one a frame",
+        )
+        require(
+            all(0 < e[1] <= c.frame_period_ms for e in c.exposure_changes),
+            f"{where}: exposure_changes' exposures must be in (0, {c.frame_period_ms:.3f}] ms (one frame period)",
         )
         require(
             all(0 <= k < len(scenario.flashes) for k in c.missed_flashes),
