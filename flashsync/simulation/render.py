@@ -2,14 +2,16 @@
 
 Readout row ``q`` of a frame with camera time ``t_f`` ends its exposure at
 ``t_f + (r0 + q) * T_row`` (camera time) and integrates light over the preceding
-``exposure_ms``. Both ends are mapped to world time with the camera's clock, so every
-row sees the flashes, switches and flicker of its own window. Stored-image row
+exposure ``E`` of its frame (``exposure_ms``, or another from one of the camera's
+``exposure_changes`` on). Both ends are mapped to world time with the camera's clock, so
+every row sees the flashes, switches and flicker of its own window. Stored-image row
 ``r = q``, or ``r = height - 1 - q`` for a camera mounted upside down.
 
 The linear light of a pixel is ``reflectance * shading * gain(f) * (ambient(row) +
-flash_gain * flash(row))`` plus Gaussian noise: flashes scale the scene (multiplicatively),
-they do not add a constant. The camera's response (`sensor`) maps it to DN, which are
-rounded and clipped to 0..255; by default that is the identity.
+flash_gain * exposure_ms / E * flash(row))`` plus Gaussian noise: flashes scale the scene
+(multiplicatively), they do not add a constant, and stand out more in a shorter exposure
+(auto-exposure keeps the ambient level). The camera's response (`sensor`) maps it to DN,
+which are rounded and clipped to 0..255; by default that is the identity.
 """
 
 from __future__ import annotations
@@ -118,14 +120,17 @@ def row_light(camera: CameraSpec, t_frame_ms: float, lighting: Lighting) -> np.n
     Returns
     -------
     ndarray, shape (height,)
-        ``ambient + flash_gain * sum of flash light``; 1 for a plain row.
+        ``ambient + flash_gain * exposure_ms / E * sum of flash light`` (``E`` the
+        frame's exposure); 1 for a plain row.
     """
+    exposure = camera.exposure_at_ms(t_frame_ms)
     end = exposure_end_ms(camera, t_frame_ms)
-    start_w, end_w = camera.world_ms(end - camera.exposure_ms), camera.world_ms(end)
+    start_w, end_w = camera.world_ms(end - exposure), camera.world_ms(end)
     light = ambient_light(start_w, end_w, lighting)
+    gain = camera.flash_gain * (camera.exposure_ms / exposure)  # auto-exposure keeps the ambient level
     for flash in lighting.flashes:
         if flash_reaches(flash, start_w.min(), end_w.max()):  # the others add exactly 0
-            light = light + camera.flash_gain * flash_light(start_w, end_w, flash)
+            light = light + gain * flash_light(start_w, end_w, flash)
     return light
 
 
@@ -143,7 +148,7 @@ def _draw_object(
     height, width = refl.shape[:2]
     k = obj.blur_samples
     end = exposure_end_ms(cam, t_frame_ms)
-    sub = end[:, None] - cam.exposure_ms * (np.arange(k) + 0.5) / k
+    sub = end[:, None] - cam.exposure_at_ms(t_frame_ms) * (np.arange(k) + 0.5) / k
     pos = obj.position(cam.world_ms(sub))  # (height, k, 2) metres: row r at its own times
     img = apply_homography(view.to_image, pos)  # (height, k, 2) px
     gap = np.abs(img[..., 1] - np.arange(height)[:, None])  # rows from each row to the disc
@@ -248,9 +253,10 @@ def puck_track(view: CameraView, puck: Puck, t_frame_ms: np.ndarray) -> tuple[np
     """
     cam = view.camera
     t = np.asarray(t_frame_ms, dtype=float)
+    half_exposure = cam.exposure_at_ms(t) / 2.0
     row = np.full(t.shape, (cam.height - 1) / 2.0)
     for _ in range(3):
-        mid = t + (cam.r0 + readout_index(cam, row)) * cam.row_time_ms - cam.exposure_ms / 2.0
+        mid = t + (cam.r0 + readout_index(cam, row)) * cam.row_time_ms - half_exposure
         xy = apply_homography(view.to_image, puck.position(cam.world_ms(mid)))
         row = np.clip(np.nan_to_num(xy[:, 1], nan=-1.0), -1.0, cam.height)
     with np.errstate(invalid="ignore"):
@@ -274,7 +280,8 @@ def flash_frames(camera: CameraSpec, t_frame_ms: np.ndarray, flash: FlashSpec) -
         Some visible row integrates at least 2 % of the flash's strength.
     """
     end = exposure_end_ms(camera, t_frame_ms)
-    light = flash_light(camera.world_ms(end - camera.exposure_ms), camera.world_ms(end), flash)
+    start = end - camera.exposure_at_ms(t_frame_ms)[:, None]
+    light = flash_light(camera.world_ms(start), camera.world_ms(end), flash)
     return light.max(axis=1) >= _FLASH_SEEN * flash.strength
 
 
