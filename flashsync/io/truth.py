@@ -9,6 +9,8 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
+
 from flashsync.atomic import write_text
 from flashsync.errors import InputError
 from flashsync.io.fields import Fields, check_types, describe, is_number
@@ -64,8 +66,13 @@ def load_ground_truth(path: str | Path) -> GroundTruth:
         for key in ("frame_times_ms", "stamps_ms"):
             entry.numbers(key, increasing=True)
         seen = Fields(entry.value("flashes_seen"), str(path), f"camera {name!r} flashes_seen", fix=fix)
+        changes = _exposure_changes(entry)
         try:
-            c = dict(entry.data, flashes_seen={int(k): [int(f) for f in v] for k, v in seen.data.items()})
+            c = dict(
+                entry.data,
+                flashes_seen={int(k): [int(f) for f in v] for k, v in seen.data.items()},
+                exposure_changes=[(int(f), float(e)) for f, e in changes],
+            )
             truths[name] = CameraTruth(**c)
         except (TypeError, ValueError) as err:
             raise InputError(f"{path}: camera {name!r}: {err}; {fix}") from None
@@ -73,3 +80,18 @@ def load_ground_truth(path: str | Path) -> GroundTruth:
     if reference not in truths:
         top.fail("reference", f"is {reference!r}, which is not among the cameras")
     return GroundTruth(reference, truths, top.value("flashes"), top.value("switches"), top.value("scenario"))
+
+
+def _exposure_changes(entry: Fields) -> np.ndarray:
+    """A camera's ``exposure_changes``, shape (n, 2): ``[file frame, exposure_ms]`` rows, frames
+    whole and increasing, exposures positive; none in a file written before they existed."""
+    if not entry.has("exposure_changes"):
+        return np.empty((0, 2))
+    value = entry.value("exposure_changes")
+    changes = entry.matrix("exposure_changes", (len(value) if isinstance(value, list) else 0, 2))
+    frames = changes[:, 0]
+    if np.any(frames < 0) or np.any(frames != np.round(frames)) or np.any(np.diff(frames) <= 0):
+        entry.fail("exposure_changes", "has frames that are not whole, >= 0 and increasing")
+    if np.any(changes[:, 1] <= 0):
+        entry.fail("exposure_changes", "has an exposure that is not positive")
+    return changes

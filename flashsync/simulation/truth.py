@@ -37,7 +37,9 @@ class CameraTruth:
         Camera name and video file name.
     width, height, r0, r1 : int
         Image size (px) and hidden rows.
-    fps, exposure_ms : float
+    fps : float
+    exposure_ms : float
+        Exposure of the first written frame, ms.
     flipped : bool
         Readout runs bottom-up in stored-image rows.
     drift_ppm, drift_rate_ppm_per_s, offset_ms, start_ms : float
@@ -52,6 +54,10 @@ class CameraTruth:
         Container stamp of each written frame, ms.
     flashes_seen : dict
         ``{flash index: [file frame indices showing it]}``.
+    exposure_changes : list of (int, float)
+        ``(file frame index, exposure_ms)`` where the exposure differs from the written
+        frame before it (a change at a dropped sensor frame shows at the next written one);
+        empty for a steady exposure. See `exposure_of_ms`.
     """
 
     name: str
@@ -74,6 +80,15 @@ class CameraTruth:
     frame_times_ms: list = field(default_factory=list)
     stamps_ms: list = field(default_factory=list)
     flashes_seen: dict = field(default_factory=dict)
+    exposure_changes: list = field(default_factory=list)
+
+    def exposure_of_ms(self, frame: int | np.ndarray) -> np.ndarray:
+        """Exposure (ms) of frames `frame` (0-based indices in the written file), same shape."""
+        frame = np.asarray(frame)
+        exposure = np.full(frame.shape, float(self.exposure_ms))
+        for first, exposure_ms in self.exposure_changes:
+            exposure[frame >= first] = exposure_ms
+        return exposure
 
     @property
     def sensor_row_ms(self) -> float:
@@ -124,6 +139,7 @@ def camera_truth(
     CameraTruth
     """
     alpha, beta, row = _params(reference, camera)
+    exposures = camera.exposure_at_ms(frame_times_ms)
     return CameraTruth(
         name=camera.name,
         file=file,
@@ -133,7 +149,7 @@ def camera_truth(
         r0=camera.r0,
         r1=camera.r1,
         flipped=camera.flipped,
-        exposure_ms=camera.exposure_ms,
+        exposure_ms=float(exposures[0]) if len(exposures) else camera.exposure_ms,
         drift_ppm=camera.drift_ppm,
         drift_rate_ppm_per_s=camera.drift_rate_ppm_per_s,
         offset_ms=camera.offset_ms,
@@ -145,6 +161,7 @@ def camera_truth(
         frame_times_ms=[float(t) for t in frame_times_ms],
         stamps_ms=[float(t) for t in stamps_ms],
         flashes_seen={int(k): [int(f) for f in v] for k, v in flashes_seen.items()},
+        exposure_changes=[(int(j), float(exposures[j])) for j in np.flatnonzero(np.diff(exposures)) + 1],
     )
 
 
