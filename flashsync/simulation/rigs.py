@@ -50,6 +50,7 @@ its rows in a fraction of the frame and idles in a long vertical blanking), whic
 `random_rig` never draws. `with_flash_powers` fires a rig's flashes at two powers, some
 pulses 2-3 ms long and the rest 0.05-0.3 ms (a speedlight's power setting, or two
 strobes), where `random_rig` draws each rig's pulse lengths from one range.
+`with_exposure_changes` gives some cameras one auto-exposure change mid-recording.
 
 `RECIPES` names fixed rigs: the independent-footage rigs of the honest-numbers issue's
 table and the real-light issue's cases, re-created with second-world settings (xenon or
@@ -637,6 +638,41 @@ def with_fast_readout(scenario: Scenario, fractions: tuple[float, float] = (0.45
     fast = dataclasses.replace(scenario, cameras=tuple(cameras))
     check_scenario(fast, f"{scenario.name} with a fast readout")
     return fast
+
+
+def with_exposure_changes(
+    scenario: Scenario,
+    share: float = 0.5,
+    shorter: tuple[float, float] = (0.4, 0.7),
+    longer: tuple[float, float] = (1.4, 2.0),
+    seed: int = 0,
+) -> Scenario:
+    """`scenario` with auto-exposure at work: each camera p ``share`` changes its exposure
+    once, at a sensor frame U over the middle half of its recording, to a factor
+    U(*shorter*) or (p 1/2) U(*longer*) of the exposure it had there (ms to 3 decimals, at
+    most one frame period); all else kept.
+
+    Examples
+    --------
+    >>> from flashsync.simulation import preset
+    >>> changed = with_exposure_changes(preset("tiny"), share=1.0, shorter=(0.5, 0.5), longer=(0.5, 0.5))
+    >>> [(c.exposure_ms, c.exposure_changes[0][1]) for c in changed.cameras]
+    [(10.0, 5.0), (8.0, 4.0)]
+    """
+    rng = np.random.default_rng([seed, zlib.crc32(b"exposure changes")])
+    cameras = []
+    for camera in scenario.cameras:
+        n = scenario.frame_count(camera)
+        changes, frame = rng.random() < share, int(rng.integers(n // 4, max(3 * n // 4, n // 4 + 1)))
+        factor = rng.uniform(*(longer if rng.random() < 0.5 else shorter))
+        if changes:
+            old = float(camera.exposure_at_ms(camera.start_ms + frame * camera.frame_period_ms))
+            exposure = min(round(old * factor, 3), camera.frame_period_ms)
+            camera = dataclasses.replace(camera, exposure_changes=camera.exposure_changes + ((frame, exposure),))
+        cameras.append(camera)
+    changed = dataclasses.replace(scenario, cameras=tuple(cameras))
+    check_scenario(changed, f"{scenario.name} with exposure changes")
+    return changed
 
 
 def recipe(name: str, seed: int = 0, duration_ms: float | None = None) -> Scenario:
