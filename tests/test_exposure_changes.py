@@ -124,11 +124,13 @@ def test_the_truth_keeps_the_change_and_round_trips(rendered, tmp_path):
     assert camera.exposure_of_ms([0, 89, 90, 179]).tolist() == [4.0, 4.0, 2.0, 2.0]
     assert load_ground_truth(out) == truth
     assert scenario_from_dict(truth.scenario) == scenario
-    # A truth file written before exposure changes existed loads with none.
+    # A steady camera's truth, and a truth file written before exposure changes existed, load with none.
     data = json.loads((out / "truth.json").read_text())
-    del data["cameras"]["cam1"]["exposure_changes"]
-    (tmp_path / "truth.json").write_text(json.dumps(data))
-    assert load_ground_truth(tmp_path).cameras["cam1"].exposure_changes == []
+    for steady in (dict(exposure_changes=[]), {}):
+        data["cameras"]["cam1"] = {k: v for k, v in data["cameras"]["cam1"].items() if k != "exposure_changes"}
+        data["cameras"]["cam1"].update(steady)
+        (tmp_path / "truth.json").write_text(json.dumps(data))
+        assert load_ground_truth(tmp_path).cameras["cam1"].exposure_changes == []
     for bad in ([[1.5, 2.0]], [[90, 0.0]], [[90, 2.0], [80, 3.0]], [[-1, 2.0]], [90, 2.0], "x"):
         data["cameras"]["cam1"]["exposure_changes"] = bad
         (tmp_path / "truth.json").write_text(json.dumps(data))
@@ -152,10 +154,18 @@ def test_the_truth_numbers_a_change_by_the_written_frames():
         assert truth.exposure_of_ms(np.arange(len(kept))).tolist() == cam.exposure_at_ms(t).tolist()
 
 
-@pytest.mark.parametrize(
-    "changes",
-    [((90,),), ((-1, 2.0),), ((1.5, 2.0),), ((90, 0.0),), ((90, 41.0),), ((90, 2.0), (90, 3.0)), ((float("inf"), 2.0),)],
-)
+BAD_CHANGES = {
+    "not a pair": ((90,),),
+    "frame before the first": ((-1, 2.0),),
+    "fractional frame": ((1.5, 2.0),),
+    "infinite frame": ((float("inf"), 2.0),),
+    "no exposure": ((90, 0.0),),
+    "over a frame period": ((90, 41.0),),
+    "two at one frame": ((90, 2.0), (90, 3.0)),
+}
+
+
+@pytest.mark.parametrize("changes", BAD_CHANGES.values(), ids=BAD_CHANGES.keys())
 def test_bad_exposure_changes_are_refused(changes):
     scenario = Scenario("bad", (dataclasses.replace(CAM, exposure_changes=changes),))
     with pytest.raises(FlashsyncError, match="exposure_changes"):

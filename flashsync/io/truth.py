@@ -88,7 +88,7 @@ def _exposure_changes(entry: Fields) -> np.ndarray:
     if not entry.has("exposure_changes"):
         return np.empty((0, 2))
     value = entry.value("exposure_changes")
-    changes = entry.matrix("exposure_changes", (len(value) if isinstance(value, list) else 0, 2))
+    changes = entry.matrix("exposure_changes", (len(value) if isinstance(value, list) else 0, 2)).reshape(-1, 2)
     frames = changes[:, 0]
     if np.any(frames < 0) or np.any(frames != np.round(frames)) or np.any(np.diff(frames) <= 0):
         entry.fail("exposure_changes", "has frames that are not whole, >= 0 and increasing")
