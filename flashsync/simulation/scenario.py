@@ -180,9 +180,9 @@ class CameraSpec:
         sensor keeps its rate.
     exposure_changes : tuple of (int, float)
         ``(sensor frame, exposure_ms)``: from that frame on, each row is exposed that many
-        ms (auto-exposure; at most one frame period). Flash light is scaled by
-        ``exposure_ms / exposure``: the camera's gain keeps the ambient level, so a flash
-        stands out more in a shorter exposure.
+        ms (auto-exposure; not cumulative; at most one frame period). A frame exposed ``E``
+        ms sees flash light scaled by ``exposure_ms / E``: the camera's gain keeps the
+        ambient level, so a flash stands out more in a shorter exposure.
     drop_fraction : float
         Fraction of further frames dropped at random.
     n_frames : int or None
