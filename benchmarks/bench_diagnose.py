@@ -2,6 +2,7 @@
 
 Run: python benchmarks/bench_diagnose.py [--folder DIR] [--cases all|NAME,...]
      python benchmarks/bench_diagnose.py --seeds 0:40 [--max-height 360] [--duration-s 8] [--folder DIR]
+                                         [--preflash MS] [--readout LO:HI] [--flash-powers SHARE]
 
 Renders each rig once (kept in --folder for the next run, each in its own sub-folder, with
 ``truth.json``), detects its events as each command does, runs ``synchronize`` (what
@@ -29,9 +30,10 @@ effects diagnose named, its verdict, what it wrote and how that compares with sy
 ``slowing-stamps``     the same, its stamps half as fast from frame 150 on, not jittered
 =====================  ===================================================================
 
-With ``--seeds``, the second world's random rigs instead (``random_rig(seed)``, kept in
-``DIR/rig-<seed>`` as ``bench_rigs.py --keep DIR`` keeps them, so one rendering serves
-both), and after them a summary: the median RMS of each model over the rigs, and the rigs
+With ``--seeds``, the second world's random rigs instead (``random_rig(seed)``, in the
+world ``bench_rigs.py``'s options ask for: ``--preflash``, ``--readout``, ``--flash-powers``;
+kept in ``DIR/<rig name>`` as ``bench_rigs.py --keep DIR`` keeps them, so one rendering
+serves both), and after them a summary: the median RMS of each model over the rigs, and the rigs
 with a camera ``diagnose -o`` puts more than twice as far off as ``sync``'s worst camera
 (plus 0.05 ms): how many pass the verdict, and how many of those cameras the line on
 ``sync``'s model names.
@@ -44,7 +46,7 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
-from bench_rigs import parse_seeds, rendered  # the sibling script: one keep layout, one seed syntax
+from bench_rigs import add_world_options, dressed, parse_seeds, rendered  # the sibling: one layout, seeds, worlds
 
 from flashsync import detect_videos, synchronize
 from flashsync.diagnose import diagnose
@@ -194,12 +196,13 @@ def main() -> None:
     parser.add_argument("--seeds", help="random rigs A:B (seeds A..B-1) or one seed, instead of the cases")
     parser.add_argument("--max-height", type=int, default=360, help="largest image height of random rigs")
     parser.add_argument("--duration-s", type=float, default=8.0, help="length of random rigs, s")
+    add_world_options(parser)
     args = parser.parse_args()
     if args.seeds:
-        results = [
-            run(random_rig(seed, args.max_height, 1000.0 * args.duration_s), args.folder / f"rig-{seed}")
-            for seed in parse_seeds(args.seeds)
-        ]
+        rigs = dressed(
+            [random_rig(seed, args.max_height, 1000.0 * args.duration_s) for seed in parse_seeds(args.seeds)], args
+        )
+        results = [run(rig, args.folder / rig.name) for rig in rigs]
         print(summary(results))
         return
     for name in list(RIGS) if args.cases == "all" else args.cases.split(","):

@@ -45,7 +45,7 @@ from flashsync.io.scenario import scenario_from_dict
 from flashsync.io.truth import load_ground_truth
 from flashsync.pipeline import edge_noise_rows
 from flashsync.robust import MAD_TO_SIGMA
-from flashsync.simulation import render_scenario
+from flashsync.simulation import Scenario, render_scenario
 from flashsync.simulation.rigs import (
     RECIPES,
     random_rig,
@@ -537,13 +537,8 @@ def power_share(text: str) -> float:
     return share
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--seeds", help="random rigs A:B (seeds A..B-1) or one seed; default 0:20 unless --recipes is given"
-    )
-    parser.add_argument("--max-height", type=int, default=540, help="largest image height of random rigs")
-    parser.add_argument("--duration-s", type=float, default=12.0, help="length of random rigs, s")
+def add_world_options(parser: argparse.ArgumentParser) -> None:
+    """The options that change the random rigs' world (:func:`dressed`)."""
     parser.add_argument(
         "--preflash",
         type=float,
@@ -568,6 +563,43 @@ def main() -> None:
         help="fire the random rigs' flashes at two powers: each p SHARE at full power, its pulse 2-3 ms long to a "
         "tenth of its peak, else at a low power, 0.05-0.3 ms (rigs named rig-N-powerSHARE; with_flash_powers)",
     )
+
+
+def dressed(rigs: list[Scenario], args: argparse.Namespace) -> list[Scenario]:
+    """The random rigs in the world :func:`add_world_options`' options ask for, each renamed
+    after what was added."""
+    if args.preflash is not None:
+        rigs = [
+            replace(
+                with_preflashes(rig, args.preflash, jitter_ms=args.preflash_jitter_ms, seed=rig.seed),
+                name=f"{rig.name}-ttl{args.preflash:g}",
+            )
+            for rig in rigs
+        ]
+    if args.readout is not None:
+        low, high = args.readout
+        rigs = [
+            replace(with_fast_readout(rig, (low, high), seed=rig.seed), name=f"{rig.name}-read{low:g}-{high:g}")
+            for rig in rigs
+        ]
+    if args.flash_powers is not None:
+        rigs = [
+            replace(
+                with_flash_powers(rig, args.flash_powers, seed=rig.seed), name=f"{rig.name}-power{args.flash_powers:g}"
+            )
+            for rig in rigs
+        ]
+    return rigs
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--seeds", help="random rigs A:B (seeds A..B-1) or one seed; default 0:20 unless --recipes is given"
+    )
+    parser.add_argument("--max-height", type=int, default=540, help="largest image height of random rigs")
+    parser.add_argument("--duration-s", type=float, default=12.0, help="length of random rigs, s")
+    add_world_options(parser)
     parser.add_argument("--recipes", help=f"'all' or a comma list of: {', '.join(RECIPES)}")
     parser.add_argument(
         "--recipe-duration-s",
@@ -606,29 +638,7 @@ def main() -> None:
             random_rig(s, max_height=args.max_height, duration_ms=args.duration_s * 1000.0)
             for s in parse_seeds(args.seeds or "0:20")
         ]
-        if args.preflash is not None:
-            rigs = [
-                replace(
-                    with_preflashes(rig, args.preflash, jitter_ms=args.preflash_jitter_ms, seed=rig.seed),
-                    name=f"{rig.name}-ttl{args.preflash:g}",
-                )
-                for rig in rigs
-            ]
-        if args.readout is not None:
-            low, high = args.readout
-            rigs = [
-                replace(with_fast_readout(rig, (low, high), seed=rig.seed), name=f"{rig.name}-read{low:g}-{high:g}")
-                for rig in rigs
-            ]
-        if args.flash_powers is not None:
-            rigs = [
-                replace(
-                    with_flash_powers(rig, args.flash_powers, seed=rig.seed),
-                    name=f"{rig.name}-power{args.flash_powers:g}",
-                )
-                for rig in rigs
-            ]
-        scenarios += rigs
+        scenarios += dressed(rigs, args)
     infos, tables = [], []
     for scenario in scenarios:
         info, table = run_rig(scenario, args.keep)
