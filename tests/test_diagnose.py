@@ -22,6 +22,7 @@ from flashsync.diagnose.verdict import noise_test
 from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
 from flashsync.errors import FlashsyncError
 from flashsync.evaluate import camera_accuracy, probe_errors, probes, sync_errors
+from flashsync.events import Edge, Flag
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
 from flashsync.model import CameraClock, SyncModel
 from flashsync.pipeline import detect_videos, synchronize
@@ -510,6 +511,25 @@ def test_a_camera_sync_leaves_out_is_left_out_with_a_pointer_to_syncs_reason(det
     measurement = measure([ref, other, lonely], paired_by=model)
     assert [c.camera for c in measurement.cameras] == [ref.camera, other.camera]
     assert measurement.warnings == ("lonely.mp4: sync ties it to no other camera (flashsync sync says why); left out",)
+
+
+def test_a_camera_no_clean_band_ties_is_left_out_and_the_rest_diagnosed(detections):
+    """A third camera with no band the workflow counts clean (both edges inside the image
+    and the pulse within the exposure; here every trailing edge hidden, as random rig 420's
+    cam4 at two flash powers had every band outlasted by its pulse): ``sync`` ties it by
+    its other edges; the workflow had no edge of it, left the plain model undetermined and
+    stopped ("cannot determine even the plain model") where ``sync`` solved. It is left out
+    with a warning, the rest diagnosed, and ``-o`` writes ``sync``'s solve of all three."""
+    ref, other = pair(detections, CAMERA["drift"])
+    source = detections[CAMERA["row_time"]]
+    leading = source.events.take(source.events.edge == Edge.LEADING)
+    flags = np.array([flags | {Flag.TRAILING_HIDDEN} for flags in leading.flags], dtype=object)
+    hidden = replace(leading, camera=np.full(len(leading), "lone", dtype=object), flags=flags)
+    lone = replace(source, camera="lone", video=Path("lone.mp4"), top_down=hidden, bottom_up=None)
+    d = diagnose([ref, other, lone])
+    assert d.cameras == [ref.camera, other.camera], format_diagnosis(d)
+    assert any(w.startswith("lone.mp4: no band of it with both edges clean") for w in d.warnings), d.warnings
+    assert "lone" in d.sync_model.cameras and len(d.sync_model.events.query("camera == 'lone'")) >= 10
 
 
 def test_cli_writes_the_table_json_and_a_recording_of_every_step(tmp_path, capsys):

@@ -247,7 +247,16 @@ def measure(
             "check that the videos overlap in time and saw the same flashes"
             + another_reference(matching, names, reference)
         )
+    clean = Matching({}, {key: flash for key, flash in matching.flashes.items() if pulses[key[0]].clean[key[1]]})
+    tied_clean = clean.tied_to(reference)
     warnings = tuple(_left_out(d, paired_by, doubted) for d in detections if d.camera not in tied)
+    warnings += tuple(
+        f"{d.video}: no band of it with both edges clean (inside the image, its pulse within its exposure) ties it "
+        "to the reference's; left out (sync ties it by its other edges)"
+        for d in kept
+        if d.camera not in tied_clean
+    )
+    kept = [d for d in kept if d.camera in tied_clean] if len(tied_clean) > 1 else kept
     cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
     excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
