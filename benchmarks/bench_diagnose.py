@@ -3,6 +3,7 @@
 Run: python benchmarks/bench_diagnose.py [--folder DIR] [--cases all|NAME,...]
      python benchmarks/bench_diagnose.py --seeds 0:40 [--max-height 360] [--duration-s 8] [--folder DIR]
                                          [--preflash MS] [--readout LO:HI] [--flash-powers SHARE]
+                                         [--exposure-changes SHARE]
 
 Renders each rig once (kept in --folder for the next run, each in its own sub-folder, with
 ``truth.json``), detects its events as each command does, runs ``synchronize`` (what
@@ -31,7 +32,8 @@ effects diagnose named, its verdict, what it wrote and how that compares with sy
 =====================  ===================================================================
 
 With ``--seeds``, the second world's random rigs instead (``random_rig(seed)``, in the
-world ``bench_rigs.py``'s options ask for: ``--preflash``, ``--readout``, ``--flash-powers``;
+world ``bench_rigs.py``'s options ask for: ``--preflash``, ``--readout``, ``--flash-powers``,
+``--exposure-changes``;
 kept in ``DIR/<rig name>`` as ``bench_rigs.py --keep DIR`` keeps them, so one rendering
 serves both), and after them a summary: the median RMS of each model over the rigs, and the rigs
 with a camera ``diagnose -o`` puts more than twice as far off as ``sync``'s worst camera

@@ -1,7 +1,7 @@
 """flashsync on the simulator's second world: random rigs and the issues' rigs, against truth.
 
 Run: python benchmarks/bench_rigs.py [--seeds 0:20] [--max-height 540] [--duration-s 12] [--preflash MS]
-                                   [--readout LO:HI] [--flash-powers SHARE]
+                                   [--readout LO:HI] [--flash-powers SHARE] [--exposure-changes SHARE]
      python benchmarks/bench_rigs.py --recipes all [--recipe-duration-s S]
 
 Each rig (`flashsync.simulation.rigs`: ``random_rig(seed)`` or a named recipe) is rendered
@@ -50,6 +50,7 @@ from flashsync.simulation.rigs import (
     RECIPES,
     random_rig,
     recipe,
+    with_exposure_changes,
     with_fast_readout,
     with_flash_powers,
     with_preflashes,
@@ -526,14 +527,14 @@ def readout_fractions(text: str) -> tuple[float, float]:
     return low, high
 
 
-def power_share(text: str) -> float:
-    """``SHARE`` of ``--flash-powers``: the share of flashes fired at full power."""
+def share(text: str) -> float:
+    """``SHARE`` of ``--flash-powers`` or ``--exposure-changes``: a share (of flashes, of cameras)."""
     try:
         share = float(text)
     except ValueError:
         share = float("nan")
     if not 0.0 <= share <= 1.0:
-        raise argparse.ArgumentTypeError(f"{text}: give a share of the flashes between 0 and 1, e.g. 0.3")
+        raise argparse.ArgumentTypeError(f"{text}: give a share between 0 and 1, e.g. 0.3")
     return share
 
 
@@ -558,10 +559,17 @@ def add_world_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--flash-powers",
-        type=power_share,
+        type=share,
         metavar="SHARE",
         help="fire the random rigs' flashes at two powers: each p SHARE at full power, its pulse 2-3 ms long to a "
         "tenth of its peak, else at a low power, 0.05-0.3 ms (rigs named rig-N-powerSHARE; with_flash_powers)",
+    )
+    parser.add_argument(
+        "--exposure-changes",
+        type=share,
+        metavar="SHARE",
+        help="give the random rigs' cameras auto exposure: each p SHARE changes its exposure once, in the middle half "
+        "of its recording, to 0.4-0.7 or 1.4-2 times it (rigs named rig-N-aeSHARE; with_exposure_changes)",
     )
 
 
@@ -586,6 +594,14 @@ def dressed(rigs: list[Scenario], args: argparse.Namespace) -> list[Scenario]:
         rigs = [
             replace(
                 with_flash_powers(rig, args.flash_powers, seed=rig.seed), name=f"{rig.name}-power{args.flash_powers:g}"
+            )
+            for rig in rigs
+        ]
+    if args.exposure_changes is not None:
+        rigs = [
+            replace(
+                with_exposure_changes(rig, args.exposure_changes, seed=rig.seed),
+                name=f"{rig.name}-ae{args.exposure_changes:g}",
             )
             for rig in rigs
         ]

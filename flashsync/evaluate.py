@@ -131,6 +131,15 @@ def true_location(
     return frame, row, recording
 
 
+def _true_exposure_ms(true) -> float:
+    """A camera's true exposure, ms: where it changes while the camera records (a
+    simulation's ``exposure_changes``), the one it held over the most frames."""
+    if not getattr(true, "exposure_changes", None):
+        return true.exposure_ms
+    held, frames = np.unique(true.exposure_of_ms(np.arange(len(true.frame_times_ms))), return_counts=True)
+    return float(held[np.argmax(frames)])
+
+
 def _z_stats(error: np.ndarray, sigma: np.ndarray) -> tuple[float, float]:
     """RMS of error / sigma and the fraction of |error| <= 2 sigma (NaN without probes)."""
     if error.size == 0:
@@ -168,7 +177,8 @@ def camera_accuracy(
     (sync error over the probes); ``reference_rms_ms`` (RMS of the error of its times
     against the reference's at the same instants: free of the global clock's own error;
     NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
-    ``exposure_error_ms`` (model - truth; NaN where the model has none) and ``exposure_z``
+    ``exposure_error_ms`` (model - truth, the exposure held over the most frames where it
+    changes; NaN where the model has none) and ``exposure_z``
     (over its standard deviation; NaN where the model states none);
     ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
     error over its predicted standard deviation); ``z_rms`` and
@@ -205,8 +215,8 @@ def camera_accuracy(
             max_ms=float(np.max(np.abs(error))),
             reference_rms_ms=float(np.sqrt(np.mean(against_reference**2))) if against_reference.size else np.nan,
             sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
-            exposure_error_ms=exposure - true.exposure_ms,
-            exposure_z=_over(exposure - true.exposure_ms, exposure_std),
+            exposure_error_ms=exposure - _true_exposure_ms(true),
+            exposure_z=_over(exposure - _true_exposure_ms(true), exposure_std),
             row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
             row_time_z=_over(camera.row_time_ms - true.row_time_ms, float(np.sqrt(camera.covariance[2, 2]))),
             z_rms=z_rms,

@@ -34,6 +34,7 @@ from flashsync.detect import (
 )
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
+from flashsync.exposure_changes import exposure_spans, with_one_exposure
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
@@ -321,7 +322,7 @@ def _synchronized(
     rolled = [d.camera for d, read in zip(detections, as_rolled) if read is not d]
     detections = as_rolled
     report = SyncReport(frame_clocks={d.camera: fit_frame_clock(d.frame_times_ms) for d in detections})
-    cameras = {d.camera: d.retimed(report.frame_clocks[d.camera].times_ms) for d in detections}
+    cameras = {d.camera: with_one_exposure(d.retimed(report.frame_clocks[d.camera].times_ms)) for d in detections}
     undecided = [name for name, d in cameras.items() if d.undecided]
 
     rate_std = {name: clock.rate_std for name, clock in report.frame_clocks.items()}
@@ -363,6 +364,9 @@ def _synchronized(
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
     for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
+    change_warnings, changes_ms = _exposure_changes(best, {d.camera: d for d in detections})
+    for name, spread in changes_ms.items():
+        exposure_spreads[name] = np.hypot(exposure_spreads.get(name, 0.0), spread)
     best = best.with_flash_scatter(exposure_spreads)
     report.alignments = best.alignments
     report.warnings = (
@@ -374,7 +378,8 @@ def _synchronized(
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
-        + _exposure_doubts(best)
+        + change_warnings
+        + _exposure_doubts(best, told=set(changes_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -905,18 +910,47 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
 EXPOSURE_DOUBT_MS = 0.1
 
 
-def _exposure_doubts(best: _Attempt) -> list[str]:
+def _exposure_changes(best: _Attempt, detections: dict[str, CameraDetection]) -> tuple[list[str], dict[str, float]]:
+    """Per camera whose exposure changes while it records (the spans of its ``detections``
+    reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`; solved on
+    the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
+    warning naming each span's exposure and frames, and how far the farthest lies from the
+    one solved, ms (into its exposure's sigma: restamp's t_center_ms takes that one
+    throughout)."""
+    warnings, changes_ms = [], {}
+    for name, solution in zip(best.connected, best.solution.cameras):
+        detection = detections[name].read_flipped(best.cameras[name].flipped)
+        spans = exposure_spans(detection)
+        if len(spans) < 2 or not solution.exposure_ms > 0:
+            continue
+        main = max(spans, key=lambda span: span.n_bands)
+        exposures_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in spans]
+        changes_ms[name] = max(abs(e - solution.exposure_ms) for e in exposures_ms)
+        seen = ", ".join(
+            f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
+            for e, s in zip(exposures_ms, spans)
+        )
+        warnings.append(
+            f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show {seen}; its "
+            f"times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span, and "
+            f"restamp's t_center_ms takes {solution.exposure_ms:.2f} ms throughout (its sigma ± "
+            f"{changes_ms[name]:.2f} ms); set the camera's shutter to one exposure to record with it"
+        )
+    return warnings, changes_ms
+
+
+def _exposure_doubts(best: _Attempt, told: set[str]) -> list[str]:
     """A warning per camera whose exposure the band lengths pin down more loosely than
     :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, lengths that differ from flash to
-    flash, or a time per row the flashes leave loose: a length is in rows). Its sigma says
-    so already."""
+    flash, or a time per row the flashes leave loose: a length is in rows), but the cameras
+    ``told`` of already. Its sigma says so already."""
     return [
         f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {solution.exposure_std_ms:.2f} ms: "
         "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash "
         "to flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp --exposure "
         "CAMERA=MS) if known"
         for name, solution in zip(best.connected, best.solution.cameras)
-        if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS
+        if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS and name not in told
     ]
 
 

@@ -55,6 +55,7 @@ from flashsync.diagnose.effects import (
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
+from flashsync.exposure_changes import with_one_exposure
 from flashsync.model import SyncModel
 from flashsync.pipeline import SyncReport, synchronize
 from flashsync.solve import DRIFT_PRIOR_STD, MIN_FLASHES_FOR_CHANGING_RATE
@@ -357,16 +358,25 @@ def _synchronized(detections: Sequence[CameraDetection], reference: str | None) 
 def _exposures_as_sync_reads(
     detections: Sequence[CameraDetection], synced: tuple[SyncModel, SyncReport] | None
 ) -> tuple[list[CameraDetection], tuple[str, ...]]:
-    """The detections with each exposure ``sync`` made longer made so in the reading its
-    model uses (:attr:`~flashsync.pipeline.SyncReport.longer_exposures`: a camera read the
-    other way round by the flashes the others see), so that the edges measured are the ones
-    ``sync`` solved on, and a warning each. Measured as detected, such a camera's edges lay
-    a few rows off ``sync``'s (2.1 rows where 0.26 ms became 1.05), none of its bands was
+    """The detections with their exposures as ``sync`` reads them, so that the edges measured
+    are the ones ``sync`` solved on, and a warning for each camera changed: where the
+    exposure changes while it records, the trailing edges outside the span of the most bands
+    left out (:func:`~flashsync.exposure_changes.with_one_exposure`); each exposure ``sync``
+    made longer made so in the reading its model uses
+    (:attr:`~flashsync.pipeline.SyncReport.longer_exposures`: a camera read the other way
+    round by the flashes the others see). Measured as detected, such a camera's edges lay a
+    few rows off ``sync``'s (2.1 rows where 0.26 ms became 1.05), none of its bands was
     paired by ``sync``'s flashes and the workflow found no band seen by two cameras."""
     longer = synced[1].longer_exposures if synced else {}
     measured, warnings = [], []
     for detection in detections:
-        rows = longer.get(detection.camera)
+        steady = with_one_exposure(detection)
+        if steady is not detection:
+            warnings.append(
+                f"{detection.video}: its exposure changes while it records; measured without the trailing edges of its "
+                "bands outside the span of the most bands, as sync solves it"
+            )
+        detection, rows = steady, longer.get(detection.camera)
         if rows is not None:
             way = synced[0].cameras[detection.camera].flipped
             detection = detection.read_flipped(way).with_longer_exposure(rows).read_flipped(detection.flipped)

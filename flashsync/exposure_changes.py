@@ -1,0 +1,151 @@
+"""A camera whose exposure changes while it records (auto exposure), found by its bands' lengths.
+
+A flash band's leading edge is the first row whose exposure *ended* at the flash, its trailing
+edge the first whose exposure *started* there, so the band is one exposure long whatever the
+flash. Where the camera's exposure changes (a phone or action camera on auto exposure), the
+lengths of its bands step with it, at one frame; the solve holds one exposure per camera, and
+the trailing edges of the bands under another exposure put their flashes half the step off
+(a 320x180 camera at 30 fps whose exposure went from 4 to 2 ms halfway: 0.43 ms RMS off the
+truth, 1.0 ms at most, time per row 2 % off). So the bands are split into spans of frames
+over which their lengths stay one (:func:`exposure_spans`), and the trailing edges outside
+the span of the most bands are left out of the solve (:func:`with_one_exposure`): their
+leading edges still time their flashes (the same camera then 0.047 ms off).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from flashsync.detect import CameraDetection
+from flashsync.events import Band, Edge, Events
+from flashsync.robust import mad_sigma
+
+#: Fewest bands on each side of a change of exposure.
+MIN_SPAN_BANDS = 3
+#: A change of exposure steps the bands' median length by this many robust standard
+#: deviations of a length (from the differences of one band's length to the next's) at least ...
+STEP_SIGMAS = 8.0
+#: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
+MIN_STEP_ROWS = 1.0
+#: Least robust standard deviation of a band's length, rows (bands fitted at one width
+#: share their length exactly).
+LENGTH_FLOOR_ROWS = 0.1
+#: Share of each span's bands within :data:`INLIER_SIGMAS` of its median length at least:
+#: lengths that scatter, as bands of flashes fired at two powers do, are not one exposure
+#: and then another.
+SPAN_INLIERS = 0.8
+INLIER_SIGMAS = 3.0
+
+
+@dataclass(frozen=True)
+class ExposureSpan:
+    """Frames over which a camera's bands share one length.
+
+    Attributes
+    ----------
+    first_frame, last_frame : int
+        Decoded frames of its first and last band.
+    length_rows : float
+        Its bands' median length, rows: the exposure in readout rows.
+    n_bands : int
+        Its bands.
+    """
+
+    first_frame: int
+    last_frame: int
+    length_rows: float
+    n_bands: int
+
+
+def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
+    """The spans of frames, in frame order, over which the bands of the detection's reading in
+    use share one length: the flash bands it fitted whole within one frame (the others'
+    edges come from a band's parts and their lengths scatter: random rig 427's last three
+    bands 4-13 rows long) but those fitted at the exposure it read its bands to share (pulses
+    longer than it: their length is that exposure, not measured). One span where the
+    lengths do not step; none without :data:`MIN_SPAN_BANDS` such bands.
+    The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
+    to the next) about the median of its neighbours (a lone length that a codec moved leans
+    on no split), are split in two where that leaves the least squared deviation from each
+    side's mean, and again within each side, while the means step (:data:`STEP_SIGMAS` of
+    the noise and :data:`MIN_STEP_ROWS`); where some span's lengths then scatter
+    (:data:`SPAN_INLIERS`), they are taken as one.
+    """
+    events, pulses = detection.events, detection.pulse_rows
+    if pulses is None:
+        return []
+    bands = events.bands()
+    whole = bands.take(bands.complete)
+    lead, trail = whole.leading, whole.trailing
+    lengths = np.abs(events.row[trail] - events.row[lead])
+    fitted = np.nan if detection.exposure_rows is None else detection.exposure_rows
+    usable = (
+        (events.band[lead] == Band.PULSE)
+        & (events.frame[lead] == events.frame[trail])
+        & np.isfinite(pulses[events.event[lead]])
+        & ~(np.abs(lengths - fitted) < 1e-6)
+    )
+    frames = events.frame[lead][usable]
+    order = np.argsort(frames, kind="stable")
+    frames, lengths = frames[order], lengths[usable][order]
+    if len(lengths) < MIN_SPAN_BANDS:
+        return []
+    noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
+    local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="nearest")
+    clipped = np.clip(lengths, local - INLIER_SIGMAS * noise, local + INLIER_SIGMAS * noise)
+    cuts = _cuts(clipped, 0, len(lengths), noise)
+    steady = all(
+        np.mean(np.abs(lengths[a:b] - np.median(lengths[a:b])) <= INLIER_SIGMAS * noise) >= SPAN_INLIERS
+        for a, b in cuts
+    )
+    return [
+        ExposureSpan(int(frames[a]), int(frames[b - 1]), float(np.median(lengths[a:b])), b - a)
+        for a, b in (cuts if steady else [(0, len(lengths))])
+    ]
+
+
+def _cuts(lengths: np.ndarray, start: int, stop: int, noise: float) -> list[tuple[int, int]]:
+    """``[start, stop)`` split in two where that leaves the least squared deviation from each
+    side's mean, recursively, while the means step (:func:`exposure_spans`; ``noise``: a
+    length's robust standard deviation, rows)."""
+
+    def deviation(part: np.ndarray) -> float:
+        return float(np.sum((part - part.mean()) ** 2))
+
+    splits = range(start + MIN_SPAN_BANDS, stop - MIN_SPAN_BANDS + 1)
+    if not splits:
+        return [(start, stop)]
+    k = min(splits, key=lambda k: deviation(lengths[start:k]) + deviation(lengths[k:stop]))
+    step = abs(float(lengths[k:stop].mean() - lengths[start:k].mean()))
+    if step < max(STEP_SIGMAS * noise, MIN_STEP_ROWS):
+        return [(start, stop)]
+    return _cuts(lengths, start, k, noise) + _cuts(lengths, k, stop, noise)
+
+
+def with_one_exposure(detection: CameraDetection) -> CameraDetection:
+    """The detection with, in each of its readings whose exposure changes
+    (:func:`exposure_spans`), the flash bands' trailing edges outside the span of the most
+    bands left out."""
+    readings = {}
+    for side, flipped in (("top_down", False), ("bottom_up", True)):
+        if getattr(detection, side) is not None:
+            reading = detection.read_flipped(flipped)
+            spans = exposure_spans(reading)
+            if len(spans) > 1:
+                readings[side] = _kept(reading.events, spans)
+    return replace(detection, **readings) if readings else detection
+
+
+def _kept(events: Events, spans: list[ExposureSpan]) -> Events:
+    """The events without the flash bands' trailing edges outside the span of the most bands
+    (beyond its bands only where no other span lies that way: the frames between two spans'
+    bands may have either exposure)."""
+    main = max(spans, key=lambda span: span.n_bands)
+    first = main.first_frame if main is not spans[0] else -np.inf
+    last = main.last_frame if main is not spans[-1] else np.inf
+    inside = (events.frame >= first) & (events.frame <= last)
+    pulse_trailing = (events.edge == Edge.TRAILING) & (events.band == Band.PULSE)
+    return events.take(~pulse_trailing | inside)

@@ -1,0 +1,132 @@
+"""A camera whose exposure changes while it records (:mod:`flashsync.exposure_changes`): its
+bands' lengths step at a frame; made-up bands here, a rendered pair in
+``test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_there``."""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_diagnose import DURATION_MS, flashes
+
+from flashsync import detect_videos, synchronize
+from flashsync.detect import CameraDetection
+from flashsync.evaluate import camera_accuracy
+from flashsync.events import Band, Edge, Events
+from flashsync.exposure_changes import exposure_spans
+from flashsync.simulation import CameraSpec, Scenario, render_scenario
+
+
+def bands(lengths_rows, frames=None, fitted=True, exposure_rows=None) -> CameraDetection:
+    """A camera whose flash bands are each in one frame (``frames``, default 10, 20, ...), a
+    leading edge at row 40 and a trailing edge its length below (lengths as given, rows),
+    fitted whole by the detector or not (``fitted``: a pulse of 1 row, or NaN), the
+    exposure its bands were read to share ``exposure_rows``."""
+    frames = np.arange(1, len(lengths_rows) + 1) * 10 if frames is None else np.asarray(frames)
+    rows = []
+    for number, (frame, length) in enumerate(zip(frames, lengths_rows)):
+        for edge, row in ((Edge.LEADING, 40.0), (Edge.TRAILING, 40.0 + length)):
+            rows.append(("cam1", number, int(frame), 40.0 * frame, row, edge, Band.PULSE, 1.0, 0.5, 20.0, frozenset()))
+    pulses = np.full(len(lengths_rows), 1.0 if fitted else np.nan)
+    return CameraDetection(
+        "cam1",
+        Path("cam1.mp4"),
+        320,
+        180,
+        np.arange(int(frames.max()) + 1) * 40.0,
+        Events.from_columns(*zip(*rows)),
+        top_down_exposure_rows=exposure_rows,
+        top_down_pulse_rows=pulses,
+    )
+
+
+def noisy(lengths_rows, seed=0, std_rows=0.3):
+    return np.asarray(lengths_rows, float) + np.random.default_rng(seed).normal(0.0, std_rows, len(lengths_rows))
+
+
+def test_bands_whose_length_steps_at_a_frame_make_two_spans():
+    """Eight bands of 18 rows, then eight of 9 (4 ms then 2 ms at 0.222 ms a row), lengths
+    scattered 0.3 rows: two spans, split between the last band of the first and the first
+    of the second, each at its median length."""
+    spans = exposure_spans(bands(noisy([18.0] * 8 + [9.0] * 8)))
+    assert [(s.first_frame, s.last_frame, s.n_bands) for s in spans] == [(10, 80, 8), (90, 160, 8)]
+    assert [s.length_rows for s in spans] == pytest.approx([18.0, 9.0], abs=0.4)
+
+
+@pytest.mark.parametrize(
+    "lengths, counts",
+    [
+        pytest.param([18.0] * 5 + [9.0] * 5 + [13.0] * 5, [5, 5, 5], id="two-steps"),
+        pytest.param([18.0] * 10 + [9.0] * 4 + [18.0] * 10, [10, 4, 10], id="there-and-back"),
+        pytest.param([18.0] * 8 + [25.0] + [18.0] * 3 + [9.0] * 8, [12, 8], id="a-length-a-codec-moved"),
+    ],
+)
+def test_each_step_makes_a_span(lengths, counts):
+    """Two steps; a short dark spell (four bands at half the exposure among twenty); a step
+    and a lone length 7 rows off four bands before it."""
+    assert [s.n_bands for s in exposure_spans(bands(noisy(lengths, seed=1)))] == counts
+
+
+@pytest.mark.parametrize(
+    "lengths",
+    [
+        pytest.param(noisy([18.0] * 16, seed=2), id="one-exposure"),
+        pytest.param(noisy([18.0] * 8 + [21.0] * 8, seed=3, std_rows=1.0), id="a-step-within-8-sigmas"),
+        pytest.param(noisy([18.0] * 8 + [17.1] * 8, seed=4, std_rows=0.01), id="a-step-under-a-row"),
+        pytest.param(noisy([18.0] * 2 + [9.0] * 14, seed=5), id="too-few-bands-on-one-side"),
+        pytest.param(
+            noisy([18, 30, 18, 30, 18, 18, 30, 18] + [30, 18, 30, 30, 18, 30, 18, 30], seed=6),
+            id="two-flash-powers",
+        ),
+    ],
+)
+def test_lengths_that_do_not_step_together_make_one_span(lengths):
+    """One exposure; a step of 3 rows in lengths scattered 1 row (under
+    :data:`~flashsync.exposure_changes.STEP_SIGMAS`); a step under a row; two bands alone
+    before a step; and bands of flashes at two powers, full-power pulses that outlast the
+    exposure (30 rows among 18) three in eight before the middle and five after: the
+    medians step, but the lengths jump from one band to the next as much: one span."""
+    assert len(exposure_spans(bands(lengths))) == 1
+
+
+def test_bands_left_out_of_the_lengths():
+    """Bands the detector did not fit whole do not count (their edges come from a band's
+    parts: random rig 427's last three bands 4-13 rows longer than the others), nor bands
+    fitted at the exposure the camera's bands were read to share (pulses longer than it:
+    their length is that exposure, not measured; rig 415 at two powers: bands of 1.2 rows
+    before and after others 9 rows long); fewer than three bands: no span."""
+    assert exposure_spans(bands(noisy([18.0] * 8 + [9.0] * 8), fitted=False)) == []
+    fitted = [1.2] * 6 + list(noisy([9.0] * 6)) + [1.2] * 6
+    assert len(exposure_spans(bands(fitted))) == 3  # the premise: their lengths step
+    assert len(exposure_spans(bands(fitted, exposure_rows=1.2))) == 1
+    assert exposure_spans(bands([18.0, 18.0])) == []
+
+
+def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_there(tmp_path):
+    """cam1 (30 fps, 320x180) goes from a 4 ms exposure to 2 ms at frame 90 of 180 (auto
+    exposure), cam0 (25 fps) keeps 8 ms; hand-fired flashes (``tests/test_diagnose.py``'s).
+    Solved on one exposure, its bands' trailing edges put half of them a millisecond off:
+    cam1's times came out 0.62 ms RMS off the truth. Its bands split into two spans (seven
+    bands at 4 ms, eight at 2 ms; the 2 ms bands clipped at white), it is solved on the 2 ms
+    span and the others' trailing edges are left out: its times within 0.1 ms (0.054), a
+    warning names both exposures and their frames, and the exposure's sigma reaches the
+    other one."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
+        CameraSpec(
+            "cam1", 320, 180, 30.0, exposure_ms=4.0, start_ms=3000.0, offset_ms=-2830.0, exposure_changes=((90, 2.0),)
+        ),
+    )
+    scenario = Scenario("auto-exposure", cameras, duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1)
+    truth = render_scenario(scenario, tmp_path)
+    detections = detect_videos([tmp_path / "cam0.mp4", tmp_path / "cam1.mp4"])
+    model, report = synchronize(detections)
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    assert accuracy.loc["cam1", "rms_ms"] < 0.1 and accuracy.loc["cam1", "z_rms"] < 2.0, accuracy
+    (warning,) = [w for w in report.warnings if "its exposure changes while it records" in w]
+    assert warning.startswith(str(tmp_path / "cam1.mp4")), warning
+    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+)", warning)
+    assert [float(ms) for ms, _, _ in spans] == pytest.approx([4.0, 2.0], abs=0.1), warning
+    assert int(spans[0][2]) < 90 <= int(spans[1][1]), warning
+    camera = model.cameras["cam1"]
+    assert camera.exposure_ms == pytest.approx(2.0, abs=0.1) and camera.exposure_std_ms > 1.9
