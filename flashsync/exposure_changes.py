@@ -5,11 +5,13 @@ edge the first whose exposure *started* there, so the band is one exposure long 
 flash. Where the camera's exposure changes (a phone or action camera on auto exposure), the
 lengths of its bands step with it, at one frame; the solve holds one exposure per camera, and
 the trailing edges of the bands under another exposure put their flashes half the step off
-(a 320x180 camera at 30 fps whose exposure went from 4 to 2 ms halfway: 0.43 ms RMS off the
-truth, 1.0 ms at most, time per row 2 % off). So the bands are split into spans of frames
-over which their lengths stay one (:func:`exposure_spans`), and the trailing edges outside
-the span of the most bands are left out of the solve (:func:`with_one_exposure`): their
-leading edges still time their flashes (the same camera then 0.047 ms off).
+(a 320x180 camera at 30 fps whose exposure went from 4 to 2 ms halfway: 0.62 ms RMS off the
+truth). So the bands are split into spans of frames over which their lengths stay one
+(:func:`exposure_spans`), and the trailing edges outside the span of the most bands are left
+out of the solve (:func:`with_one_exposure`, before any: the readout directions and frame
+times are chosen on them too): their leading edges still time their flashes (the same
+camera then 0.054 ms off). Only bands within one frame and fitted whole tell a length, so
+a camera needs three of them on each side of a change.
 """
 
 from __future__ import annotations
@@ -30,6 +32,10 @@ MIN_SPAN_BANDS = 3
 STEP_SIGMAS = 8.0
 #: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
 MIN_STEP_ROWS = 1.0
+#: Neighbouring spans whose median lengths differ by less than this share of the longer are
+#: one (auto exposure steps by a third of a stop, 26 %, or more; the bands of a steady
+#: camera at two flash powers, measured against its flashes, came out 3.6 % longer at the end).
+MIN_STEP_SHARE = 0.15
 #: Least robust standard deviation of a band's length, rows (bands fitted at one width
 #: share their length exactly).
 LENGTH_FLOOR_ROWS = 0.1
@@ -71,7 +77,8 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     to the next) about the median of its neighbours (a lone length that a codec moved leans
     on no split), are split in two where that leaves the least squared deviation from each
     side's mean, and again within each side, while the means step (:data:`STEP_SIGMAS` of
-    the noise and :data:`MIN_STEP_ROWS`); where some span's lengths then scatter
+    the noise and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
+    :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
     (:data:`SPAN_INLIERS`), they are taken as one.
     """
     events, pulses = detection.events, detection.pulse_rows
@@ -96,7 +103,7 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
     local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="nearest")
     clipped = np.clip(lengths, local - INLIER_SIGMAS * noise, local + INLIER_SIGMAS * noise)
-    cuts = _cuts(clipped, 0, len(lengths), noise)
+    cuts = _merged(lengths, _cuts(clipped, 0, len(lengths), noise))
     steady = all(
         np.mean(np.abs(lengths[a:b] - np.median(lengths[a:b])) <= INLIER_SIGMAS * noise) >= SPAN_INLIERS
         for a, b in cuts
@@ -123,6 +130,19 @@ def _cuts(lengths: np.ndarray, start: int, stop: int, noise: float) -> list[tupl
     if step < max(STEP_SIGMAS * noise, MIN_STEP_ROWS):
         return [(start, stop)]
     return _cuts(lengths, start, k, noise) + _cuts(lengths, k, stop, noise)
+
+
+def _merged(lengths: np.ndarray, cuts: list[tuple[int, int]]) -> list[tuple[int, int]]:
+    """``cuts`` with each pair of neighbours whose median lengths differ by less than
+    :data:`MIN_STEP_SHARE` of the longer joined."""
+    merged = [cuts[0]]
+    for start, stop in cuts[1:]:
+        before, after = np.median(lengths[slice(*merged[-1])]), np.median(lengths[start:stop])
+        if abs(after - before) < MIN_STEP_SHARE * max(before, after):
+            merged[-1] = (merged[-1][0], stop)
+        else:
+            merged.append((start, stop))
+    return merged
 
 
 def with_one_exposure(detection: CameraDetection) -> CameraDetection:

@@ -11,6 +11,7 @@ from test_diagnose import DURATION_MS, flashes
 
 from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
+from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy
 from flashsync.events import Band, Edge, Events
 from flashsync.exposure_changes import exposure_spans
@@ -72,7 +73,8 @@ def test_each_step_makes_a_span(lengths, counts):
     [
         pytest.param(noisy([18.0] * 16, seed=2), id="one-exposure"),
         pytest.param(noisy([18.0] * 8 + [21.0] * 8, seed=3, std_rows=1.0), id="a-step-within-8-sigmas"),
-        pytest.param(noisy([18.0] * 8 + [17.1] * 8, seed=4, std_rows=0.01), id="a-step-under-a-row"),
+        pytest.param(noisy([4.0] * 8 + [3.1] * 8, seed=4, std_rows=0.01), id="a-step-under-a-row"),
+        pytest.param(noisy([32.4] * 8 + [33.6] * 8, seed=7, std_rows=0.05), id="a-step-of-4-percent"),
         pytest.param(noisy([18.0] * 2 + [9.0] * 14, seed=5), id="too-few-bands-on-one-side"),
         pytest.param(
             noisy([18, 30, 18, 30, 18, 18, 30, 18] + [30, 18, 30, 30, 18, 30, 18, 30], seed=6),
@@ -82,7 +84,8 @@ def test_each_step_makes_a_span(lengths, counts):
 )
 def test_lengths_that_do_not_step_together_make_one_span(lengths):
     """One exposure; a step of 3 rows in lengths scattered 1 row (under
-    :data:`~flashsync.exposure_changes.STEP_SIGMAS`); a step under a row; two bands alone
+    :data:`~flashsync.exposure_changes.STEP_SIGMAS`); a step under a row (of 4 rows); a
+    step of 4 % (auto exposure's least is a third of a stop, 26 %); two bands alone
     before a step; and bands of flashes at two powers, full-power pulses that outlast the
     exposure (30 rows among 18) three in eight before the middle and five after: the
     medians step, but the lengths jump from one band to the next as much: one span."""
@@ -110,7 +113,7 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     bands at 4 ms, eight at 2 ms; the 2 ms bands clipped at white), it is solved on the 2 ms
     span and the others' trailing edges are left out: its times within 0.1 ms (0.054), a
     warning names both exposures and their frames, and the exposure's sigma reaches the
-    other one."""
+    other one; ``diagnose`` measures it as ``sync`` solves it."""
     cameras = (
         CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
         CameraSpec(
@@ -130,3 +133,6 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     assert int(spans[0][2]) < 90 <= int(spans[1][1]), warning
     camera = model.cameras["cam1"]
     assert camera.exposure_ms == pytest.approx(2.0, abs=0.1) and camera.exposure_std_ms > 1.9
+    d = diagnose(detections)  # measures cam1 as sync solves it, and writes sync's model
+    assert any(w.startswith(f"{tmp_path / 'cam1.mp4'}: its exposure changes while it records") for w in d.warnings)
+    assert d.written.endswith("(the same as sync's own)"), d.written
