@@ -120,18 +120,15 @@ def test_bench_rigs_readout_out_of_range_is_one_line(fractions):
     assert f"argument --readout: {fractions}: give LO:HI with 0 < LO <= HI <= 1" in run.stderr.splitlines()[-1]
 
 
+@pytest.mark.parametrize("option", ["--flash-powers", "--exposure-changes"])
 @pytest.mark.parametrize("share", ["1.5", "a"])
-def test_bench_rigs_flash_powers_out_of_range_is_one_line(share):
-    """``bench_rigs.py --flash-powers`` takes a share between 0 and 1; anything else is one
-    line of argparse's and exit 2, before any rig is drawn."""
+def test_bench_rigs_share_out_of_range_is_one_line(option, share):
+    """``bench_rigs.py --flash-powers`` and ``--exposure-changes`` take a share between 0
+    and 1; anything else is one line of argparse's and exit 2, before any rig is drawn."""
     script = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_rigs.py"
-    run = subprocess.run(
-        [sys.executable, str(script), f"--flash-powers={share}"], capture_output=True, text=True, timeout=60
-    )
+    run = subprocess.run([sys.executable, str(script), f"{option}={share}"], capture_output=True, text=True, timeout=60)
     assert run.returncode == 2 and "Traceback" not in run.stderr, run.stderr
-    assert (
-        f"argument --flash-powers: {share}: give a share of the flashes between 0 and 1" in run.stderr.splitlines()[-1]
-    )
+    assert f"argument {option}: {share}: give a share between 0 and 1, e.g. 0.3" in run.stderr.splitlines()[-1]
 
 
 def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
