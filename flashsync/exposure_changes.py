@@ -8,8 +8,8 @@ the trailing edges of the bands under another exposure put their flashes half th
 (a 320x180 camera at 30 fps whose exposure went from 4 to 2 ms halfway: 0.62 ms RMS off the
 truth). So the bands are split into spans of frames over which their lengths stay one
 (:func:`exposure_spans`), and the trailing edges outside the span of the most bands are left
-out of the solve (:func:`with_one_exposure`, before any: the readout directions and frame
-times are chosen on them too): their leading edges still time their flashes (the same
+out before anything is solved (:func:`with_one_exposure`: the readout directions and frame
+times are chosen on the edges too); their leading edges still time their flashes (the same
 camera then 0.054 ms off). Only bands within one frame and fitted whole tell a length, so
 a camera needs three of them on each side of a change.
 """
@@ -27,14 +27,14 @@ from flashsync.robust import mad_sigma
 
 #: Fewest bands on each side of a change of exposure.
 MIN_SPAN_BANDS = 3
-#: A change of exposure steps the bands' median length by this many robust standard
+#: A change of exposure steps the bands' mean length by this many robust standard
 #: deviations of a length (from the differences of one band's length to the next's) at least ...
 STEP_SIGMAS = 8.0
 #: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
 MIN_STEP_ROWS = 1.0
 #: Neighbouring spans whose median lengths differ by less than this share of the longer are
-#: one (auto exposure steps by a third of a stop, 26 %, or more; the bands of a steady
-#: camera at two flash powers, measured against its flashes, came out 3.6 % longer at the end).
+#: one (auto exposure steps by a third of a stop, 26 %, or more; at two flash powers a
+#: steady camera's last bands, measured against their flashes, came out 3.6 % longer).
 MIN_STEP_SHARE = 0.15
 #: Least robust standard deviation of a band's length, rows (bands fitted at one width
 #: share their length exactly).
