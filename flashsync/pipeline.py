@@ -38,7 +38,7 @@ from flashsync.exposure_changes import exposure_spans, with_one_exposure
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
-from flashsync.jackknife import flash_scatter
+from flashsync.jackknife import flash_scatter, split_scatter
 from flashsync.likelihood import (
     SCORE_MIN_SIGMA_MS,
     HeldClock,
@@ -1166,12 +1166,15 @@ class _Attempt:
         """This attempt with the scatter its flashes make added to every camera's
         covariance and exposure variance (:func:`~flashsync.jackknife.flash_scatter`): the
         errors a flash brings to all its edges, which the residuals do not show, in the
-        cameras' sigma; and :data:`EXPOSURE_FLOOR_MS` and the camera's ``exposure_spreads``
-        (ms, where given) in the exposure's (without the scatter where a solve left an
-        exposure unread)."""
-        scatter = flash_scatter(
-            self.observations, len(self.connected), self.connected.index(self.reference), self.solution, self.priors
-        )
+        cameras' sigma, and the error split bands share in a camera
+        (:func:`~flashsync.jackknife.split_scatter`); and :data:`EXPOSURE_FLOOR_MS` and the
+        camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
+        scatter where a solve left an exposure unread)."""
+        solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
+        scatter = [
+            flashes + split
+            for flashes, split in zip(flash_scatter(*solve, self.priors), split_scatter(*solve, self.priors))
+        ]
         cameras = [
             replace(
                 camera,
@@ -1998,6 +2001,7 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
     the exposure weighed down in its length, :func:`_trailing_sigma`)."""
     camera, flash, t_frame, q = [matches.camera_index], [matches.flash], [matches.t_frame_ms], [matches.q]
     leading_of = [np.full(len(matches), -1, dtype=np.int64)]
+    split = [np.zeros(len(matches), dtype=bool)]
     sigma_factor = [matches.edge_sigma.copy()]
     for index, detection in enumerate(cameras):
         mine = np.flatnonzero(matches.camera_index == index)
@@ -2009,6 +2013,7 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         # a clipped band's midpoint (its leading edge's row) is as sharp as an unclipped one's (_timing_bands)
         clipped = edges.has_flag(Flag.SATURATED)
         sigma_factor[0][leading_of[-1][clipped]] = _faintness(detection, edges)[clipped]
+        split.append(edges.has_flag(Flag.SPLIT))
         camera.append(np.full(len(edges), index, dtype=np.int64))
         flash.append(matches.flash[leading_of[-1]])
         t_frame.append(edges.t_frame_ms)
@@ -2022,6 +2027,7 @@ def _observations(cameras: list[CameraDetection], matches: Matches) -> Observati
         np.concatenate(sigma_factor),
         trailing,
         np.concatenate(leading_of),
+        np.concatenate(split),
     )
 
 

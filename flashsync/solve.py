@@ -58,7 +58,8 @@ class Observations:
     ``trailing``: bool (n,), the edge is a band's trailing edge, one exposure after the
     flash (None: all leading); ``leading_of``: int (n,), for a trailing edge the index of its
     band's leading edge among these observations, -1 for none and for leading edges (None:
-    no pairs). A pair enters the solve as its band's midpoint and length (:class:`_System`).
+    no pairs); ``split``: bool (n,), a trailing edge whose band is split across two frames
+    (None: none). A pair enters the solve as its band's midpoint and length (:class:`_System`).
     """
 
     camera: np.ndarray
@@ -68,6 +69,7 @@ class Observations:
     sigma_factor: np.ndarray | None = None
     trailing: np.ndarray | None = None
     leading_of: np.ndarray | None = None
+    split: np.ndarray | None = None
 
     def take(self, keep: np.ndarray) -> Observations:
         """The observations a boolean mask (n,) keeps, a trailing edge's ``leading_of``
@@ -90,6 +92,7 @@ class Observations:
             kept(self.sigma_factor),
             kept(self.trailing),
             leading_of,
+            kept(self.split),
         )
 
 
