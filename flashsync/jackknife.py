@@ -39,19 +39,16 @@ def flash_scatter(
     and its warp (the layout of :attr:`~flashsync.solve.CameraSolution.covariance`), then
     ``exposure_ms``: (4 + k, 4 + k), the last row and column NaN for a camera without one.
 
-    Each solve keeps ``solution``'s drift model (its warps' knots, the cameras solved
-    without the drift prior) and ``priors``. A solve the remaining flashes cannot support
-    is skipped; with fewer than two solves every matrix is zero.
+    Each solve is made as ``solution`` was (:func:`_solved_as`). A solve the remaining
+    flashes cannot support is skipped; with fewer than two solves every matrix is zero.
     """
-    knots = {c: camera.knots_ms for c, camera in enumerate(solution.cameras) if len(camera.knots_ms)}
-    priors = priors.without_drift_prior(solution.free_drift)
     flashes = np.unique(events.flash)
     groups = min(len(flashes), GROUPS)
     solved = []
     for group in range(groups):
         left_out = np.isin(events.flash, flashes[group::groups])
         try:
-            trial = solve_clocks(events.take(~left_out), n_cameras, reference, priors=priors, drift_knots=knots)
+            trial = _solved_as(solution, events.take(~left_out), n_cameras, reference, priors)
         except NotEnoughDataError:
             continue
         solved.append([_parameters(camera) for camera in trial.cameras])
@@ -84,22 +81,33 @@ def split_scatter(
     brings to its clock's parameters and its exposure (the layout of :func:`flash_scatter`):
     for every camera with such bands, the joint solve re-run with their trailing edges
     :data:`SPLIT_OFFSET_ROWS` later, the change of every camera's parameters squared (its
-    outer product), summed over those cameras. Zero where no camera has a split band whose
-    both edges the solve pairs."""
-    knots = {c: camera.knots_ms for c, camera in enumerate(solution.cameras) if len(camera.knots_ms)}
-    priors = priors.without_drift_prior(solution.free_drift)
+    outer product), summed over those cameras; each solve made as ``solution`` was
+    (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that many groups
+    (the k-th in group k mod GROUPS), one solve each, a camera's change then holding its
+    group's others' small share. Zero where no camera has a split band whose both edges the
+    solve pairs."""
     solved = [_parameters(camera) for camera in solution.cameras]
     scatter = [np.zeros((len(parameters),) * 2) for parameters in solved]
     if events.split is None or events.leading_of is None:
         return scatter
     lengths = events.split & (events.leading_of >= 0)
-    for moved in (lengths & (events.camera == c) for c in np.unique(events.camera[lengths])):
+    cameras = np.unique(events.camera[lengths])
+    groups = min(len(cameras), GROUPS)
+    for moved in (lengths & np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
         shifted = replace(events, q=np.where(moved, events.q + SPLIT_OFFSET_ROWS, events.q))
-        trial = solve_clocks(shifted, n_cameras, reference, priors=priors, drift_knots=knots)
+        trial = _solved_as(solution, shifted, n_cameras, reference, priors)
         for c, camera in enumerate(trial.cameras):
             change = np.nan_to_num(_parameters(camera) - solved[c])
             scatter[c] += np.outer(change, change)
     return scatter
+
+
+def _solved_as(solution: Solution, events: Observations, n_cameras: int, reference: int, priors: Priors) -> Solution:
+    """``events`` solved as ``solution`` was: with its drift model (its warps' knots, the
+    cameras solved without the drift prior) and ``priors``."""
+    knots = {c: camera.knots_ms for c, camera in enumerate(solution.cameras) if len(camera.knots_ms)}
+    priors = priors.without_drift_prior(solution.free_drift)
+    return solve_clocks(events, n_cameras, reference, priors=priors, drift_knots=knots)
 
 
 def _parameters(camera: CameraSolution) -> np.ndarray:
