@@ -131,9 +131,10 @@ def sync_table(model: SyncModel, report=None) -> str:
 
 #: What ``sync ± ms`` means, printed under the table.
 SIGMA_MEANING = (
-    "sync ± ms: 1σ of a camera's times on the reference's clock, the edges' noise and the scatter of the solve "
-    "with each flash left out (the reference's: its rows' below its first, whose times are the clock); a camera "
-    "against the reference's rows: the root of the sum of both squares"
+    "sync ± ms: 1σ of a camera's times on the reference's clock, the edges' noise, the scatter of the solve "
+    "with each flash left out and what an error its split bands' lengths share moves (the reference's: its rows' "
+    "below its first, whose times are the clock); a camera against the reference's rows: the root of the sum of "
+    "both squares"
 )
 
 
