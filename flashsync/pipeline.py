@@ -367,7 +367,7 @@ def _synchronized(
     change_warnings, changes_ms = _exposure_changes(best, {d.camera: d for d in detections})
     for name, spread in changes_ms.items():
         exposure_spreads[name] = np.hypot(exposure_spreads.get(name, 0.0), spread)
-    best = best.with_flash_scatter(exposure_spreads)
+    best = best.with_scatter(exposure_spreads)
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -1162,11 +1162,11 @@ class _Attempt:
         readings are compared by (:func:`_best_readout`, :func:`_readout_doubts`)."""
         return self.score - UPSIDE_DOWN_PRIOR * sum(d.flipped for d in self.cameras.values())
 
-    def with_flash_scatter(self, exposure_spreads: dict[str, float]) -> _Attempt:
-        """This attempt with the scatter its flashes make added to every camera's
-        covariance and exposure variance (:func:`~flashsync.jackknife.flash_scatter`): the
-        errors a flash brings to all its edges, which the residuals do not show, in the
-        cameras' sigma, and the error split bands share in a camera
+    def with_scatter(self, exposure_spreads: dict[str, float]) -> _Attempt:
+        """This attempt with what the residuals do not show added to every camera's
+        covariance and exposure variance: the scatter of the solve with each flash left out
+        (:func:`~flashsync.jackknife.flash_scatter`: the errors a flash brings to all its
+        edges) and what an error common to a camera's split bands moves
         (:func:`~flashsync.jackknife.split_scatter`); and :data:`EXPOSURE_FLOOR_MS` and the
         camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
         scatter where a solve left an exposure unread)."""
