@@ -63,8 +63,8 @@ def test_a_reencoded_reference_is_synchronised_as_closely_as_the_original(
 ):
     """Every camera within the original's error + 0.02 ms, or within the sigma sync states
     for it where that is larger (r's times rest on seven flashes, one of whose bands runs off
-    the image's bottom: on the renders of the CI machine of 2026-12-02, OpenCV 5.1 on an
-    AVX-512 CPU, the ProRes file lost its tail in the next frame, the original did not, and
+    the image's bottom: on the renders of the CI machine of 2026-12-02, with OpenCV
+    5.1, the ProRes file lost its tail in the next frame, the original did not, and
     its leading edge, fitted alone, lies 0.18 rows apart: r 0.051 ms off against 0.016, at
     a stated 0.054); the sigma itself no more than 0.02 ms above the original's."""
     suffix, codec, pixel_format, options = FORMATS[name]
