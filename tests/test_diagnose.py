@@ -127,9 +127,9 @@ def assert_settled(d, cameras: list, truth: GroundTruth, world: str) -> None:
     the test (χ² per degree of freedom 2.0-3.1 on these cases), they pass it against the
     edge noise the truth shows: χ² over the truth's χ² per degree of freedom. (Until
     2026-12-02 the model's χ² per degree of freedom was held under the truth's; on three
-    flashes, 3 degrees of freedom, that is a coin toss: on the renders of the CI machine of
-    2026-12-02, with OpenCV 5.1, the second world's flicker pair gave 4.6
-    against 2.8, p = 0.18 so scaled.)"""
+    flashes, 3 degrees of freedom, that is a coin toss: rendered with OpenCV 5.1, the CI
+    machine's of 2026-12-02, the second world's flicker pair gave 4.6 against 2.8, p = 0.18
+    so scaled.)"""
     if world == FIRST or d.consistent:
         assert d.consistent, format_diagnosis(d)
         return
@@ -168,10 +168,10 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     gone and what is left goes with the depth of the clip: named first in both worlds, the
     gap 0.058 -> 0.021 ms (first world) and 0.069 -> 0.036 (second), within the noise floor,
     the share 0.26 and 0.34. Whether it comes alone or with the camera's time per row, which
-    its 18 flashes hardly tell from it, turns on the renders' last bits: on those of the CI
-    machine of 2026-12-02 (OpenCV 5.1) the second world's step is the pair,
-    0.074 -> 0.037 ms, the share 0.41. ``sync`` times a clipped band by its midpoint and leaves its
-    length out of the exposure (``tests/test_pipeline_checks.py``), which edges moved out
+    its 18 flashes hardly tell from it, turns on the renders' last bits: rendered with OpenCV
+    5.1 (the CI machine of 2026-12-02) the second world's step is the pair, 0.074 -> 0.037
+    ms, the share 0.41. ``sync`` times a clipped band by its midpoint and leaves its length
+    out of the exposure (``tests/test_pipeline_checks.py``), which edges moved out
     alike leave in place; ``diagnose -o`` writes ``sync``'s solve with the clipped edges
     moved back by what the effect moves each, no further off the truth than ``sync``'s
     own (0.076 against 0.085 ms in the first world, 0.036 against 0.038 in the second). It
@@ -804,10 +804,10 @@ def test_rolling_flicker_is_named_first_and_times_the_rows(flickering, tmp_path)
     flicker's prior; at frame period / height, before ``sync``'s shape, it was 2.1 ms off.
     ``sync`` (the same flicker, :func:`~flashsync.pipeline.mains_flicker`, is its prior) is
     within 0.1 ms of the truth (0.038 and 0.049 ms) and of ``diagnose -o``. The time per row
-    written is the flicker's within 0.5 % (first world) and 1 % (second: on the renders of
-    the CI machine of 2026-12-02, with OpenCV 5.1, the flicker's is 0.21 %
-    short, the three flashes pull the solve 0.58 % long, 0.79 % apart; the times 0.08 ms off
-    at error/sigma 2.8, a miss the README's honest-numbers section lists)."""
+    written is the flicker's within 0.5 % (first world) and 1 % (second: rendered with OpenCV
+    5.1, the CI machine's of 2026-12-02, the flicker's is 0.21 % short, the three flashes
+    pull the solve 0.58 % long, 0.79 % apart; the times 0.08 ms off at error/sigma 2.8, a
+    miss the README lists under "Renders move with the machine")."""
     cameras, truth, world = flickering
     d = diagnose(cameras)
     step = d.steps[0]
@@ -844,9 +844,9 @@ def test_second_world_pulse_tail_is_named_on_the_hd_rig_and_diagnose_o_closes_in
     (not first, see the README), and from before that step to the run's end the gap
     shrinks over 3.5x (0.306 to 0.044 ms: the step, 0.306 to 0.254, and the times per row it
     leaves to the next one; with split bands located edge by edge it was a pair with the
-    time per row, 0.220 to 0.049; on the renders of the CI machine of 2026-12-02, with OpenCV
-    5.1, the step comes last, 0.186 to 0.047). ``diagnose -o`` writes ``sync``'s solve with the widened
-    bands' edges moved back by the shares found (0.068 ms off the truth, ``sync`` 0.070;
+    time per row, 0.220 to 0.049; rendered with OpenCV 5.1, the CI machine's of 2026-12-02,
+    the step comes last, 0.186 to 0.047). ``diagnose -o`` writes ``sync``'s solve with the
+    widened bands' edges moved back by the shares found (0.068 ms off the truth, ``sync`` 0.070;
     the workflow's own model, written until 2026-12-02, 0.030: its cam2's time per row
     0.23 % off against ``sync``'s 0.71 %, not the pulse shape)."""
     monkeypatch.setattr("flashsync.detect.TAIL_SHARE", 0.0)
@@ -907,9 +907,9 @@ def test_the_final_model_reads_every_camera_as_sync_reads_it(tmp_path):
     reading it bottom-up by them, as it is, the final model reads it so too and says so: its
     residuals pass the χ² test (before: cam4 top-down, 0.39 ms RMS, χ² 17.6 over 2 on the
     model ``-o`` did not write) and every camera is read as the model ``-o`` writes. Which
-    way the workflow takes turns on the renders' last bits: on the renders of the CI machine
-    of 2026-12-02 (OpenCV 5.1) five flashes are found and a step turns
-    cam4 (ΔBIC 15.1), so the model reads it as ``sync`` does with no word needed."""
+    way the workflow takes turns on the renders' last bits: rendered with OpenCV 5.1 (the CI
+    machine of 2026-12-02) five flashes are found and a step turns cam4 (ΔBIC 15.1), so the
+    model reads it as ``sync`` does with no word needed."""
     scenario = random_rig(428, max_height=360, duration_ms=8000.0)
     render_scenario(scenario, tmp_path)
     d = diagnose(detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras]))

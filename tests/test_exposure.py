@@ -77,9 +77,9 @@ def synced(request, tmp_path_factory):
 
 #: A known miss: the 0.5 ms camera (e0), whose exposure is the solve's since both band edges
 #: entered it, comes out 0.10-0.14 ms short under xenon pulses (the renders vary with the
-#: machine) and, on the renders of the CI machine of 2026-12-02 (OpenCV
-#: 5.1), 0.129 ms short under the LED's; the detector's shared band width had it
-#: +0.03 ms (README, "Both edges of every band").
+#: machine) and, rendered with OpenCV 5.1 (the CI machine of 2026-12-02), 0.129 ms short
+#: under the LED's; the detector's shared band width had it +0.03 ms (README, "Both edges of
+#: every band").
 KNOWN_MISS = {("xenon", "e0"): 0.15, ("led", "e0"): 0.15}
 
 
@@ -180,10 +180,10 @@ def test_an_exposure_every_pulse_outlasts_is_read_from_the_bands_ramps(tmp_path,
     short used to be refused: the band lengths were taken for the exposure (+1.03 and
     +0.59 ms) and the camera's times put half the excess late, 0.54 and 0.33 ms RMS at
     error/sigma 5.5 and 3.3, without a word. Read at the longest exposure its ramps allow:
-    within 0.07 ms, the times 0.043 and 0.022 ms RMS off; on the renders of the CI machine
-    of 2026-12-02 (OpenCV 5.1) the 0.35 ms one (2.5 rows) 0.103 ms long and
-    0.063 ms RMS off at error/sigma 1.0: its exposure is held to 0.15 ms (a row is 0.14 ms)
-    and its times to 0.08 ms, the honesty of its sigma as before."""
+    within 0.07 ms, the times 0.043 and 0.022 ms RMS off; rendered with OpenCV 5.1 (the CI
+    machine of 2026-12-02) the 0.35 ms one (2.5 rows) 0.103 ms long and 0.063 ms RMS off at
+    error/sigma 1.0: its exposure is held to 0.15 ms (a row is 0.14 ms) and its times to
+    0.08 ms, the honesty of its sigma as before."""
     bounds = (0.15, 0.08) if exposure_ms < 0.5 else (0.1, 0.06)
     assert_the_short_camera_right(tmp_path, exposure_ms, [1.2, 1.3, 1.4, 1.5, 1.6, 1.7, 1.8, 2.0], *bounds)
 

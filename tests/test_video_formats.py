@@ -2,9 +2,10 @@
 reference camera by re-encoding its decoded frames at their own times: 10-bit HEVC (phones,
 action cameras), 10-bit 4:2:2 ProRes (cinema cameras), RGB and VP9 are synchronised as
 closely as the original, or within the sigma sync states; an AVI that lists its dropped
-frames as empty index entries (IP cameras, capture cards) is read whole, not called cut short; a video stored turned for
-display (a phone held upright) is named; a still picture stream before the video is passed
-over; a camera whose frame rate halves part-way (a phone in dim light) is tied."""
+frames as empty index entries (IP cameras, capture cards) is read whole, not called cut
+short; a video stored turned for display (a phone held upright) is named; a still picture
+stream before the video is passed over; a camera whose frame rate halves part-way (a phone
+in dim light) is tied."""
 
 import json
 from fractions import Fraction
@@ -63,10 +64,10 @@ def test_a_reencoded_reference_is_synchronised_as_closely_as_the_original(
 ):
     """Every camera within the original's error + 0.02 ms, or within the sigma sync states
     for it where that is larger (r's times rest on seven flashes, one of whose bands runs off
-    the image's bottom: on the renders of the CI machine of 2026-12-02, with OpenCV
-    5.1, the ProRes file lost its tail in the next frame, the original did not, and
-    its leading edge, fitted alone, lies 0.18 rows apart: r 0.051 ms off against 0.016, at
-    a stated 0.054); the sigma itself no more than 0.02 ms above the original's."""
+    the image's bottom: rendered with OpenCV 5.1, the CI machine's of 2026-12-02, the ProRes
+    file lost its tail in the next frame, the original did not, and its leading edge, fitted
+    alone, lies 0.18 rows apart: r 0.051 ms off against 0.016, at a stated 0.054); the sigma
+    itself no more than 0.02 ms above the original's."""
     suffix, codec, pixel_format, options = FORMATS[name]
     reencode(synced_scenario / "r.mp4", tmp_path / f"r.{suffix}", codec, pixel_format, options)
     reencoded = accuracy(tmp_path / f"r.{suffix}", others, truth)
