@@ -806,7 +806,7 @@ def test_rolling_flicker_is_named_first_and_times_the_rows(flickering, tmp_path)
     within 0.1 ms of the truth (0.038 and 0.049 ms) and of ``diagnose -o``. The time per row
     written is the flicker's within 0.5 % (first world) and 1 % (second: rendered with OpenCV
     5.1, the CI machine's of 2026-12-02, the flicker's is 0.21 % short, the three flashes
-    pull the solve 0.58 % long, 0.79 % apart; the times 0.08 ms off at error/sigma 2.8, a
+    pull the solve 0.58 % long, 0.79 % apart; the times 0.08 ms off at error/sigma 2.2, a
     miss the README lists under "Renders move with the machine")."""
     cameras, truth, world = flickering
     d = diagnose(cameras)
