@@ -50,6 +50,7 @@ from flashsync.likelihood import (
 from flashsync.match import (
     MIN_SHARED_FLASHES,
     MIN_TOLERANCE_MS,
+    NOMINAL_HIDDEN_ROWS,
     Matching,
     PairAlignment,
     approximate_times_ms,
@@ -65,14 +66,15 @@ from flashsync.segments import SEGMENT_MS
 from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
 from flashsync.timestamps import median_step_ms
 
-#: Weak prior on T_row where no datasheet value is given: the nominal one
-#: (:func:`~flashsync.match.nominal_row_time_ms`), std 35 %; only decisive where the events
-#: cannot tell T_row (few flashes, all on a few rows). The nominal is the slow end: a sensor
-#: built for 50-120 fps run at 25-30 reads its rows in a third to three quarters of the
-#: frame period. At 8 %, on random rigs whose sensors read in 45-75 % of it, cameras came
-#: out up to 8.7 ms off and times per row up to 115 % off, six of 50 beyond 3 sigmas
-#: (README, "Sensors that read out faster than their frame").
-NOMINAL_ROW_TIME_STD = 0.35
+#: Fastest readout the weak prior on T_row spans, a share of the frame period: the prior
+#: (:func:`row_time_prior_ms`) spreads a camera's readout evenly from this to the whole
+#: frame. A sensor built for 50-120 fps run at 25-30 reads its rows in a third to three
+#: quarters of the frame period, a stacked sensor in a tenth to a third of it. The nominal
+#: +-8 % and then +-35 % (to 2026-12-02) centred the prior on the slowest readout, which
+#: only a sensor reading over its whole frame has: on random rigs reading in 25-45 % of their
+#: frame, cameras whose flashes left their time per row to the prior came out 4-29 ms off
+#: (README, "Sensors that read out in a part of their frame").
+FASTEST_READOUT = 0.1
 
 #: Part of a camera's exposure error (ms) that all its flashes share and neither the solve's
 #: residuals nor the flashes left out show: its tone curve, codec and the pulse shape bend its
@@ -1687,7 +1689,7 @@ def _contradicted_flicker(
     free: Solution, connected: list[str], flicker: dict[str, Flicker]
 ) -> dict[str, tuple[float, float]]:
     """The cameras whose mains flicker's time per row (:func:`flicker_row_time_ms`) the events
-    alone (``free``: solved with the weak nominal prior) contradict: more than
+    alone (``free``: solved with the weak prior) contradict: more than
     :data:`ROW_TIME_SIGMAS` standard deviations of the two together apart. Through the codec
     a flicker's period came out up to 12 % off, and a 100 Hz flicker was named 120 Hz (20 %):
     camera -> (the events' value, its std), ms."""
@@ -1745,7 +1747,7 @@ def _row_time_priors(
 ) -> dict[int, tuple[float, float]]:
     """Per camera index: a datasheet T_row (std 0.01 %), else its mains flicker's (``flicker``
     by camera name, :func:`flicker_row_time_ms`; None: :func:`mains_flicker`), else the
-    weak nominal prior."""
+    weak prior (:func:`row_time_prior_ms`)."""
     if flicker is None:
         flicker = {c.camera: seen for c, seen in zip(cameras, mains_flicker(cameras)) if seen is not None}
     priors = {}
@@ -1755,9 +1757,20 @@ def _row_time_priors(
         elif camera.camera in flicker:
             priors[index] = flicker_row_time_ms(flicker[camera.camera])
         else:
-            nominal = nominal_row_time_ms(camera)
-            priors[index] = (nominal, NOMINAL_ROW_TIME_STD * nominal)
+            priors[index] = row_time_prior_ms(nominal_row_time_ms(camera))
     return priors
+
+
+def row_time_prior_ms(nominal_ms: float) -> tuple[float, float]:
+    """The weak prior on a camera's T_row where no datasheet value nor mains flicker gives
+    one, ms: mean and standard deviation of a readout spread evenly from
+    :data:`FASTEST_READOUT` of the frame period to all of it; ``nominal_ms`` is the frame period
+    over (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height)
+    (:func:`~flashsync.match.nominal_row_time_ms`): 0.58 and 0.27 of it. Only decisive where
+    the events cannot tell T_row (few flashes, all on a few rows)."""
+    slowest = NOMINAL_HIDDEN_ROWS * nominal_ms
+    fastest = FASTEST_READOUT * slowest
+    return (fastest + slowest) / 2.0, (slowest - fastest) / np.sqrt(12.0)
 
 
 def _readout_rows(detection: CameraDetection, events: Events) -> np.ndarray:

@@ -1,7 +1,8 @@
 """Sensors that read their rows in part of the frame period (a sensor built for 50-120 fps
-run at 25-30 idles in a long vertical blanking): the frame period over the height, the
-time per row ``sync`` takes where the flashes do not tell it, is then the slow end of what
-the camera may have, and its uncertainty must say so."""
+run at 25-30 idles in a long vertical blanking): the frame period over the height is then
+the slow end of what the camera may have, so where the flashes do not tell the time per
+row ``sync`` takes a readout spread over 10-100 % of the frame (``pipeline.row_time_prior_ms``),
+and its uncertainty must say so."""
 
 from __future__ import annotations
 
@@ -35,15 +36,18 @@ def same_row(tmp_path_factory):
 
 
 def test_a_time_per_row_the_flashes_do_not_tell_has_a_sigma_that_covers_a_fast_readout(same_row):
-    """cam1's time per row rests on the nominal prior, which must allow a readout in half
-    the frame: its time per row and its exposure (the bands' length in rows times it) within
-    3 sigmas of the truth, its times within 2 (RMS of error/sigma), and the report warns that
-    its flashes do not pin its time per row down. It comes out 0.209 ms (81 % off) at 1.3
-    sigmas, its times 5.2 ms RMS off at 1.3; with the prior's old std of 8 % at 5.7 and 5.6
-    sigmas (its exposure 7.3 ms against 4, at 5.7)."""
+    """cam1's time per row rests on the prior, which must allow a readout in half the frame:
+    its time per row and its exposure (the bands' length in rows times it) within 3 sigmas
+    of the truth, its times within 2 (RMS of error/sigma), and the report warns that its
+    flashes do not pin its time per row down. With the prior on a readout over 10-100 % of
+    the frame it comes out 0.123 ms (6.7 % off), its times 0.42 ms RMS off at error/sigma
+    0.14; with the prior centred on the nominal (+-35 %, to 2026-12-02) 0.213 ms (84 % off),
+    its times 5.4 ms off at 1.3, and at +-8 % (to 2026-11-29) at 5.7 and 5.6 sigmas."""
     truth, model, report = same_row
     table = camera_accuracy(model, truth).set_index("camera")
     assert truth.cameras["cam1"].row_time_ms == pytest.approx(0.1156, abs=0.001)  # the premise
+    assert abs(table.loc["cam1", "row_time_error_pct"]) < 15.0, table.loc["cam1"]
+    assert table.loc["cam1", "rms_ms"] < 1.0, table.loc["cam1"]
     assert abs(table.loc["cam1", "row_time_z"]) <= 3.0, table.loc["cam1"]
     assert abs(table.loc["cam1", "exposure_z"]) <= 3.0, table.loc["cam1"]
     assert table.loc["cam1", "z_rms"] <= 2.0, table.loc["cam1"]

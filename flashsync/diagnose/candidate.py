@@ -50,7 +50,7 @@ from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock
 from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
-from flashsync.pipeline import NOMINAL_ROW_TIME_STD
+from flashsync.pipeline import row_time_prior_ms
 from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
 from flashsync.solve import DRIFT_PRIOR_STD
 
@@ -424,9 +424,9 @@ def _pseudo_rows(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The fit's equations beyond the edges, those of ``sync``'s solve: per camera whose
     time per row the model fits (``row_time``), ``correction = its rolling flicker's time per
-    row - base`` where it saw flicker, else the weak nominal prior's (frame period /
-    (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height), std
-    :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` of it); per camera whose drift it fits
+    row - base`` where it saw flicker, else the weak prior's
+    (:func:`~flashsync.pipeline.row_time_prior_ms` of the frame period /
+    (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height)); per camera whose drift it fits
     (but those of :attr:`Measurement.free_drift`), the drift prior (0, std
     :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
     (k, len(keys) + n_flashes), right-hand sides (k,) in the parameters' units and weights
@@ -439,7 +439,7 @@ def _pseudo_rows(
             row_time, std = measurement.flicker_row_time_ms(c)
             if not np.isfinite(row_time):
                 nominal = timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * measurement.cameras[c].height)
-                row_time, std = nominal, NOMINAL_ROW_TIME_STD * nominal
+                row_time, std = row_time_prior_ms(nominal)
             equations.append(((ROW_TIME, c), row_time - base, std))
         if (DRIFT, c) in keys and c not in measurement.free_drift:
             equations.append(((DRIFT, c), 0.0, DRIFT_PRIOR_STD))

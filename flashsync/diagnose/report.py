@@ -4,7 +4,7 @@ verdict on the noise and the final model per camera. ``Diagnosis.to_dict()`` is 
 from __future__ import annotations
 
 from flashsync.diagnose.workflow import THRESHOLD, Diagnosis
-from flashsync.pipeline import NOMINAL_ROW_TIME_STD
+from flashsync.pipeline import FASTEST_READOUT
 from flashsync.solve import DRIFT_PRIOR_STD
 
 
@@ -39,7 +39,8 @@ def format_diagnosis(diagnosis: Diagnosis) -> str:
         lines.append(
             " " * 6 + "in sync's shape".ljust(32) + f" {'every':<10} {d.found_rms_ms:>13.4f} "
             f"{d.final_rms_ms:>9.4f}  the effects above with every camera's time per row, exposure and drift "
-            f"free under sync's priors (time per row nominal ± {100 * NOMINAL_ROW_TIME_STD:.0f} % or its flicker's, "
+            f"free under sync's priors (time per row a readout in {100 * FASTEST_READOUT:.0f}-100 % of the frame or "
+            "its flicker's, "
             f"drift 0 ± {DRIFT_PRIOR_STD * 1e6:.0f} ppm)"
             + (
                 f", and {', '.join(d.sync_readouts)} read the other way up, as sync reads "

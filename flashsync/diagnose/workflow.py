@@ -311,7 +311,7 @@ def in_sync_shape(
 ) -> Candidate | None:
     """The ``found`` model's effects with every camera's time per row, exposure and drift
     (:data:`SYNC_SHAPE`) free under ``sync``'s priors (the fit's pseudo-observations: time per
-    row nominal ± :data:`~flashsync.pipeline.NOMINAL_ROW_TIME_STD` or its rolling flicker's,
+    row :func:`~flashsync.pipeline.row_time_prior_ms` or its rolling flicker's,
     drift 0 ± :data:`~flashsync.solve.DRIFT_PRIOR_STD` but on the cameras
     ``free_drift``, whose drift ``sync`` solved without it, a warning each) and the cameras
     ``turned``, which ``sync`` reads the other way up from the measurement, read that way
