@@ -32,8 +32,10 @@ GROUPS = 10
 #: A solve that leaves a camera's time per row to its prior (its standard deviation over
 #: this share of the prior's) where the whole solve did not is not counted in that camera's
 #: scatter: its time per row then moves by the prior's pull, not by what the group's edges
-#: got wrong (the reference of ``tests/test_video_formats.py`` re-encoded as VP9: its 50 fps
-#: camera's sigma 2.06 ms for an error of 0.015, under the prior of 2026-12-02).
+#: got wrong (under :func:`~flashsync.pipeline.row_time_prior_ms`, the reference of
+#: ``tests/test_video_formats.py`` re-encoded as VP9 gave its 50 fps camera a sigma of 2.06 ms
+#: for an error of 0.015; the twins of ``tests/test_accuracy.py``, whose times per row rest
+#: on one flash, had 1.09 and 1.88 ms for 0.009 and 0.046 under the nominal prior).
 PRIOR_BOUND_SHARE = 0.5
 
 

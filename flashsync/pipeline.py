@@ -72,7 +72,7 @@ from flashsync.timestamps import median_step_ms
 #: quarters of the frame period, a stacked sensor in a tenth to a third of it. The nominal
 #: +-8 % and then +-35 % (to 2026-12-02) centred the prior on the slowest readout, which
 #: only a sensor reading over its whole frame has: on random rigs reading in 25-45 % of their
-#: frame, cameras whose flashes left their time per row to the prior came out 4-29 ms off
+#: frame, cameras whose flashes left their time per row to the prior came out 1-29 ms off
 #: (README, "Sensors that read out in a part of their frame").
 FASTEST_READOUT = 0.1
 
