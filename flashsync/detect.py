@@ -200,6 +200,7 @@ class EventDetector:
         self._open: _Event | None = None
         self._lit_rows = (0, height)
         self._global_frames = 0
+        self._global_sign = 0
         self._n_events = 0
         self._edges: list[tuple] = []  # one tuple of the Events fields per edge found
         self._whole: list[tuple[BandFit, int]] = []  # bands fitted whole that passed the recurrence
@@ -209,6 +210,7 @@ class EventDetector:
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
         self.n_faint = 0
+        self.n_whole_frames = 0
 
     def push(self, frame: int, t_frame_ms: float, profile: np.ndarray) -> None:
         """Process one frame's row profile (shape (height, blocks) or (height,), stored rows).
@@ -367,6 +369,7 @@ class EventDetector:
                 opened = None
             elif at_top and at_bottom:
                 self._global_frames += 1
+                self._global_sign = segment.sign
                 if self._global_frames >= self.settings.step_frames:
                     self._reset_baseline(readout)
                 return
@@ -376,6 +379,8 @@ class EventDetector:
                 self._emit(_Event([segment]), Band.PULSE)
         if opened is not None:
             self._emit(opened, Band.PULSE, trailing_visible=False)
+        if self._global_frames and self._global_sign > 0:
+            self.n_whole_frames += 1  # lit whole and gone again: a flash without a band
         self._global_frames = 0
 
     def _reset_baseline(self, readout: np.ndarray) -> None:
@@ -663,6 +668,10 @@ class CameraDetection:
     n_recurring, n_degenerate : int
         Bands dropped as recurring at the same rows (:mod:`flashsync.recurrence`) and as
         degenerate (no plateau to fit an edge on), in the first reading.
+    n_whole_frames : int
+        Flashes that lit every row of a frame at once and were gone the next frame (no band,
+        no edge: a global shutter, or a sensor that reads its rows far faster than its
+        exposure), in the first reading.
     top_down_exposure_rows, bottom_up_exposure_rows : float or None
         The exposure in readout rows that the camera's bands within one frame share, as
         each reading fitted them (:attr:`EventDetector.exposure_rows`); None where fewer
@@ -689,6 +698,7 @@ class CameraDetection:
     flicker: Flicker | None = None
     n_recurring: int = 0
     n_degenerate: int = 0
+    n_whole_frames: int = 0
     top_down_exposure_rows: float | None = None
     bottom_up_exposure_rows: float | None = None
     top_down_pulse_rows: np.ndarray | None = None
@@ -854,6 +864,7 @@ class VideoDetection:
             flicker=self._remove_flicker.estimate(),
             n_recurring=self._detectors[0].n_recurring,
             n_degenerate=self._detectors[0].n_degenerate,
+            n_whole_frames=self._detectors[0].n_whole_frames,
             top_down_exposure_rows=exposures.get(False),
             bottom_up_exposure_rows=exposures.get(True),
             top_down_pulse_rows=pulses.get(False),

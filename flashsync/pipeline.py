@@ -1237,7 +1237,7 @@ def _attempt(
     usable = [name for name, events in sync_events.items() if len(events) >= MIN_SYNC_EVENTS]
     warnings = [
         f"{cameras[name].video}: {len(sync_events[name])} usable flash events "
-        f"(need at least {MIN_SYNC_EVENTS}); left out"
+        f"(need at least {MIN_SYNC_EVENTS}); left out{_whole_frames_note(cameras[name])}"
         for name in cameras
         if name not in usable
     ]
@@ -1261,6 +1261,19 @@ def _attempt(
         return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)
 
     return _shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts)
+
+
+def _whole_frames_note(detection: CameraDetection) -> str:
+    """Why a camera left out for want of flash events saw none, where its frames tell: flashes
+    that lit every row of a frame at once (:attr:`~flashsync.detect.CameraDetection.n_whole_frames`)
+    leave no band edge to time rows by."""
+    if detection.n_whole_frames < MIN_SYNC_EVENTS:
+        return ""
+    return (
+        f": {detection.n_whole_frames} of its frames were lit whole by a flash, every row at once (a global "
+        "shutter, or rows read far faster than the exposure?); flashsync times a camera by the edges of the "
+        "bands a rolling shutter leaves"
+    )
 
 
 def _tie_fast_readouts(

@@ -46,6 +46,7 @@ def detection_notes(detection) -> list[str]:
         for n, what in (
             (detection.n_recurring, "recurring at the same rows (codec echoes, leftover flicker)"),
             (detection.n_degenerate, "degenerate (no plateau to fit)"),
+            (detection.n_whole_frames, "lit whole (every row at once: no edge)"),
         )
         if n
     ]

@@ -86,7 +86,7 @@ def assert_identical(found, expected):
             assert len(ours) and ours.equals(theirs), reading
         assert a.flicker.period_rows == b.flicker.period_rows and a.flicker.depth == b.flicker.depth
         assert np.array_equal(a.flicker.phase, b.flicker.phase, equal_nan=True)
-        assert (a.n_recurring, a.n_degenerate) == (b.n_recurring, b.n_degenerate)
+        assert (a.n_recurring, a.n_degenerate, a.n_whole_frames) == (b.n_recurring, b.n_degenerate, b.n_whole_frames)
 
 
 def test_segments_start_at_key_frames_and_decode_as_the_whole_video(clips):

@@ -214,3 +214,31 @@ def test_a_camera_read_the_wrong_way_up_is_left_out_with_a_word(long_bands):
     assert (table["rms_ms"].dropna() < 0.02).all(), table
     with pytest.raises(NotEnoughDataError, match=r"cam2.mp4, the reference: .*backwards in time.*another --reference"):
         synchronize(upside_down, reference="cam2")
+
+
+@pytest.fixture(scope="module")
+def whole_frames(tmp_path_factory):
+    """cam1 (25 fps) reads its 180 rows in 1 % of its frame (0.4 ms, as a global shutter
+    does) and exposes each for 16 ms: a flash in its exposure lights every row of one frame
+    at once, one in the other 24 ms none. cam0 (30 fps) and cam2 (50 fps) read over their
+    whole frame. Sixteen flashes."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 30.0, r0=6, r1=4, exposure_ms=4.0),
+        CameraSpec("cam1", 320, 180, 25.0, r0=6, r1=18414, exposure_ms=16.0, start_ms=500.0, offset_ms=-480.0),
+        CameraSpec("cam2", 320, 180, 50.0, r0=8, r1=6, exposure_ms=3.0, start_ms=200.0, offset_ms=150.0),
+    )
+    return _rendered(tmp_path_factory, "whole-frames", cameras, _irregular_flashes())
+
+
+def test_a_camera_whose_flashes_light_whole_frames_is_left_out_with_the_reason(whole_frames):
+    """cam1's flashes leave no band edge, so it has no event to be timed by: it is left out,
+    and the warning says why (its frames lit whole, a global shutter?) instead of only that
+    it had no usable event. The detector counts those frames (as many as the flashes that
+    fell in its exposures) and none in the rolling-shutter cameras."""
+    truth, detections = whole_frames
+    lit = sum(1 for frames in truth.cameras["cam1"].flashes_seen.values() if frames)
+    counts = {d.camera: d.n_whole_frames for d in detections}
+    assert lit >= 3 and counts == {"cam0": 0, "cam1": lit, "cam2": 0}, (lit, counts)
+    model, report = synchronize(detections)
+    assert set(model.cameras) == {"cam0", "cam2"}
+    assert [w for w in report.warnings if "cam1.mp4: 0 usable flash events" in w and "lit whole" in w], report.warnings
