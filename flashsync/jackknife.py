@@ -64,8 +64,8 @@ def flash_scatter(
     scatter = []
     for c, camera in enumerate(solution.cameras):
         bound = PRIOR_BOUND_SHARE * priors.row_time[c][1] if c in priors.row_time else np.inf
-        informed = _row_time_std(camera) <= bound
-        kept = [_parameters(trial[c]) for trial in solved if not informed or _row_time_std(trial[c]) <= bound]
+        informed = camera.row_time_std_ms <= bound
+        kept = [_parameters(trial[c]) for trial in solved if not informed or trial[c].row_time_std_ms <= bound]
         count = len(kept)
         if count < 2:
             scatter.append(np.zeros((len(camera.covariance) + 1,) * 2))
@@ -120,11 +120,6 @@ def _solved_as(solution: Solution, events: Observations, n_cameras: int, referen
     knots = {c: camera.knots_ms for c, camera in enumerate(solution.cameras) if len(camera.knots_ms)}
     priors = priors.without_drift_prior(solution.free_drift)
     return solve_clocks(events, n_cameras, reference, priors=priors, drift_knots=knots)
-
-
-def _row_time_std(camera: CameraSolution) -> float:
-    """Standard deviation of the camera's solved time per row, ms."""
-    return float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
 
 
 def _parameters(camera: CameraSolution) -> np.ndarray:

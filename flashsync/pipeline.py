@@ -896,7 +896,7 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
     warnings = []
     for name, solution in zip(best.connected, best.solution.cameras):
         detection = best.cameras[name]
-        std = float(np.sqrt(max(solution.covariance[2, 2], 0.0)))
+        std = solution.row_time_std_ms
         if std * detection.height > ROW_TIME_DOUBT_MS:
             warnings.append(
                 f"{detection.video}: its time per row is {solution.row_time_ms:.5f} ± {std:.5f} ms "
@@ -1709,7 +1709,7 @@ def _contradicted_flicker(
     contradicted = {}
     for name, seen in flicker.items():
         camera = free.cameras[connected.index(name)]
-        std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
+        std = camera.row_time_std_ms
         row_time, spread = flicker_row_time_ms(seen)
         if abs(camera.row_time_ms - row_time) > ROW_TIME_SIGMAS * np.hypot(std, spread):
             contradicted[name] = (camera.row_time_ms, std)
@@ -1727,7 +1727,7 @@ def _contradicted_row_times(
     for name, value in given.items():
         index = connected.index(name)
         camera, detection = free.cameras[index], cameras[index]
-        std = float(np.sqrt(max(camera.covariance[2, 2], 0.0)))
+        std = camera.row_time_std_ms
         too_slow = value * detection.height > READOUT_SLACK * median_step_ms(detection.frame_times_ms)
         if too_slow or abs(camera.row_time_ms - value) > max(ROW_TIME_SIGMAS * std, ROW_TIME_TOLERANCE * value):
             contradicted[name] = (camera.row_time_ms, std)

@@ -138,6 +138,11 @@ class CameraSolution:
     exposure_ms: float = float("nan")
     exposure_std_ms: float = float("nan")
 
+    @property
+    def row_time_std_ms(self) -> float:
+        """Standard deviation of ``row_time_ms``, ms (0 where the covariance holds none)."""
+        return float(np.sqrt(max(self.covariance[2, 2], 0.0)))
+
 
 @dataclass(frozen=True)
 class Solution:
