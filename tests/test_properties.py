@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -33,14 +31,12 @@ from flashsync.io.scenario import scenario_from_dict
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
 
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-FOLDER = Path(tempfile.mkdtemp(prefix="flashsync-properties-"))
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _remove_folder():
-    """The examples' files go when the module's tests are done (hypothesis cannot use tmp_path)."""
-    yield
-    shutil.rmtree(FOLDER, ignore_errors=True)
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory) -> Path:
+    """One folder for the module's examples (hypothesis cannot use the per-test tmp_path)."""
+    return tmp_path_factory.mktemp("properties")
 
 
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
@@ -116,8 +112,8 @@ def models(draw) -> SyncModel:
 
 @FAST
 @given(models())
-def test_a_model_round_trips(model):
-    path = FOLDER / "model.json"
+def test_a_model_round_trips(folder, model):
+    path = folder / "model.json"
     save_model(model, path)
     loaded = load_model(path)
     assert loaded.reference == model.reference and list(loaded.cameras) == list(model.cameras)
@@ -151,8 +147,8 @@ CAMERA_CORRUPTIONS = [
 
 @FAST
 @given(models(), st.data())
-def test_a_corrupted_model_is_one_clean_error(model, data):
-    path = FOLDER / "corrupt.json"
+def test_a_corrupted_model_is_one_clean_error(folder, model, data):
+    path = folder / "corrupt.json"
     save_model(model, path)
     document = json.loads(path.read_text())
     kind = data.draw(st.sampled_from(["camera", "frames", "top", "event"]))
@@ -233,15 +229,15 @@ def assert_same_events(a: Events, b: Events) -> None:
 
 @FAST
 @given(events(), st.sampled_from([".csv", ".parquet"]))
-def test_an_events_table_round_trips(table, suffix):
-    path = FOLDER / f"events{suffix}"
+def test_an_events_table_round_trips(folder, table, suffix):
+    path = folder / f"events{suffix}"
     save_events(table, path)
     assert_same_events(load_events(path), table)
 
 
 @FAST
 @given(events(), st.sampled_from([".csv", ".parquet"]), st.data())
-def test_a_corrupted_events_table_is_one_clean_error(table, suffix, data):
+def test_a_corrupted_events_table_is_one_clean_error(folder, table, suffix, data):
     frame = events_to_frame(table).astype(object)
     index = data.draw(st.integers(0, len(frame) - 1))
     column, bad = data.draw(
@@ -262,7 +258,7 @@ def test_a_corrupted_events_table_is_one_clean_error(table, suffix, data):
         frame.loc[mine & last, column] = frame.loc[mine, "t_frame_ms"].min() - 1.0
     else:
         frame.loc[index, column] = bad
-    path = FOLDER / f"bad-events{suffix}"
+    path = folder / f"bad-events{suffix}"
     if suffix == ".csv":
         frame.to_csv(path, index=False)
     else:  # every column as text (a typed Parquet file round-trips above)
@@ -282,19 +278,19 @@ increasing_times = st.lists(st.floats(0.01, 1e4), min_size=1, max_size=60).map(
 
 @FAST
 @given(increasing_times)
-def test_timestamps_round_trip(times):
-    path = FOLDER / "t.csv"
+def test_timestamps_round_trip(folder, times):
+    path = folder / "t.csv"
     path.write_text("t_ms\n" + "\n".join(repr(float(t)) for t in times) + "\n")
     np.testing.assert_array_equal(load_timestamps(path), times)
 
 
 @FAST
 @given(increasing_times.filter(lambda times: len(times) > 1), st.data())
-def test_corrupted_timestamps_are_one_clean_error(times, data):
+def test_corrupted_timestamps_are_one_clean_error(folder, times, data):
     texts = [repr(float(t)) for t in times]
     index = data.draw(st.integers(0, len(texts) - 1))
     texts[index] = data.draw(st.sampled_from(["", "abc", "nan", "inf", "-inf", texts[index - 1] if index else "1e9"]))
-    path = FOLDER / "bad-t.csv"
+    path = folder / "bad-t.csv"
     path.write_text("t_ms\n" + "\n".join(texts) + "\n")
     with pytest.raises(InputError) as error:
         load_timestamps(path)
@@ -311,8 +307,8 @@ matrices = (
 
 @FAST
 @given(st.dictionaries(st.sampled_from(["a", "b", "c"]), matrices, min_size=1))
-def test_homographies_round_trip(homographies):
-    path = FOLDER / "h.json"
+def test_homographies_round_trip(folder, homographies):
+    path = folder / "h.json"
     path.write_text(json.dumps({name: matrix.tolist() for name, matrix in homographies.items()}))
     loaded = load_homographies(path)
     for name, matrix in homographies.items():
@@ -321,13 +317,13 @@ def test_homographies_round_trip(homographies):
 
 @FAST
 @given(matrices, st.data())
-def test_corrupted_homographies_are_one_clean_error(matrix, data):
+def test_corrupted_homographies_are_one_clean_error(folder, matrix, data):
     document = matrix.tolist()
     i, j = data.draw(st.integers(0, 2)), data.draw(st.integers(0, 2))
     document[i][j] = data.draw(not_a_number)
     if data.draw(st.booleans()):
         document = data.draw(st.sampled_from([document, document[:2], [row[:2] for row in matrix.tolist()], "H", 3]))
-    path = FOLDER / "bad-h.json"
+    path = folder / "bad-h.json"
     path.write_text(json.dumps({"cam": document}))
     with pytest.raises(InputError) as error:
         load_homographies(path)
@@ -349,8 +345,8 @@ triples = st.lists(
 
 @FAST
 @given(triples, st.data())
-def test_validation_json_round_trips_and_corruptions_are_clean_errors(records, data):
-    path = FOLDER / "v.json"
+def test_validation_json_round_trips_and_corruptions_are_clean_errors(folder, records, data):
+    path = folder / "v.json"
     path.write_text(json.dumps({"pairs": [], "instant": "t_global_ms", "not_used": {}, "triples": records}))
     loaded = load_validation(path)
     assert loaded.to_dict(orient="records") == records
@@ -434,14 +430,14 @@ option_text = st.one_of(
                             "--anchor", "--cell"]),
     value=option_text,
 )  # fmt: skip
-def test_any_option_value_ends_in_a_result_or_one_clean_error(small_model, capsys, command, option, value):
-    out = FOLDER / "out"
+def test_any_option_value_ends_in_a_result_or_one_clean_error(folder, small_model, capsys, command, option, value):
+    out = folder / "out"
     base = {
         "frames": ["frames", "--model", small_model / "sync.json", "-o", out / "f.csv"],
         "restamp": ["restamp", small_model / "d.csv", "--model", small_model / "sync.json", "-o", out / "r.csv"],
         "validate": ["validate", small_model / "d.csv", "--model", small_model / "sync.json", "--homographies",
                      small_model / "h.json"],
-        "sync": ["sync", FOLDER / "no-a.mp4", FOLDER / "no-b.mp4", "-o", out / "s.json"],
+        "sync": ["sync", folder / "no-a.mp4", folder / "no-b.mp4", "-o", out / "s.json"],
         "resample": ["resample", small_model / "d.csv", "--model", small_model / "sync.json", "-o", out / "t.csv"],
     }[command]  # fmt: skip
     rate = [] if command not in ("frames", "resample") or option == "--rate" else ["--rate", "10"]
