@@ -11,7 +11,7 @@ truth). So the bands are split into spans of frames over which their lengths sta
 out before anything is solved (:func:`with_one_exposure`: the readout directions and frame
 times are chosen on the edges too); their leading edges still time their flashes (the same
 camera then 0.054 ms off). Only bands within one frame and fitted whole tell a length, so
-a camera needs three of them on each side of a change.
+a camera needs two of them on each side of a change, in frames apart.
 """
 
 from __future__ import annotations
@@ -25,8 +25,10 @@ from flashsync.detect import CameraDetection
 from flashsync.events import Band, Edge, Events
 from flashsync.robust import mad_sigma
 
-#: Fewest bands on each side of a change of exposure.
-MIN_SPAN_BANDS = 3
+#: Fewest bands on each side of a change of exposure, each in a frame of its own: bands in
+#: one frame or the next are one burst of light (a pre-flash and its flash, a strobe's double
+#: pulse), whose pulses may differ.
+MIN_SPAN_BANDS = 2
 #: A change of exposure steps the bands' mean length by this many robust standard
 #: deviations of a length (from the differences of one band's length to the next's) at least ...
 STEP_SIGMAS = 8.0
@@ -103,7 +105,8 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
     local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="nearest")
     clipped = np.clip(lengths, local - INLIER_SIGMAS * noise, local + INLIER_SIGMAS * noise)
-    cuts = _merged(lengths, _cuts(clipped, 0, len(lengths), noise))
+    bursts = np.concatenate([[0], np.cumsum(np.diff(frames) > 1)])
+    cuts = _merged(lengths, _cuts(clipped, bursts, 0, len(lengths), noise))
     steady = all(
         np.mean(np.abs(lengths[a:b] - np.median(lengths[a:b])) <= INLIER_SIGMAS * noise) >= SPAN_INLIERS
         for a, b in cuts
@@ -114,22 +117,31 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     ]
 
 
-def _cuts(lengths: np.ndarray, start: int, stop: int, noise: float) -> list[tuple[int, int]]:
-    """``[start, stop)`` split in two where that leaves the least squared deviation from each
-    side's mean, recursively, while the means step (:func:`exposure_spans`; ``noise``: a
-    length's robust standard deviation, rows)."""
+def _cuts(lengths: np.ndarray, bursts: np.ndarray, start: int, stop: int, noise: float) -> list[tuple[int, int]]:
+    """``[start, stop)`` split in two between bursts (``bursts``: each band's, counted in frame
+    order), :data:`MIN_SPAN_BANDS` or more on each side, where that leaves the least squared
+    deviation from each side's mean, recursively, while the means step (:func:`exposure_spans`;
+    ``noise``: a length's robust standard deviation, rows, at most the sides' own about their
+    medians)."""
 
     def deviation(part: np.ndarray) -> float:
         return float(np.sum((part - part.mean()) ** 2))
 
-    splits = range(start + MIN_SPAN_BANDS, stop - MIN_SPAN_BANDS + 1)
+    splits = [
+        k
+        for k in range(start + 1, stop)
+        if bursts[k] != bursts[k - 1]
+        and bursts[k - 1] - bursts[start] + 1 >= MIN_SPAN_BANDS
+        and bursts[stop - 1] - bursts[k] + 1 >= MIN_SPAN_BANDS
+    ]
     if not splits:
         return [(start, stop)]
     k = min(splits, key=lambda k: deviation(lengths[start:k]) + deviation(lengths[k:stop]))
     step = abs(float(lengths[k:stop].mean() - lengths[start:k].mean()))
-    if step < max(STEP_SIGMAS * noise, MIN_STEP_ROWS):
+    sides = np.concatenate([part - np.median(part) for part in (lengths[start:k], lengths[k:stop])])
+    if step < max(STEP_SIGMAS * min(noise, mad_sigma(sides, LENGTH_FLOOR_ROWS)), MIN_STEP_ROWS):
         return [(start, stop)]
-    return _cuts(lengths, start, k, noise) + _cuts(lengths, k, stop, noise)
+    return _cuts(lengths, bursts, start, k, noise) + _cuts(lengths, bursts, k, stop, noise)
 
 
 def _merged(lengths: np.ndarray, cuts: list[tuple[int, int]]) -> list[tuple[int, int]]:
