@@ -1586,7 +1586,7 @@ def _solved(
     }
 
     def priors(given: dict[str, float], flicker: dict[str, Flicker]) -> Priors:
-        shared = _shared_readouts(chosen, set(given) | set(flicker))
+        shared = shared_readouts(chosen, set(given) | set(flicker))
         return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider, shared_readout=shared)
 
     def solve(given: dict[str, float], flicker: dict[str, Flicker]) -> Solution:
@@ -1775,7 +1775,7 @@ def _row_time_priors(
     return priors
 
 
-def _shared_readouts(cameras: list[CameraDetection], told: set[str]) -> tuple[tuple[int, ...], ...]:
+def shared_readouts(cameras: list[CameraDetection], told: set[str]) -> tuple[tuple[int, ...], ...]:
     """The groups of two or more indices of ``cameras`` under the weak prior on their time per
     row (:func:`row_time_prior_ms`: none ``told``, by datasheet or flicker) that share a width,
     a height and a frame rate (to the nearest frame a second): likely one model read out
