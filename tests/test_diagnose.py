@@ -895,6 +895,22 @@ def test_second_world_pulse_tail_is_named_on_the_hd_rig_and_diagnose_o_closes_in
     assert pooled_error_ms(d.sync_model, truth) < 0.1, format_diagnosis(d)
 
 
+def test_a_final_time_per_row_far_from_the_written_models_is_named(tmp_path):
+    """The line-locked recipe (three 25 fps cameras in one phase) at 320x180 for 6 s: the
+    workflow's fit reads the rows' noise as information and puts every time per row 75 %
+    short, its verdict passing; ``sync``'s solve, written by ``-o``, is within 1 % of the
+    truth. The report names each camera so (:data:`~flashsync.diagnose.workflow.TABLE_DOUBT_SIGMAS`)."""
+    scenario = recipe("line-locked", seed=0, duration_ms=6000.0)
+    scenario = replace(scenario, cameras=tuple(small(c, 320, 180) for c in scenario.cameras))
+    truth = render_scenario(scenario, tmp_path)
+    d = diagnose(detect_videos([tmp_path / f"{c.name}.{c.container}" for c in scenario.cameras]))
+    doubted = [w for w in d.warnings if "the final model's time per row" in w]
+    assert [w.split(":")[0] for w in doubted] == [str(tmp_path / f"{c.name}.mp4") for c in scenario.cameras]
+    for name, clock in d.sync_model.cameras.items():
+        assert clock.row_time_ms == pytest.approx(truth.cameras[name].row_time_ms, rel=0.01)
+    assert all(row["row_time_ms"] < 0.5 * truth.cameras[row["camera"]].row_time_ms for row in d.model)
+
+
 @pytest.mark.parametrize(
     "output, message",
     [("folder", "-o {}: is a folder; give a file name"), ("input", "is also an input (VIDEO {})")],
