@@ -64,7 +64,7 @@ from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, reado
 from flashsync.ramp import MAX_BLUR
 from flashsync.segments import SEGMENT_MS
 from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
-from flashsync.timestamps import median_step_ms, shortest_step_ms
+from flashsync.timestamps import median_step_ms
 
 #: Fastest readout the weak prior on T_row spans, a share of the frame period: the prior
 #: (:func:`row_time_prior_ms`) spreads a camera's readout evenly from this to the whole
@@ -1523,14 +1523,14 @@ def _unshared_bands_log_likelihood(attempt: _Attempt, noise: dict[str, np.ndarra
 def _prior_log_density(attempt: _Attempt) -> float:
     """Log density of the solve's priors at its clocks, up to a constant: each camera's drift
     against its prior (kept where the events contradicted it), each time per row against its."""
-    priors, cameras = attempt.priors, attempt.solution.cameras
-    total = 0.0
-    for index, camera in enumerate(cameras):
+    priors, total = attempt.priors, 0.0
+    for index, camera in enumerate(attempt.solution.cameras):
         drift_std = max(priors.drift_std or np.inf, priors.wider_drift_std.get(index, 0.0))
+        row_time = priors.row_time.get(index)
         total -= 0.5 * ((camera.alpha - 1.0) / drift_std) ** 2
-    with_prior, mean, information = priors.row_time_information()
-    off = np.array([cameras[c].row_time_ms for c in with_prior]) - mean
-    return total - 0.5 * float(off @ information @ off)
+        if row_time is not None:
+            total -= 0.5 * ((camera.row_time_ms - row_time[0]) / row_time[1]) ** 2
+    return total
 
 
 def _solved_or_none(solved: Callable[[Matching], _Attempt], matching: Matching) -> _Attempt | None:
@@ -1586,8 +1586,7 @@ def _solved(
     }
 
     def priors(given: dict[str, float], flicker: dict[str, Flicker]) -> Priors:
-        shared = shared_readouts(chosen, set(given) | set(flicker))
-        return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider, shared_readout=shared)
+        return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider)
 
     def solve(given: dict[str, float], flicker: dict[str, Flicker]) -> Solution:
         return solve_with_drift_model(
@@ -1773,19 +1772,6 @@ def _row_time_priors(
         else:
             priors[index] = row_time_prior_ms(nominal_row_time_ms(camera))
     return priors
-
-
-def shared_readouts(cameras: list[CameraDetection], told: set[str]) -> tuple[tuple[int, ...], ...]:
-    """The groups of two or more indices of ``cameras`` under the weak prior on their time per
-    row (:func:`row_time_prior_ms`: none ``told``, by datasheet or flicker) that share a width,
-    a height and a frame rate (to the nearest frame a second): likely one model read out
-    alike (:data:`~flashsync.solve.SHARED_READOUT_CORRELATION`)."""
-    groups: dict[tuple[int, int, int], list[int]] = {}
-    for index, camera in enumerate(cameras):
-        if camera.camera not in told:
-            rate = round(1000.0 / shortest_step_ms(camera.frame_times_ms))
-            groups.setdefault((camera.width, camera.height, rate), []).append(index)
-    return tuple(tuple(group) for group in groups.values() if len(group) > 1)
 
 
 def row_time_prior_ms(nominal_ms: float) -> tuple[float, float]:
