@@ -865,7 +865,7 @@ def test_second_world_pulse_tail_is_named_on_the_hd_rig_and_diagnose_o_closes_in
 
 def test_a_final_time_per_row_far_from_the_written_models_is_named(tmp_path):
     """The line-locked recipe (three 25 fps cameras in one phase) at 320x180 for 6 s: the
-    workflow's fit reads the rows' noise as information and puts every time per row 75 %
+    workflow's fit reads the rows' noise as information and puts every time per row 59 %
     short, its verdict passing; ``sync``'s solve, written by ``-o``, is within 1 % of the
     truth. The report names each camera so (:data:`~flashsync.diagnose.workflow.TABLE_DOUBT_SIGMAS`)."""
     scenario = recipe("line-locked", seed=0, duration_ms=6000.0)

@@ -318,7 +318,7 @@ def _table_doubts(table: list[dict], written: SyncModel, detections: Sequence[Ca
     :attr:`Diagnosis.model`) lies far from the written model's (:data:`TABLE_DOUBT_SIGMAS`,
     :data:`TABLE_DOUBT_SHARE`). On the line-locked recipe (three 25 fps cameras in one
     phase) the workflow's fit took the rows' noise for information and put every time per
-    row 79 % short (exposures 0.4-0.8 ms for 2-4), its verdict passing at χ² 1.2 over 40,
+    row 63 % short (exposures 0.7-1.5 ms for 2-4), its verdict passing at χ² 3.8 over 40,
     while ``sync``'s solve, which takes that noise out, was within 0.02 %."""
     videos = {d.camera: d.video for d in detections}
     warnings = []
