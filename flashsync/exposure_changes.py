@@ -121,8 +121,10 @@ def _cuts(lengths: np.ndarray, bursts: np.ndarray, start: int, stop: int, noise:
     """``[start, stop)`` split in two between bursts (``bursts``: each band's, counted in frame
     order), :data:`MIN_SPAN_BANDS` or more on each side, where that leaves the least squared
     deviation from each side's mean, recursively, while the means step (:func:`exposure_spans`;
-    ``noise``: a length's robust standard deviation, rows, at most the sides' own about their
-    medians)."""
+    ``noise``: a length's robust standard deviation, rows; the step is weighed against the
+    sides' own RMS about their medians where that is less: a step between two clean sides
+    then shows whatever noise the step put into ``noise``, while wild lengths on a side
+    still hold it back, as a robust spread would not)."""
 
     def deviation(part: np.ndarray) -> float:
         return float(np.sum((part - part.mean()) ** 2))
@@ -139,7 +141,8 @@ def _cuts(lengths: np.ndarray, bursts: np.ndarray, start: int, stop: int, noise:
     k = min(splits, key=lambda k: deviation(lengths[start:k]) + deviation(lengths[k:stop]))
     step = abs(float(lengths[k:stop].mean() - lengths[start:k].mean()))
     sides = np.concatenate([part - np.median(part) for part in (lengths[start:k], lengths[k:stop])])
-    if step < max(STEP_SIGMAS * min(noise, mad_sigma(sides, LENGTH_FLOOR_ROWS)), MIN_STEP_ROWS):
+    spread = max(float(np.sqrt(np.mean(sides**2))), LENGTH_FLOOR_ROWS)
+    if step < max(STEP_SIGMAS * min(noise, spread), MIN_STEP_ROWS):
         return [(start, stop)]
     return _cuts(lengths, bursts, start, k, noise) + _cuts(lengths, bursts, k, stop, noise)
 
