@@ -29,8 +29,9 @@ from flashsync.robust import mad_sigma
 #: one frame or the next are one burst of light (a pre-flash and its flash, a strobe's double
 #: pulse), whose pulses may differ.
 MIN_SPAN_BANDS = 2
-#: A change of exposure steps the bands' mean length by this many robust standard
-#: deviations of a length (from the differences of one band's length to the next's) at least ...
+#: A change of exposure steps the bands' mean length by this many standard deviations of a
+#: length at least (robust, from the differences of one band's length to the next's, or the
+#: lengths' RMS about each side's median where that is less) ...
 STEP_SIGMAS = 8.0
 #: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
 MIN_STEP_ROWS = 1.0
@@ -77,9 +78,10 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     lengths do not step; none without :data:`MIN_SPAN_BANDS` such bands.
     The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
     to the next) about the median of its neighbours (a lone length that a codec moved leans
-    on no split), are split in two where that leaves the least squared deviation from each
-    side's mean, and again within each side, while the means step (:data:`STEP_SIGMAS` of
-    the noise and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
+    on no split), are split in two between bands in frames apart where that leaves the least
+    squared deviation from each side's mean, and again within each side, while the means
+    step (:data:`STEP_SIGMAS` of the noise, or of the sides' RMS about their medians where
+    that is less, and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
     :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
     (:data:`SPAN_INLIERS`), they are taken as one.
     """
