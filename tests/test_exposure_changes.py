@@ -119,7 +119,7 @@ def test_a_step_is_measured_against_the_lengths_noise_on_its_sides():
     """Random rig 417's cam12 (50 fps, 360 rows; 2.2 ms, then 3.6 ms from frame 164): three
     bands of 43 rows, then three of 65-69 (their flashes' pulses differ). From one band's
     length to the next, the step itself makes the noise 3.5 rows, and 8 of it hides the
-    24-row step; about each side's median the lengths scatter 0.3 rows: two spans."""
+    24-row step; the lengths' RMS about each side's median is 1.4 rows: two spans."""
     detection = bands([42.53, 42.81, 42.98, 68.94, 64.86, 68.15], frames=[69, 115, 150, 201, 224, 358])
     assert [(s.first_frame, s.n_bands) for s in exposure_spans(detection)] == [(69, 3), (201, 3)]
 
