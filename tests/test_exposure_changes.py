@@ -124,6 +124,34 @@ def test_a_step_is_measured_against_the_lengths_noise_on_its_sides():
     assert [(s.first_frame, s.n_bands) for s in exposure_spans(detection)] == [(69, 3), (201, 3)]
 
 
+@pytest.mark.parametrize(
+    "lengths, frames, counts",
+    [
+        pytest.param(
+            [89.18, 89.13, 89.17, 162.02, 160.81, 160.94],
+            [42, 78, 117, 132, 175, 210],
+            [3, 3],
+            id="rig-546-cam3-10-to-19-ms",
+        ),
+        pytest.param(
+            [18.67, 18.71, 18.73, 18.64, 18.63, 31.60, 32.57, 32.45],
+            [33, 45, 71, 84, 104, 153, 173, 190],
+            [5, 3],
+            id="rig-551-cam3-3.2-to-5.6-ms",
+        ),
+    ],
+)
+def test_lengths_that_scatter_far_less_than_their_step_make_two_spans(lengths, frames, counts):
+    """Random rigs 546's cam3 (30 fps, 270 rows; 10.4 ms, then 19.0 ms from frame 127) and
+    551's cam3 (3.2 ms, then 5.6 ms from frame 110), auto exposure bench at those seeds:
+    the lengths step by 72 and 14 rows, and one length after the step lies 1.1 and 0.8 rows
+    from its side's median, over three times the lengths' noise from one band to the next
+    (0.1 rows). Held to that noise, a side whose lengths scatter (flashes at two powers)
+    made them one span; a span's lengths scatter only where they stray from its median by
+    an eighth of the step to its neighbour as well: two spans."""
+    assert [s.n_bands for s in exposure_spans(bands(lengths, frames=frames))] == counts
+
+
 def test_wild_lengths_on_a_side_hold_a_step_back():
     """Random rig 545's cam1 (50 fps, 180 rows, a steady 13 ms exposure: 121 rows; auto
     exposure bench at seed 545): its clean bands measure 88, 18, 38 and 39 rows, then 121,
