@@ -76,18 +76,8 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     use share one length: the flash bands it fitted whole within one frame (the others'
     edges come from a band's parts and their lengths scatter: random rig 427's last three
     bands 4-13 rows long) but those fitted at the exposure it read its bands to share (pulses
-    longer than it: their length is that exposure, not measured). One span where the
-    lengths do not step; none without :data:`MIN_SPAN_BANDS` such bands.
-    The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
-    to the next) about the median of its neighbours (a lone length that a codec moved leans
-    on no split), are split in two between bands in frames apart where that leaves the least
-    squared deviation from each side's mean, and again within each side, while the means
-    step (:data:`STEP_SIGMAS` of the noise, or of the sides' RMS about their medians where
-    that is less, and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
-    :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
-    (:data:`SPAN_INLIERS`, against the noise or the step to its neighbour), they are taken
-    as one.
-    """
+    longer than it: their length is that exposure, not measured), split where their
+    lengths step (:func:`length_spans`)."""
     events, pulses = detection.events, detection.pulse_rows
     if pulses is None:
         return []
@@ -105,6 +95,26 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     frames = events.frame[lead][usable]
     order = np.argsort(frames, kind="stable")
     frames, lengths = frames[order], lengths[usable][order]
+    return [
+        ExposureSpan(int(frames[a]), int(frames[b - 1]), float(np.median(lengths[a:b])), b - a)
+        for a, b in length_spans(frames, lengths)
+    ]
+
+
+def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int]]:
+    """The spans ``[a, b)`` of bands, given in frame order (``frames``, decoded frames, and
+    ``lengths``, rows, shape (n,) each), over which the lengths stay one: one span where they
+    do not step, none without :data:`MIN_SPAN_BANDS` bands.
+    The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
+    to the next) about the median of its neighbours (a lone length that a codec moved leans
+    on no split), are split in two between bands in frames apart where that leaves the least
+    squared deviation from each side's mean, and again within each side, while the means
+    step (:data:`STEP_SIGMAS` of the noise, or of the sides' RMS about their medians where
+    that is less, and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
+    :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
+    (:data:`SPAN_INLIERS`, against the noise or the step to its neighbour), they are taken
+    as one.
+    """
     if len(lengths) < MIN_SPAN_BANDS:
         return []
     noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
@@ -119,16 +129,13 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
         np.mean(np.abs(lengths[a:b] - median) <= max(INLIER_SIGMAS * noise, step / STEP_SIGMAS)) >= SPAN_INLIERS
         for (a, b), median, step in zip(cuts, medians, nearest)
     )
-    return [
-        ExposureSpan(int(frames[a]), int(frames[b - 1]), float(np.median(lengths[a:b])), b - a)
-        for a, b in (cuts if steady else [(0, len(lengths))])
-    ]
+    return cuts if steady else [(0, len(lengths))]
 
 
 def _cuts(lengths: np.ndarray, bursts: np.ndarray, start: int, stop: int, noise: float) -> list[tuple[int, int]]:
     """``[start, stop)`` split in two between bursts (``bursts``: each band's, counted in frame
     order), :data:`MIN_SPAN_BANDS` or more on each side, where that leaves the least squared
-    deviation from each side's mean, recursively, while the means step (:func:`exposure_spans`;
+    deviation from each side's mean, recursively, while the means step (:func:`length_spans`;
     ``noise``: a length's robust standard deviation, rows; the step is weighed against the
     sides' own RMS about their medians where that is less: a step between two clean sides
     then shows whatever noise the step put into ``noise``, while wild lengths on a side
