@@ -754,14 +754,18 @@ class CameraDetection:
         exposure convolved with the pulse, so a rectangle's band is the same whichever of the
         two is taken the longer; its leading edge lies half a pulse in, its trailing edge one
         exposure after that)."""
+        return self.with_band_exposures(np.where(np.isfinite(self.pulse_rows), rows, 0.0), self.exposure_rows + rows)
+
+    def with_band_exposures(self, rows: np.ndarray, exposure_rows: float) -> CameraDetection:
+        """This detection with the band of each event of the reading in use ``rows[event]``
+        readout rows longer (shape (n_events,)), as :meth:`with_longer_exposure` makes every
+        band fitted whole, and ``exposure_rows`` (rows) the reading's exposure."""
         events, pulses = self.events, self.pulse_rows
-        whole = np.isfinite(pulses[events.event])
-        later = np.where(events.edge == Edge.TRAILING, 0.5, -0.5) * rows * whole
+        later = np.where(events.edge == Edge.TRAILING, 0.5, -0.5) * rows[events.event]
         moved = replace(events, row=events.row + (-later if self.flipped else later))
         side = "bottom_up" if self.flipped else "top_down"
         return replace(
-            self,
-            **{side: moved, f"{side}_exposure_rows": self.exposure_rows + rows, f"{side}_pulse_rows": pulses - rows},
+            self, **{side: moved, f"{side}_exposure_rows": exposure_rows, f"{side}_pulse_rows": pulses - rows}
         )
 
     def retimed(self, frame_times_ms: np.ndarray) -> CameraDetection:

@@ -78,23 +78,64 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     bands 4-13 rows long) but those fitted at the exposure it read its bands to share (pulses
     longer than it: their length is that exposure, not measured), split where their
     lengths step (:func:`length_spans`)."""
-    events, pulses = detection.events, detection.pulse_rows
-    if pulses is None:
-        return []
+    return _spans(*_measured(detection, pulses=False)[:2])
+
+
+def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
+    """The spans of frames, in frame order, over which the pulses of the bands that the
+    detection's reading in use fitted at its exposure under longer pulses stay one
+    (:func:`length_spans`): where they step, and the other cameras saw those flashes
+    shorter, each is an exposure read the other way round, and the camera's exposure
+    changes (random rig 542's cam8, 9.8 ms and then 3.9 under pulses of 0.35 ms, read as
+    0.35 ms under pulses of 45.7, 45.4, 18.3, 18.3 and 18.3 rows)."""
+    return _spans(*_measured(detection, pulses=True)[:2])
+
+
+def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
+    """The detection with each band of :func:`pulse_spans` read the other way round, its
+    pulse its exposure and the reading's exposure its pulse
+    (:meth:`~flashsync.detect.CameraDetection.with_band_exposures`), the span of the most
+    bands' its exposure, and the trailing edges outside that span left out (as
+    :func:`with_one_exposure`)."""
+    frames, pulses, events = _measured(detection, pulses=True)
+    spans = _spans(frames, pulses)
+    rows = np.zeros(len(detection.pulse_rows))
+    rows[events] = pulses - detection.exposure_rows
+    main = max(spans, key=lambda span: span.n_bands)
+    turned = detection.with_band_exposures(rows, main.length_rows)
+    side = "bottom_up" if detection.flipped else "top_down"
+    return replace(turned, **{side: _kept(turned.events, spans)})
+
+
+def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per flash band of the detection's reading in use fitted whole within one frame, in
+    frame order (shape (n,) each): its frame, the length it tells (rows) and its event.
+    Without ``pulses`` its own length, but not those fitted at the exposure the reading
+    read its bands to share (under longer pulses: their length is that exposure); with
+    ``pulses``, only those, and their pulses."""
+    events, pulse_rows = detection.events, detection.pulse_rows
+    if pulse_rows is None:
+        return np.empty(0, np.int64), np.empty(0), np.empty(0, np.int64)
     bands = events.bands()
     whole = bands.take(bands.complete)
     lead, trail = whole.leading, whole.trailing
     lengths = np.abs(events.row[trail] - events.row[lead])
+    band_pulses = pulse_rows[events.event[lead]]
     fitted = np.nan if detection.exposure_rows is None else detection.exposure_rows
+    at_exposure = np.abs(lengths - fitted) < 1e-6
     usable = (
         (events.band[lead] == Band.PULSE)
         & (events.frame[lead] == events.frame[trail])
-        & np.isfinite(pulses[events.event[lead]])
-        & ~(np.abs(lengths - fitted) < 1e-6)
+        & np.isfinite(band_pulses)
+        & (at_exposure & (band_pulses > fitted) if pulses else ~at_exposure)
     )
-    frames = events.frame[lead][usable]
-    order = np.argsort(frames, kind="stable")
-    frames, lengths = frames[order], lengths[usable][order]
+    order = np.argsort(events.frame[lead][usable], kind="stable")
+    told = band_pulses if pulses else lengths
+    return events.frame[lead][usable][order], told[usable][order], events.event[lead][usable][order]
+
+
+def _spans(frames: np.ndarray, lengths: np.ndarray) -> list[ExposureSpan]:
+    """The :class:`ExposureSpan` of each of :func:`length_spans`."""
     return [
         ExposureSpan(int(frames[a]), int(frames[b - 1]), float(np.median(lengths[a:b])), b - a)
         for a, b in length_spans(frames, lengths)

@@ -34,7 +34,7 @@ from flashsync.detect import (
 )
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
-from flashsync.exposure_changes import exposure_spans, with_one_exposure
+from flashsync.exposure_changes import exposure_spans, pulse_spans, with_one_exposure, with_pulses_as_exposures
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
@@ -247,6 +247,9 @@ class SyncReport:
         (:func:`_exposures_by_pulses`): the readout rows by which their exposure was made
         longer in the reading the model uses
         (:meth:`~flashsync.detect.CameraDetection.with_longer_exposure`).
+    stepped_exposures : cameras read the other way round band by band, their pulses that
+        step while they record their exposures
+        (:func:`~flashsync.exposure_changes.with_pulses_as_exposures`).
     warnings : cameras left out and why; stamps that follow no steady clock or change rate;
         datasheet times per row the events contradict.
     sigma_ms : robust residual scale of the solve, ms.
@@ -259,6 +262,7 @@ class SyncReport:
     free_drift: list[str] = field(default_factory=list)
     distrusted_flicker: list[str] = field(default_factory=list)
     longer_exposures: dict[str, float] = field(default_factory=dict)
+    stepped_exposures: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     sigma_ms: float = float("nan")
 
@@ -358,15 +362,16 @@ def _synchronized(
         spreads.update(more_spreads)
         readout_warnings += more_warnings
     best, backward_warnings = _without_backward_readings(best, attempt_on(reference))
-    best, pulse_warnings, longer = _exposures_by_pulses(best, attempt_on(reference))
+    best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, attempt_on(reference))
     report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
+    report.stepped_exposures = stepped
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     if any(alignment.others for alignment in best.alignments.values()):
         best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
     for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
-    change_warnings, changes_ms = _exposure_changes(best, {d.camera: d for d in detections})
+    change_warnings, changes_ms = _exposure_changes(best, {d.camera: d for d in detections}, stepped)
     for name, spread in changes_ms.items():
         exposure_spreads[name] = np.hypot(exposure_spreads.get(name, 0.0), spread)
     best = best.with_scatter(exposure_spreads)
@@ -430,15 +435,19 @@ def _without_backward_readings(
 
 def _exposures_by_pulses(
     best: _Attempt, attempt: Callable[[dict[str, CameraDetection]], _Attempt]
-) -> tuple[_Attempt, list[str], dict[str, tuple[float, float]]]:
+) -> tuple[_Attempt, list[str], dict[str, tuple[float, float]], list[str]]:
     """``best`` solved again with each camera read the other way round by the flashes the
-    other cameras see shorter (:func:`_exposures_the_others_tell`) given that exposure
-    (:meth:`~flashsync.detect.CameraDetection.with_longer_exposure`), a warning naming each,
-    and per such camera the readout rows its exposure was made longer by and the exposure's
-    standard error (ms; its times take half of it)."""
-    told = _exposures_the_others_tell(best)
-    if not told:
-        return best, [], {}
+    other cameras see shorter: given one exposure (:func:`_exposures_the_others_tell`,
+    :meth:`~flashsync.detect.CameraDetection.with_longer_exposure`), or band by band where
+    its pulses step while it records (:func:`_exposure_steps_the_others_tell`,
+    :func:`~flashsync.exposure_changes.with_pulses_as_exposures`); a warning naming each,
+    per camera given one exposure the readout rows its exposure was made longer by and the
+    exposure's standard error (ms; its times take half of it), and the cameras read band by
+    band."""
+    stepped = _exposure_steps_the_others_tell(best)
+    told = {name: seen for name, seen in _exposures_the_others_tell(best).items() if name not in stepped}
+    if not told and not stepped:
+        return best, [], {}, []
     cameras = dict(best.cameras)
     warnings, longer = [], {}
     for name, (exposure_ms, std_ms, n_flashes) in told.items():
@@ -450,7 +459,15 @@ def _exposures_by_pulses(
             f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: read the other way "
             f"round, its exposure is {exposure_ms:.2f} ms; check it against the camera's shutter setting"
         )
-    return attempt(cameras), warnings, longer
+    for name, n_flashes in stepped.items():
+        camera = best.solution.cameras[best.connected.index(name)]
+        cameras[name] = with_pulses_as_exposures(cameras[name])
+        warnings.append(
+            f"{cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer pulses that "
+            f"step while it records, but {n_flashes} flashes it saw so long the other cameras saw shorter: read the "
+            "other way round band by band, its pulses are its exposures, and its exposure changes (below)"
+        )
+    return attempt(cameras), warnings, longer, list(stepped)
 
 
 def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, int]]:
@@ -462,16 +479,7 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
     pulse measured by the band's ramps) see shorter, that median's standard error (ms) and
     the number of those flashes."""
     matches = best.matches
-    pulse_of = np.full(len(matches), np.nan)  # per matched sync event, ms: its band's pulse, its camera's exposure
-    exposure_of = np.full(len(matches), np.nan)
-    for detection, camera in zip((best.cameras[name] for name in best.connected), best.solution.cameras):
-        mine = matches.camera == detection.camera
-        read_ms = (detection.exposure_rows or np.nan) * camera.row_time_ms
-        agree = abs(read_ms - camera.exposure_ms) <= READINGS_AGREE * camera.exposure_ms
-        if detection.pulse_rows is not None and agree:
-            pulse_of[mine] = detection.pulse_rows[matches.event[mine]] * camera.row_time_ms
-        exposure_of[mine] = camera.exposure_ms
-    ramp_read = pulse_of < exposure_of
+    pulse_of, ramp_read = _pulses_seen(best)
     told = {}
     for name, camera in zip(best.connected, best.solution.cameras):
         mine = (matches.camera == name) & np.isfinite(pulse_of)
@@ -491,6 +499,51 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
         spread_ms = 1.4826 * float(np.median(np.abs(np.array(longer) - exposure_ms)))
         if exposure_ms >= MIN_EXPOSURE_GAIN * camera.exposure_ms and spread_ms <= PULSES_AGREE * exposure_ms:
             told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
+    return told
+
+
+def _pulses_seen(best: _Attempt) -> tuple[np.ndarray, np.ndarray]:
+    """Per matched sync event of ``best`` (shape (n_matches,) each): its band's pulse (ms;
+    NaN where its camera's reading of its exposure disagrees with the solve's,
+    :data:`READINGS_AGREE`) and whether the pulse was measured by the band's ramps (shorter
+    than its camera's exposure)."""
+    matches = best.matches
+    pulse_of = np.full(len(matches), np.nan)
+    exposure_of = np.full(len(matches), np.nan)
+    for detection, camera in zip((best.cameras[name] for name in best.connected), best.solution.cameras):
+        mine = matches.camera == detection.camera
+        read_ms = (detection.exposure_rows or np.nan) * camera.row_time_ms
+        agree = abs(read_ms - camera.exposure_ms) <= READINGS_AGREE * camera.exposure_ms
+        if detection.pulse_rows is not None and agree:
+            pulse_of[mine] = detection.pulse_rows[matches.event[mine]] * camera.row_time_ms
+        exposure_of[mine] = camera.exposure_ms
+    return pulse_of, pulse_of < exposure_of
+
+
+def _exposure_steps_the_others_tell(best: _Attempt) -> dict[str, int]:
+    """Per camera whose bands read with pulses longer than its exposure that step while it
+    records (:func:`~flashsync.exposure_changes.pulse_spans`) and that the other cameras show
+    was read the other way round, the number of its flashes that tell so: the cameras whose
+    bands of them are one exposure long see them shorter (:data:`SHORTER_PULSE_SHARE`) and no
+    camera but the others whose pulses step sees one :data:`PULSES_AGREE` as long;
+    :data:`MIN_PULSE_FLASHES` or more and most of its flashes so read. A pulse is the
+    flash's, the same in every camera, an exposure the camera's: random rig 542's cam1, cam8
+    and cam9 on auto exposure under short pulses were read as exposures of 0.30-1.27 ms
+    under pulses that stepped in time, and each saw the others' flashes as long as its own."""
+    matches = best.matches
+    pulse_of, ramp_read = _pulses_seen(best)
+    stepping = [name for name in best.connected if len(pulse_spans(best.cameras[name])) > 1]
+    told = {}
+    for name in stepping:
+        mine = (matches.camera == name) & (pulse_of > best.solution.cameras[best.connected.index(name)].exposure_ms)
+        shorter = 0
+        for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
+            seen = (matches.flash == flash) & ~np.isin(matches.camera, stepping)
+            others, as_long = seen & ramp_read, seen & (pulse_of >= (1 - PULSES_AGREE) * pulse)
+            if others.any() and not as_long.any():
+                shorter += pulse - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse
+        if shorter >= MIN_PULSE_FLASHES and 2 * shorter > np.count_nonzero(mine):
+            told[name] = shorter
     return told
 
 
@@ -912,17 +965,20 @@ def _row_time_doubts(best: _Attempt) -> list[str]:
 EXPOSURE_DOUBT_MS = 0.1
 
 
-def _exposure_changes(best: _Attempt, detections: dict[str, CameraDetection]) -> tuple[list[str], dict[str, float]]:
+def _exposure_changes(
+    best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str]
+) -> tuple[list[str], dict[str, float]]:
     """Per camera whose exposure changes while it records (the spans of its ``detections``
-    reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`; solved on
-    the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
+    reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`, or of its
+    pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`;
+    solved on the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
     warning naming each span's exposure and frames, and how far the farthest lies from the
     one solved, ms (into its exposure's sigma: restamp's t_center_ms takes that one
     throughout)."""
     warnings, changes_ms = [], {}
     for name, solution in zip(best.connected, best.solution.cameras):
         detection = detections[name].read_flipped(best.cameras[name].flipped)
-        spans = exposure_spans(detection)
+        spans = pulse_spans(detection) if name in stepped else exposure_spans(detection)
         if len(spans) < 2 or not solution.exposure_ms > 0:
             continue
         main = max(spans, key=lambda span: span.n_bands)

@@ -15,7 +15,7 @@ from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy
 from flashsync.events import Band, Edge, Events
 from flashsync.exposure_changes import exposure_spans
-from flashsync.simulation import CameraSpec, Scenario, render_scenario
+from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 
 
 def bands(lengths_rows, frames=None, fitted=True, exposure_rows=None) -> CameraDetection:
@@ -192,4 +192,43 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     assert camera.exposure_ms == pytest.approx(2.0, abs=0.1) and camera.exposure_std_ms > 1.9
     d = diagnose(detections)  # measures cam1 as sync solves it, and writes sync's model
     assert any(w.startswith(f"{tmp_path / 'cam1.mp4'}: its exposure changes while it records") for w in d.warnings)
+    assert d.written.endswith("(the same as sync's own)"), d.written
+
+
+def test_an_auto_exposure_read_as_pulses_that_step_is_read_the_other_way_round(tmp_path):
+    """cam1 (30 fps, 320x180) goes from 9.8 ms to 3.9 ms at frame 75 of 180 under LED
+    rectangles of 0.2-1.5 ms (every third of the hand-fired flashes), cam0 (25 fps) keeps
+    8 ms. Its four bands read as one short exposure (0.36 ms) under pulses of 53, 53, 23.7
+    and 21.9 rows, so the lengths had no span to find; cam0's ramps show three of those
+    flashes short, and read the other way round given one exposure (7.78 ms) its times
+    came out 2.2 ms RMS off the truth at error/sigma 4.3. Its pulses step while it records:
+    read the other way round band by band, its times are within 0.3 ms (cam0's own are
+    0.14 off) under a sigma that covers them, a warning names both exposures (a turned
+    band's exposure takes its flash's pulse less the one read: 4.16 ms for 3.9), its
+    exposure's sigma reaches the other one, and ``diagnose`` measures it as ``sync`` solves
+    it."""
+    rng = np.random.default_rng(4)
+    leds = tuple(
+        FlashSpec(flash.world_ms, flash.strength, decay_ms=0.0, hold_ms=round(float(rng.uniform(0.2, 1.5)), 3))
+        for flash in flashes(4)[::3]
+    )
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
+        CameraSpec(
+            "cam1", 320, 180, 30.0, exposure_ms=9.8, start_ms=3000.0, offset_ms=-2830.0, exposure_changes=((75, 3.9),)
+        ),
+    )
+    scenario = Scenario("auto-exposure-leds", cameras, duration_ms=DURATION_MS, flashes=leds, n_players=0, seed=4)
+    truth = render_scenario(scenario, tmp_path)
+    detections = detect_videos([tmp_path / "cam0.mp4", tmp_path / "cam1.mp4"])
+    model, report = synchronize(detections)
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    assert accuracy.loc["cam1", "rms_ms"] < 0.3 and accuracy.loc["cam1", "z_rms"] < 2.0, accuracy
+    assert any(w.startswith(f"{tmp_path / 'cam1.mp4'}: its bands read as") and "step" in w for w in report.warnings)
+    (warning,) = [w for w in report.warnings if "its exposure changes while it records" in w]
+    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+)", warning)
+    assert [float(ms) for ms, _, _ in spans] == pytest.approx([9.8, 3.9], abs=0.3), warning
+    camera = model.cameras["cam1"]
+    assert camera.exposure_ms == pytest.approx(9.8, abs=0.2) and camera.exposure_std_ms > 5.5
+    d = diagnose(detections)
     assert d.written.endswith("(the same as sync's own)"), d.written

@@ -55,7 +55,7 @@ from flashsync.diagnose.effects import (
 from flashsync.diagnose.measure import Measurement, measure
 from flashsync.diagnose.verdict import SIGNIFICANCE, NoiseTest, noise_test
 from flashsync.errors import FlashsyncError, NotEnoughDataError
-from flashsync.exposure_changes import with_one_exposure
+from flashsync.exposure_changes import with_one_exposure, with_pulses_as_exposures
 from flashsync.model import SyncModel
 from flashsync.pipeline import SyncReport, synchronize
 from flashsync.solve import DRIFT_PRIOR_STD, MIN_FLASHES_FOR_CHANGING_RATE
@@ -397,7 +397,8 @@ def _exposures_as_sync_reads(
     left out (:func:`~flashsync.exposure_changes.with_one_exposure`); each exposure ``sync``
     made longer made so in the reading its model uses
     (:attr:`~flashsync.pipeline.SyncReport.longer_exposures`: a camera read the other way
-    round by the flashes the others see). Measured as detected, such a camera's edges lay a
+    round by the flashes the others see), and each read the other way round band by band so
+    (:attr:`~flashsync.pipeline.SyncReport.stepped_exposures`). Measured as detected, such a camera's edges lay a
     few rows off ``sync``'s (2.1 rows where 0.26 ms became 1.05), none of its bands was
     paired by ``sync``'s flashes and the workflow found no band seen by two cameras."""
     longer = synced[1].longer_exposures if synced else {}
@@ -410,6 +411,13 @@ def _exposures_as_sync_reads(
                 "bands outside the span of the most bands, as sync solves it"
             )
         detection, rows = steady, longer.get(detection.camera)
+        if synced and detection.camera in synced[1].stepped_exposures:
+            way = synced[0].cameras[detection.camera].flipped
+            detection = with_pulses_as_exposures(detection.read_flipped(way)).read_flipped(detection.flipped)
+            warnings.append(
+                f"{detection.video}: measured with its bands read the other way round band by band, its pulses that "
+                "step while it records its exposures, as sync reads it (the flashes the other cameras see tell it)"
+            )
         if rows is not None:
             way = synced[0].cameras[detection.camera].flipped
             detection = detection.read_flipped(way).with_longer_exposure(rows).read_flipped(detection.flipped)
