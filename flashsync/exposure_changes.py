@@ -11,7 +11,11 @@ truth). So the bands are split into spans of frames over which their lengths sta
 out before anything is solved (:func:`with_one_exposure`: the readout directions and frame
 times are chosen on the edges too); their leading edges still time their flashes (the same
 camera then 0.054 ms off). Only bands within one frame and fitted whole tell a length, so
-a camera needs two of them on each side of a change, in frames apart.
+a camera needs two of them on each side of a change, in frames apart. Where one exposure
+fits such bands only as a short exposure under longer pulses (the detector's other reading,
+:func:`~flashsync.ramp.common_width`), the pulses step instead (:func:`pulse_spans`); where
+the other cameras see those flashes shorter, the pipeline reads each band the other way
+round (:func:`with_pulses_as_exposures`).
 """
 
 from __future__ import annotations
@@ -86,8 +90,8 @@ def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
     detection's reading in use fitted at its exposure under longer pulses stay one
     (:func:`length_spans`): where they step, and the other cameras saw those flashes
     shorter, each is an exposure read the other way round, and the camera's exposure
-    changes (random rig 542's cam8, 9.8 ms and then 3.9 under pulses of 0.35 ms, read as
-    0.35 ms under pulses of 45.7, 45.4, 18.3, 18.3 and 18.3 rows)."""
+    changes (random rig 542's cam8, 9.8 ms and then 3.9 under LED pulses of 0.2-1.9 ms,
+    read as 0.35 ms under pulses of 45.7, 45.4, 18.3, 18.3 and 18.3 rows)."""
     return _spans(*_measured(detection, pulses=True)[:2])
 
 
@@ -130,8 +134,8 @@ def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.
         & (at_exposure & (band_pulses > fitted) if pulses else ~at_exposure)
     )
     order = np.argsort(events.frame[lead][usable], kind="stable")
-    told = band_pulses if pulses else lengths
-    return events.frame[lead][usable][order], told[usable][order], events.event[lead][usable][order]
+    measured = band_pulses if pulses else lengths
+    return events.frame[lead][usable][order], measured[usable][order], events.event[lead][usable][order]
 
 
 def _spans(frames: np.ndarray, lengths: np.ndarray) -> list[ExposureSpan]:
