@@ -64,7 +64,7 @@ from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, reado
 from flashsync.ramp import MAX_BLUR
 from flashsync.segments import SEGMENT_MS
 from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
-from flashsync.timestamps import median_step_ms
+from flashsync.timestamps import median_step_ms, shortest_step_ms
 
 #: Fastest readout the weak prior on T_row spans, a share of the frame period: the prior
 #: (:func:`row_time_prior_ms`) spreads a camera's readout evenly from this to the whole
@@ -353,21 +353,28 @@ def _synchronized(
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
     spreads, readout_warnings = _readout_doubts(best, rivals, search_reference)
-    if choices:
-        best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
+    chosen = {name: best.cameras[name] for name in cameras}  # in the order given
     if search_reference != reference:
+        on_reference = attempt_on(reference)
         more_spreads, more_warnings = _doubts_on_reference(
-            best, cameras, undecided, set(spreads), reference, attempt_on(reference)
+            on_reference(chosen), cameras, undecided, set(spreads), reference, on_reference
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
-    best, backward_warnings = _without_backward_readings(best, attempt_on(reference))
-    best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, attempt_on(reference))
+
+    def final(trial: dict[str, CameraDetection], other_shifts: bool = False) -> _Attempt:
+        # the choices made, cameras of one size and rate share one readout a priori (not in the search: there
+        # it read two of random rig 544's cameras the wrong way up)
+        return _attempt(trial, reference, row_times, anchors, rate_std, memo, other_shifts, shared_readout=True)
+
+    best = final(chosen)
+    best, backward_warnings = _without_backward_readings(best, final)
+    best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, final)
     report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
     report.stepped_exposures = stepped
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     if any(alignment.others for alignment in best.alignments.values()):
-        best = _attempt(best.cameras, reference, row_times, anchors, rate_std, memo, other_shifts=True)
+        best = final(best.cameras, other_shifts=True)
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
     for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
@@ -1282,11 +1289,14 @@ def _attempt(
     rate_std: dict[str, float] | None = None,
     memo: dict | None = None,
     other_shifts: bool = False,
+    shared_readout: bool = False,
 ) -> _Attempt:
     """Match and solve with the cameras' current readout directions. ``rate_std``: per camera,
     the relative standard error of its frame clock's rate (it and the reference's widen the
     prior on its drift); ``memo``: pair alignments of earlier attempts (:func:`~flashsync.match.match_events`);
-    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`). The cameras
+    ``other_shifts``: try the pairs' other shifts too (:func:`_shifts_by_fit`);
+    ``shared_readout``: the weak priors on the times per row of cameras of one size and rate
+    correlated (:func:`shared_readouts`; the final solves only, not the search). The cameras
     the nominal time per row leaves untied are matched again at shorter ones
     (:func:`_tie_fast_readouts`)."""
     sync_events = {name: _sync_events(d) for name, d in cameras.items()}
@@ -1314,7 +1324,9 @@ def _attempt(
     matching = _tie_fast_readouts(matched(times), times, reference, cameras, sync_events, matched)
 
     def solved(matching: Matching) -> _Attempt:
-        return _solved(cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings)
+        return _solved(
+            cameras, sync_events, usable, matching, reference, row_times, rate_std or {}, warnings, shared_readout
+        )
 
     return _shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts)
 
@@ -1579,14 +1591,14 @@ def _unshared_bands_log_likelihood(attempt: _Attempt, noise: dict[str, np.ndarra
 def _prior_log_density(attempt: _Attempt) -> float:
     """Log density of the solve's priors at its clocks, up to a constant: each camera's drift
     against its prior (kept where the events contradicted it), each time per row against its."""
-    priors, total = attempt.priors, 0.0
-    for index, camera in enumerate(attempt.solution.cameras):
+    priors, cameras = attempt.priors, attempt.solution.cameras
+    total = 0.0
+    for index, camera in enumerate(cameras):
         drift_std = max(priors.drift_std or np.inf, priors.wider_drift_std.get(index, 0.0))
-        row_time = priors.row_time.get(index)
         total -= 0.5 * ((camera.alpha - 1.0) / drift_std) ** 2
-        if row_time is not None:
-            total -= 0.5 * ((camera.row_time_ms - row_time[0]) / row_time[1]) ** 2
-    return total
+    with_prior, mean, information = priors.row_time_information()
+    off = np.array([cameras[c].row_time_ms for c in with_prior]) - mean
+    return total - 0.5 * float(off @ information @ off)
 
 
 def _solved_or_none(solved: Callable[[Matching], _Attempt], matching: Matching) -> _Attempt | None:
@@ -1611,6 +1623,7 @@ def _solved(
     row_times: dict[str, float] | None,
     rate_std: dict[str, float],
     warnings: list[str],
+    shared_readout: bool,
 ) -> _Attempt:
     """The solve of the ``usable`` cameras' events matched as ``matching`` (see :func:`_attempt`)."""
     warnings = list(warnings)
@@ -1642,7 +1655,8 @@ def _solved(
     }
 
     def priors(given: dict[str, float], flicker: dict[str, Flicker]) -> Priors:
-        return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider)
+        shared = shared_readouts(chosen, set(given) | set(flicker)) if shared_readout else ()
+        return Priors(_row_time_priors(chosen, given, flicker), wider_drift_std=wider, shared_readout=shared)
 
     def solve(given: dict[str, float], flicker: dict[str, Flicker]) -> Solution:
         return solve_with_drift_model(
@@ -1828,6 +1842,19 @@ def _row_time_priors(
         else:
             priors[index] = row_time_prior_ms(nominal_row_time_ms(camera))
     return priors
+
+
+def shared_readouts(cameras: list[CameraDetection], told: set[str]) -> tuple[tuple[int, ...], ...]:
+    """The groups of two or more indices of ``cameras`` under the weak prior on their time per
+    row (:func:`row_time_prior_ms`: none ``told``, by datasheet or flicker) that share a width,
+    a height and a frame rate (to the nearest frame a second): likely one model read out
+    alike (:data:`~flashsync.solve.SHARED_READOUT_CORRELATION`)."""
+    groups: dict[tuple[int, int, int], list[int]] = {}
+    for index, camera in enumerate(cameras):
+        if camera.camera not in told:
+            rate = round(1000.0 / shortest_step_ms(camera.frame_times_ms))
+            groups.setdefault((camera.width, camera.height, rate), []).append(index)
+    return tuple(tuple(group) for group in groups.values() if len(group) > 1)
 
 
 def row_time_prior_ms(nominal_ms: float) -> tuple[float, float]:

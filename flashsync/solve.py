@@ -99,6 +99,12 @@ class Observations:
 #: Prior std of a camera's clock rate about the reference's (``alpha - 1``): oscillators of
 #: consumer cameras keep within some tens of ppm.
 DRIFT_PRIOR_STD = 50e-6
+#: Prior correlation of the times per row of cameras that :attr:`Priors.shared_readout`
+#: groups (one size and frame rate: mostly one model, one readout). Where their flashes tell
+#: only the differences of their times per row (one rate and phase), their common part is
+#: then known as well as one camera's prior tells it, not sqrt(n) better; 0.9 still lets
+#: two of them differ by a third of the prior's std.
+SHARED_READOUT_CORRELATION = 0.9
 
 
 @dataclass(frozen=True)
@@ -106,11 +112,26 @@ class Priors:
     """Pseudo-observations: ``row_time`` maps a camera index to (mean, std) of ``T_row`` in
     ms; ``drift_std`` is the prior std of ``alpha - 1`` for every camera (None: no prior),
     ``wider_drift_std`` a larger one for some camera indices (a frame clock whose rate is
-    uncertain)."""
+    uncertain); ``shared_readout`` groups camera indices whose ``row_time`` priors are
+    correlated :data:`SHARED_READOUT_CORRELATION` (identical cameras)."""
 
     row_time: dict[int, tuple[float, float]]
     drift_std: float | None = DRIFT_PRIOR_STD
     wider_drift_std: dict[int, float] = field(default_factory=dict)
+    shared_readout: tuple[tuple[int, ...], ...] = ()
+
+    def row_time_information(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The times per row's prior as a Gaussian: the camera indices that have one (k,),
+        their means (k,), ms, and the inverse of their covariance (k, k), 1/ms²."""
+        cameras = np.array(sorted(self.row_time), dtype=np.int64)
+        mean = np.array([self.row_time[c][0] for c in cameras])
+        std = np.array([self.row_time[c][1] for c in cameras])
+        correlation = np.eye(len(cameras))
+        for group in self.shared_readout:
+            shared = np.isin(cameras, group)
+            correlation[np.ix_(shared, shared)] = SHARED_READOUT_CORRELATION
+        np.fill_diagonal(correlation, 1.0)
+        return cameras, mean, np.linalg.inv(correlation * np.outer(std, std))
 
     def without_drift_prior(self, cameras: tuple[int, ...]) -> Priors:
         """These priors with no drift prior on the given camera indices."""
@@ -498,16 +519,20 @@ class _System:
         self.group = camera + n_cameras * trailing
         self.event_sigma_ms = event_sigma_ms
 
+        # prior rows (columns, weights, value): each row's weights times its columns' unknowns = value;
+        # the times per row's rows are a root of their information (event_sigma_ms^2 times it)
         prior_rows = []
-        for c, (mean, std) in sorted(priors.row_time.items()):
-            prior_rows.append((self.param_columns[c, 2], event_sigma_ms / std, mean))
+        with_prior, mean, information = priors.row_time_information()
+        root = event_sigma_ms * linalg.cholesky(information) if len(with_prior) else np.zeros((0, 0))
+        for weights in root:
+            prior_rows.append((self.param_columns[with_prior, 2], weights, float(weights @ mean)))
         for c in range(n_cameras):
             if c != reference and priors.drift_std is not None:
                 std = max(priors.drift_std, priors.wider_drift_std.get(c, 0.0))
-                prior_rows.append((self.param_columns[c, 0], event_sigma_ms / std, 0.0))
-        for i, (column, weight, mean) in enumerate(prior_rows):
-            triplets.add(np.array([self.n_equations + i]), np.array([column]), np.array([weight]))
-        rhs.append(np.array([weight * mean for _, weight, mean in prior_rows]))
+                prior_rows.append((self.param_columns[[c], 0], np.array([event_sigma_ms / std]), 0.0))
+        for i, (columns, weights, _) in enumerate(prior_rows):
+            triplets.add(np.full(len(columns), self.n_equations + i), columns, weights)
+        rhs.append(np.array([value for _, _, value in prior_rows]))
         self.n_priors = len(prior_rows)
         factor = np.ones(n_events) if events.sigma_factor is None else np.asarray(events.sigma_factor, np.float64)
         self.sigma_factor = factor
@@ -533,10 +558,11 @@ class _System:
         #: each equation's row noise, rows² (its sigma factor's worth; shape (n_equations,)): the
         #: variance its rows add to its time per row's column (:meth:`_take_row_noise`)
         self.row_noise = np.zeros(self.n_equations)
-        #: each camera's time-per-row prior's weight on the Schur complement's diagonal (scaled)
-        self.row_time_prior = np.zeros(n_cameras)
-        for c, (_, std) in priors.row_time.items():
-            self.row_time_prior[c] = (event_sigma_ms / std * self.column_scale[self.param_columns[c, 2]]) ** 2
+        #: the times per row's prior's information on the Schur complement's last block (scaled),
+        #: (n_cameras, n_cameras)
+        self.row_time_prior = np.zeros((n_cameras, n_cameras))
+        scale = event_sigma_ms * self.column_scale[self.param_columns[with_prior, 2]]
+        self.row_time_prior[np.ix_(with_prior, with_prior)] = information * np.outer(scale, scale)
         self.cams = self.matrix[:, : self.n_camera_columns].tocsr()
         self.flashes = self.matrix[:, self.n_camera_columns :].tocsr()
         named = self.flashes[: self.n_equations].tocoo()
@@ -635,12 +661,12 @@ class _System:
         kept = w * self.row_noise * (1.0 - w * self.flash_coefficient**2 / d[self.flash_of])
         noise = np.bincount(self.camera, kept, minlength=len(t)) * self.column_scale[t] ** 2
         block = np.triu(factor[0][t[0] :, t[0] :])
-        information = block.T @ block - np.diag(self.row_time_prior)
+        information = block.T @ block - self.row_time_prior
         noisy = np.flatnonzero(noise > 0)
         root = np.sqrt(noise[noisy])
         values, vectors = np.linalg.eigh(information[np.ix_(noisy, noisy)] / np.outer(root, root))
         information[np.ix_(noisy, noisy)] = (vectors * np.maximum(values - 1.0, 0.0)) @ vectors.T * np.outer(root, root)
-        corrected = _cholesky(information + np.diag(self.row_time_prior), largest)
+        corrected = _cholesky(information + self.row_time_prior, largest)
         if corrected is None:
             return None
         factor[0][t[0] :, t[0] :] = np.triu(corrected[0])  # cho_factor's own array: the solves read its upper triangle

@@ -7,6 +7,7 @@ xenon and LED pulses in turn, tone curves, black levels, x264 at crf 23)."""
 import json
 from dataclasses import fields, replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -16,8 +17,8 @@ from scipy.stats import chi2
 from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.adopt import _moved_back, written_model
 from flashsync.diagnose.agreement import agreement, model_gaps
-from flashsync.diagnose.candidate import Term, fit_candidate
-from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED
+from flashsync.diagnose.candidate import Term, _pseudo_rows, fit_candidate
+from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED, ROW_TIME
 from flashsync.diagnose.measure import Edges, Measurement, measure
 from flashsync.diagnose.verdict import noise_test
 from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
@@ -25,10 +26,12 @@ from flashsync.errors import FlashsyncError
 from flashsync.evaluate import camera_accuracy, probe_errors, probes, sync_errors
 from flashsync.events import Edge, Flag
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
+from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import CameraClock, SyncModel
-from flashsync.pipeline import detect_videos, synchronize
+from flashsync.pipeline import detect_videos, row_time_prior_ms, synchronize
 from flashsync.simulation import CameraSpec, FlashSpec, GroundTruth, Scenario, render_scenario
 from flashsync.simulation.rigs import NTSC_30, NTSC_60, random_rig, recipe, second_world
+from flashsync.solve import SHARED_READOUT_CORRELATION
 
 DURATION_MS = 6000.0
 #: Noise floor of a gap in the hidden-effect tests: this many times the RMS the edge noise
@@ -468,6 +471,35 @@ def test_syncs_shape_frees_every_time_per_row_exposure_and_drift_under_syncs_pri
         assert camera.exposure_ms == pytest.approx(truth.cameras[name].exposure_ms, abs=0.1), name
     d = diagnose(cameras)
     assert d.sync_shape and pooled_error_ms(d.sync_model, truth) < 0.03, format_diagnosis(d)
+
+
+def test_the_fits_priors_on_the_times_per_row_are_syncs_identical_cameras_sharing_a_readout():
+    """Two 640x360 cameras at 30 fps and one 480x270 at 25 fps, every time per row free: the
+    prior the fit's pseudo-rows carry (the inverse of their information) gives each camera
+    ``sync``'s weak prior and the two identical ones correlated
+    :data:`~flashsync.solve.SHARED_READOUT_CORRELATION`, the third independent, as
+    :func:`~flashsync.pipeline.shared_readouts` has ``sync``'s solve take them."""
+    sizes = [(640, 360, 1000 / 30), (640, 360, 1000 / 30), (480, 270, 40.0)]
+    cameras = [
+        SimpleNamespace(camera=f"cam{c}", width=w, height=h, frame_times_ms=np.arange(100) * period)
+        for c, (w, h, period) in enumerate(sizes)
+    ]
+    measurement = SimpleNamespace(
+        cameras=cameras, noise_ms=0.02, free_drift=(), n_flashes=0, flicker_row_time_ms=lambda c: (np.nan, np.nan)
+    )
+    timing = [SimpleNamespace(period_ms=period) for _, _, period in sizes]
+    keys = [(ROW_TIME, c) for c in range(3)]
+    rows, observed, weight = _pseudo_rows(measurement, frozenset(), timing, keys)
+    weighted = rows * weight[:, None] / 0.02
+    covariance = np.linalg.inv(weighted.T @ weighted)
+    std = np.sqrt(np.diag(covariance))
+    nominal = [period / (NOMINAL_HIDDEN_ROWS * h) for _, h, period in sizes]
+    assert std == pytest.approx([row_time_prior_ms(n)[1] for n in nominal])
+    correlation = covariance / np.outer(std, std)
+    assert correlation[0, 1] == pytest.approx(SHARED_READOUT_CORRELATION)
+    assert correlation[0, 2] == pytest.approx(0.0, abs=1e-9) and correlation[1, 2] == pytest.approx(0.0, abs=1e-9)
+    mean = np.linalg.solve(weighted, observed * weight / 0.02)
+    assert mean + [period / h for _, h, period in sizes] == pytest.approx([row_time_prior_ms(n)[0] for n in nominal])
 
 
 def test_without_syncs_shape_the_diagnosis_says_so_and_keeps_the_last_steps_model(detections):

@@ -29,6 +29,7 @@ from itertools import product
 
 import numpy as np
 import pandas as pd
+from scipy import linalg
 
 from flashsync.diagnose.effects import (
     CATALOGUE,
@@ -50,9 +51,9 @@ from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock
 from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
-from flashsync.pipeline import row_time_prior_ms
+from flashsync.pipeline import row_time_prior_ms, shared_readouts
 from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
-from flashsync.solve import DRIFT_PRIOR_STD
+from flashsync.solve import DRIFT_PRIOR_STD, Priors
 
 
 @dataclass(frozen=True, order=True)
@@ -422,33 +423,37 @@ def _base_row_time_ms(
 def _pseudo_rows(
     measurement: Measurement, terms: frozenset[Term], timing: list[FrameTiming], keys: list[tuple[str, int]]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The fit's equations beyond the edges, those of ``sync``'s solve: per camera whose
-    time per row the model fits (``row_time``), ``correction = its rolling flicker's time per
-    row - base`` where it saw flicker, else the weak prior's
+    """The fit's equations beyond the edges, those of ``sync``'s solve: on the cameras whose
+    time per row the model fits (``row_time``), their priors, each ``correction = its
+    rolling flicker's time per row - base`` where it saw flicker, else the weak prior's
     (:func:`~flashsync.pipeline.row_time_prior_ms` of the frame period /
-    (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height)); per camera whose drift it fits
-    (but those of :attr:`Measurement.free_drift`), the drift prior (0, std
-    :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
-    (k, len(keys) + n_flashes), right-hand sides (k,) in the parameters' units and weights
-    (k,) that put them on the edges' scale (pooled edge noise over their standard deviation)."""
+    (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height)), the weak priors of cameras of
+    one size and rate correlated (:func:`~flashsync.pipeline.shared_readouts`); per camera
+    whose drift it fits (but those of :attr:`Measurement.free_drift`), the drift prior (0,
+    std :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
+    (k, len(keys) + n_flashes), whitened (a root of the priors' information), right-hand
+    sides (k,) and weights (k,) that put them on the edges' scale (the pooled edge noise)."""
     noise = measurement.noise_ms if np.isfinite(measurement.noise_ms) else MIN_SCALE_MS
-    equations = []  # (key, value, std)
-    for c in range(len(measurement.cameras)):
+    row_times, base, told = {}, {}, set()
+    for c, camera in enumerate(measurement.cameras):
         if (ROW_TIME, c) in keys:
-            base = _base_row_time_ms(measurement, terms, timing, c)
-            row_time, std = measurement.flicker_row_time_ms(c)
-            if not np.isfinite(row_time):
-                nominal = timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * measurement.cameras[c].height)
-                row_time, std = row_time_prior_ms(nominal)
-            equations.append(((ROW_TIME, c), row_time - base, std))
-        if (DRIFT, c) in keys and c not in measurement.free_drift:
-            equations.append(((DRIFT, c), 0.0, DRIFT_PRIOR_STD))
-    rows = np.zeros((len(equations), len(keys) + measurement.n_flashes))
-    for row, (key, _, _) in zip(rows, equations):
-        row[keys.index(key)] = 1.0
-    observed = np.array([value for _, value, _ in equations], dtype=np.float64)
-    weights = np.array([noise / std for _, _, std in equations], dtype=np.float64)
-    return rows, observed, weights
+            base[c] = _base_row_time_ms(measurement, terms, timing, c)
+            row_times[c] = measurement.flicker_row_time_ms(c)
+            if np.isfinite(row_times[c][0]):
+                told.add(camera.camera)
+            else:
+                row_times[c] = row_time_prior_ms(timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * camera.height))
+    groups = shared_readouts(list(measurement.cameras), told)
+    priors = Priors(row_times, shared_readout=tuple(tuple(c for c in g if c in row_times) for g in groups))
+    cameras, mean, information = priors.row_time_information()
+    root = linalg.cholesky(information) if len(cameras) else np.zeros((0, 0))
+    drifts = [c for c in range(len(measurement.cameras)) if (DRIFT, c) in keys and c not in measurement.free_drift]
+    rows = np.zeros((len(cameras) + len(drifts), len(keys) + measurement.n_flashes))
+    rows[np.ix_(range(len(cameras)), [keys.index((ROW_TIME, c)) for c in cameras])] = root
+    for row, c in enumerate(drifts, start=len(cameras)):
+        rows[row, keys.index((DRIFT, c))] = 1.0 / DRIFT_PRIOR_STD
+    observed = np.concatenate([root @ (mean - np.array([base[c] for c in cameras])), np.zeros(len(drifts))])
+    return rows, observed, np.full(len(rows), noise)
 
 
 def _flicker_nll(
