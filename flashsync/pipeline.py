@@ -353,11 +353,11 @@ def _synchronized(
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
     spreads, readout_warnings = _readout_doubts(best, rivals, search_reference)
-    chosen = {name: best.cameras[name] for name in cameras}  # in the order given
+    if choices:
+        best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
     if search_reference != reference:
-        on_reference = attempt_on(reference)
         more_spreads, more_warnings = _doubts_on_reference(
-            on_reference(chosen), cameras, undecided, set(spreads), reference, on_reference
+            best, cameras, undecided, set(spreads), reference, attempt_on(reference)
         )
         spreads.update(more_spreads)
         readout_warnings += more_warnings
@@ -367,7 +367,8 @@ def _synchronized(
         # it read two of random rig 544's cameras the wrong way up)
         return _attempt(trial, reference, row_times, anchors, rate_std, memo, other_shifts, shared_readout=True)
 
-    best = final(chosen)
+    if shared_readouts(list(best.cameras.values()), set()):
+        best = final(best.cameras)
     best, backward_warnings = _without_backward_readings(best, final)
     best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, final)
     report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
