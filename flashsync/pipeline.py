@@ -494,13 +494,12 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
         short = (best.cameras[name].exposure_rows or np.inf) <= MAX_TURNED_ROWS
         if not (short and camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)):
             continue
-        longer = []
-        for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
-            seen = (matches.flash == flash) & (matches.camera != name)
-            others, as_long = seen & ramp_read, seen & (pulse_of >= (1 - PULSES_AGREE) * pulse)
-            shorter = others.any() and pulse - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse
-            if shorter and not as_long.any():
-                longer.append(pulse)
+        witnesses = matches.camera != name
+        longer = [
+            pulse
+            for flash, pulse in zip(matches.flash[mine], pulse_of[mine])
+            if _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, witnesses)
+        ]
         if len(longer) < MIN_PULSE_FLASHES:
             continue
         exposure_ms = float(np.median(longer))
@@ -508,6 +507,20 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
         if exposure_ms >= MIN_EXPOSURE_GAIN * camera.exposure_ms and spread_ms <= PULSES_AGREE * exposure_ms:
             told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
     return told
+
+
+def _seen_shorter(
+    flash: np.ndarray, pulse_ms: float, pulse_of: np.ndarray, ramp_read: np.ndarray, witnesses: np.ndarray
+) -> bool:
+    """Whether the ``witnesses`` among the matched sync events of one ``flash`` (masks of shape
+    (n_matches,); :func:`_pulses_seen` gives ``pulse_of`` and ``ramp_read``) show its pulse
+    shorter than ``pulse_ms``: those whose bands of it are one exposure long see it
+    :data:`SHORTER_PULSE_SHARE` shorter, and none sees it :data:`PULSES_AGREE` as long."""
+    seen = flash & witnesses
+    others, as_long = seen & ramp_read, seen & (pulse_of >= (1 - PULSES_AGREE) * pulse_ms)
+    return bool(
+        others.any() and not as_long.any() and pulse_ms - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse_ms
+    )
 
 
 def _pulses_seen(best: _Attempt) -> tuple[np.ndarray, np.ndarray]:
@@ -544,12 +557,11 @@ def _exposure_steps_the_others_tell(best: _Attempt) -> dict[str, int]:
     told = {}
     for name in stepping:
         mine = (matches.camera == name) & (pulse_of > best.solution.cameras[best.connected.index(name)].exposure_ms)
-        shorter = 0
-        for flash, pulse in zip(matches.flash[mine], pulse_of[mine]):
-            seen = (matches.flash == flash) & ~np.isin(matches.camera, stepping)
-            others, as_long = seen & ramp_read, seen & (pulse_of >= (1 - PULSES_AGREE) * pulse)
-            if others.any() and not as_long.any():
-                shorter += pulse - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse
+        witnesses = ~np.isin(matches.camera, stepping)
+        shorter = sum(
+            _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, witnesses)
+            for flash, pulse in zip(matches.flash[mine], pulse_of[mine])
+        )
         if shorter >= MIN_PULSE_FLASHES and 2 * shorter > np.count_nonzero(mine):
             told[name] = shorter
     return told
