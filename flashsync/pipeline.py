@@ -1006,6 +1006,8 @@ def _exposure_changes(
         changes_ms[name] = max(abs(e - solution.exposure_ms) for e in exposures_ms)
         seen = ", ".join(
             f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
+            if s.n_bands > 1
+            else f"{e:.2f} ms in frame {s.first_frame} (one band: a change, or a band the others' lengths do not fit)"
             for e, s in zip(exposures_ms, spans)
         )
         warnings.append(

@@ -75,7 +75,7 @@ def test_each_step_makes_a_span(lengths, counts):
         pytest.param(noisy([18.0] * 8 + [21.0] * 8, seed=3, std_rows=1.0), id="a-step-within-8-sigmas"),
         pytest.param(noisy([4.0] * 8 + [3.1] * 8, seed=4, std_rows=0.01), id="a-step-under-a-row"),
         pytest.param(noisy([32.4] * 8 + [33.6] * 8, seed=7, std_rows=0.05), id="a-step-of-4-percent"),
-        pytest.param(noisy([18.0] + [9.0] * 15, seed=5), id="too-few-bands-on-one-side"),
+        pytest.param(noisy([9.0] * 7 + [18.0] + [9.0] * 8, seed=5), id="a-lone-length-among-others"),
         pytest.param(
             noisy([18, 30, 18, 30, 18, 18, 30, 18] + [30, 18, 30, 30, 18, 30, 18, 30], seed=6),
             id="two-flash-powers",
@@ -85,8 +85,8 @@ def test_each_step_makes_a_span(lengths, counts):
 def test_lengths_that_do_not_step_together_make_one_span(lengths):
     """One exposure; a step of 3 rows in lengths scattered 1 row (under
     :data:`~flashsync.exposure_changes.STEP_SIGMAS`); a step under a row (of 4 rows); a
-    step of 4 % (auto exposure's least is a third of a stop, 26 %); one band alone
-    before a step; and bands of flashes at two powers, full-power pulses that outlast the
+    step of 4 % (auto exposure's least is a third of a stop, 26 %); one band twice as long
+    as the others amid them; and bands of flashes at two powers, full-power pulses that outlast the
     exposure (30 rows among 18) three in eight before the middle and five after: the
     medians step, but the lengths jump from one band to the next as much: one span."""
     assert len(exposure_spans(bands(lengths))) == 1
@@ -162,6 +162,21 @@ def test_wild_lengths_on_a_side_hold_a_step_back():
     assert len(exposure_spans(detection)) == 1
 
 
+def rendered_rig(folder: Path, changes, every: int = 1) -> tuple[list[CameraDetection], object]:
+    """cam0 (25 fps, 8 ms) and cam1 (30 fps, 4 ms, its exposure changing as ``changes`` says:
+    (frame, ms) pairs), 320x180, under every ``every``-th of the hand-fired flashes of
+    ``tests/test_diagnose.py``: their detections and the truth."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
+        CameraSpec(
+            "cam1", 320, 180, 30.0, exposure_ms=4.0, start_ms=3000.0, offset_ms=-2830.0, exposure_changes=changes
+        ),
+    )
+    fired = flashes(1)[::every]
+    truth = render_scenario(Scenario("auto-exposure", cameras, DURATION_MS, fired, n_players=0, seed=1), folder)
+    return detect_videos([folder / "cam0.mp4", folder / "cam1.mp4"]), truth
+
+
 def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_there(tmp_path):
     """cam1 (30 fps, 320x180) goes from a 4 ms exposure to 2 ms at frame 90 of 180 (auto
     exposure), cam0 (25 fps) keeps 8 ms; hand-fired flashes (``tests/test_diagnose.py``'s).
@@ -171,15 +186,7 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     span and the others' trailing edges are left out: its times within 0.1 ms (0.054), a
     warning names both exposures and their frames, and the exposure's sigma reaches the
     other one; ``diagnose`` measures it as ``sync`` solves it."""
-    cameras = (
-        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=8.0),
-        CameraSpec(
-            "cam1", 320, 180, 30.0, exposure_ms=4.0, start_ms=3000.0, offset_ms=-2830.0, exposure_changes=((90, 2.0),)
-        ),
-    )
-    scenario = Scenario("auto-exposure", cameras, duration_ms=DURATION_MS, flashes=flashes(1), n_players=0, seed=1)
-    truth = render_scenario(scenario, tmp_path)
-    detections = detect_videos([tmp_path / "cam0.mp4", tmp_path / "cam1.mp4"])
+    detections, truth = rendered_rig(tmp_path, ((90, 2.0),))
     model, report = synchronize(detections)
     accuracy = camera_accuracy(model, truth).set_index("camera")
     assert accuracy.loc["cam1", "rms_ms"] < 0.1 and accuracy.loc["cam1", "z_rms"] < 2.0, accuracy
@@ -232,3 +239,37 @@ def test_an_auto_exposure_read_as_pulses_that_step_is_read_the_other_way_round(t
     assert camera.exposure_ms == pytest.approx(9.8, abs=0.2) and camera.exposure_std_ms > 5.5
     d = diagnose(detections)
     assert d.written.endswith("(the same as sync's own)"), d.written
+
+
+@pytest.mark.parametrize(
+    "lengths, frames, counts",
+    [
+        pytest.param(noisy([18.0] * 6 + [9.0], seed=8), None, [6, 1], id="last"),
+        pytest.param(noisy([9.0] + [18.0] * 6, seed=8), None, [1, 6], id="first"),
+        pytest.param(noisy([18.0] * 6 + [9.0], seed=8), [10, 20, 30, 40, 50, 60, 61], [7], id="in-a-burst"),
+        pytest.param(noisy([18.0] * 6 + [21.0], seed=8, std_rows=1.0), None, [7], id="within-8-sigmas"),
+    ],
+)
+def test_a_lone_band_at_either_end_that_steps_from_all_the_others_is_a_span(lengths, frames, counts):
+    """A change after a camera's last band but one (or before its second) leaves one band
+    on its side: where that band, in a burst of its own, steps from the others as a change
+    does, it is a span alone (random rig 546's reference: 114 rows, then one band of 216;
+    solved on one exposure every camera came out 2.8 ms off the truth). Not where it lies in
+    one burst with the band before it, nor where it strays 3 rows from lengths that scatter
+    one."""
+    assert [s.n_bands for s in exposure_spans(bands(lengths, frames=frames))] == counts
+
+
+def test_an_exposure_that_changes_after_the_last_band_but_one_is_found(tmp_path):
+    """cam1's exposure halves (4 ms to 2) at frame 100 of 180, between its third band and its
+    fourth, the last. Solved on one exposure, that band's trailing edge took both cameras off
+    the truth (cam0 1.76 ms RMS, cam1 0.93); its last band a span of its own, each within
+    0.1 ms (0.09 and 0.07), a warning names the change and cam1's exposure's sigma reaches it."""
+    detections, truth = rendered_rig(tmp_path, ((100, 2.0),), every=3)
+    model, report = synchronize(detections)
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    assert (accuracy["rms_ms"] < 0.15).all() and accuracy.loc["cam1", "z_rms"] < 2.0, accuracy
+    (warning,) = [w for w in report.warnings if "its exposure changes while it records" in w]
+    assert warning.startswith(str(tmp_path / "cam1.mp4")) and "(one band:" in warning, warning
+    camera = model.cameras["cam1"]
+    assert camera.exposure_ms == pytest.approx(4.0, abs=0.1) and camera.exposure_std_ms > 1.5
