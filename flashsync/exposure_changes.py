@@ -13,11 +13,13 @@ times are chosen on the edges too); their leading edges still time their flashes
 camera then 0.054 ms off). Only bands within one frame and fitted whole tell a length, so
 a camera needs two of them on each side of a change, in frames apart, or, where the change
 comes before its second band or after its last but one, that one band in a burst of its own
-stepping from all the others (:func:`length_spans`). Where one exposure
-fits such bands only as a short exposure under longer pulses (the detector's other reading,
-:func:`~flashsync.ramp.common_width`), the pulses step instead (:func:`pulse_spans`); where
-the other cameras see those flashes shorter, the pipeline reads each band the other way
-round (:func:`with_pulses_as_exposures`).
+stepping from all the others (:func:`length_spans`). A band split across two frames tells
+no length (the rows hidden between them are not seen), only a floor, its rows in sight:
+where those outreach the exposure, its trailing edge is left out as well
+(:func:`outreaching_splits`). Where one exposure fits such bands only as a short exposure
+under longer pulses (the detector's other reading, :func:`~flashsync.ramp.common_width`),
+the pulses step instead (:func:`pulse_spans`); where the other cameras see those flashes
+shorter, the pipeline reads each band the other way round (:func:`with_pulses_as_exposures`).
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from flashsync.detect import CameraDetection
-from flashsync.events import Band, Edge, Events
+from flashsync.events import Band, Bands, Edge, Events, Flag
+from flashsync.model import readout_rows
 from flashsync.robust import mad_sigma
 
 #: Fewest bands on each side of a change of exposure, each in a frame of its own: bands in
@@ -111,7 +114,7 @@ def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
     main = max(spans, key=lambda span: span.n_bands)
     turned = detection.with_band_exposures(rows, main.length_rows)
     side = "bottom_up" if detection.flipped else "top_down"
-    return replace(turned, **{side: _kept(turned.events, spans)})
+    return replace(turned, **{side: turned.events.take(~_outside(turned.events, spans))})
 
 
 def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -247,26 +250,101 @@ def _merged(lengths: np.ndarray, cuts: list[tuple[int, int]]) -> list[tuple[int,
 
 
 def with_one_exposure(detection: CameraDetection) -> CameraDetection:
-    """The detection with, in each of its readings whose exposure changes
-    (:func:`exposure_spans`), the flash bands' trailing edges outside the span of the most
-    bands left out."""
+    """The detection with, in each of its readings, the flash bands' trailing edges that are
+    not of its exposure left out: where that changes (:func:`exposure_spans`), those
+    outside the span of the most bands, and those of bands split across two frames that
+    outreach it (:func:`outreaching_splits`)."""
     readings = {}
     for side, flipped in (("top_down", False), ("bottom_up", True)):
         if getattr(detection, side) is not None:
             reading = detection.read_flipped(flipped)
             spans = exposure_spans(reading)
+            other = np.isin(np.arange(len(reading.events)), outreaching_splits(reading).trailing)
             if len(spans) > 1:
-                readings[side] = _kept(reading.events, spans)
+                other |= _outside(reading.events, spans)
+            if other.any():
+                readings[side] = reading.events.take(~other)
     return replace(detection, **readings) if readings else detection
 
 
-def _kept(events: Events, spans: list[ExposureSpan]) -> Events:
-    """The events without the flash bands' trailing edges outside the span of the most bands
-    (beyond its bands only where no other span lies that way: the frames between two spans'
-    bands may have either exposure)."""
+def outreaching_splits(detection: CameraDetection) -> Bands:
+    """The flash bands of the detection's reading in use that are split across two frames and
+    whose rows in sight alone (from the leading edge to the frame's end, and from the next
+    frame's start to the trailing edge) outreach its exposure (:func:`_exposure_rows`)
+    as a change does (:data:`MIN_STEP_SHARE` and :data:`MIN_STEP_ROWS`). A band is one
+    exposure long, the rows hidden between frames counted, so such a band's exposure is
+    longer: the camera's changed (random rig 546's reference, 114 rows and then 216, its four
+    split bands 194 rows in sight). But not within the frames of the span of the most bands
+    (:func:`length_spans`) where most of them lie within :data:`MIN_STEP_SHARE` of its median:
+    amid bands of one exposure such a band is of it, its trailing edge read late on a
+    pulse's tail in the next frame (the HD rig of ``tests/test_diagnose.py``); amid lengths
+    that scatter (flashes at two powers, pre-flashes) nothing says so. Of 959 split
+    bands over the ten kept benches of :func:`_lone_end`, 82 outreach so, every one on a
+    camera whose exposure changed."""
+    bands = detection.events.bands()
+    bands = bands.take(bands.complete)
+    events, lead, trail = detection.events, bands.leading, bands.trailing
+    exposure = _exposure_rows(detection, bands)
+    if exposure is None:
+        return bands.take(np.zeros(len(bands), dtype=bool))
+    sight = _rows_between(detection, bands) + detection.height
+    split = (events.frame[trail] == events.frame[lead] + 1) & (events.band[lead] == Band.PULSE)
+    outreach = sight - exposure > np.maximum(MIN_STEP_SHARE * sight, MIN_STEP_ROWS)
+    return bands.take(split & outreach & ~_amid_one_exposure(detection, events.frame[lead]))
+
+
+def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.ndarray:
+    """Boolean mask of ``frames`` (decoded frames, shape (n,)): within the frames of the span
+    of the detection's most bands (:func:`length_spans`) where that span is of one length
+    (:data:`SPAN_INLIERS` of its bands within :data:`MIN_STEP_SHARE` of its median)."""
+    measured, lengths = _measured(detection, pulses=False)[:2]
+    spans = length_spans(measured, lengths)
+    if not spans:
+        return np.zeros(len(frames), dtype=bool)
+    a, b = max(spans, key=lambda span: span[1] - span[0])
+    median = np.median(lengths[a:b])
+    if np.mean(np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median) < SPAN_INLIERS:
+        return np.zeros(len(frames), dtype=bool)
+    return (frames >= measured[a]) & (frames <= measured[b - 1])
+
+
+def _exposure_rows(detection: CameraDetection, bands: Bands) -> float | None:
+    """The camera's exposure, readout rows: the one its bands were read to share, else (fewer
+    than three fitted whole) the longest of its unclipped flash bands within one frame (of
+    ``bands``, complete ones; random rig 653's cam8: two of 127 rows, then four split across
+    frames 223 rows in sight; not their median: rig 426's cam1 has bands of 162 and 326
+    rows, and split ones of 312 and 306 in sight under its 326-row exposure), None with
+    fewer than two."""
+    if detection.exposure_rows is not None:
+        return detection.exposure_rows
+    events, lead, trail = detection.events, bands.leading, bands.trailing
+    within = (events.frame[lead] == events.frame[trail]) & (events.band[lead] == Band.PULSE)
+    within &= ~events.has_flag(Flag.SATURATED)[lead]
+    lengths = np.abs(events.row[trail] - events.row[lead])[within]
+    return float(np.max(lengths)) if len(lengths) >= MIN_SPAN_BANDS else None
+
+
+def split_lengths_ms(detection: CameraDetection, bands: Bands, row_time_ms: float) -> np.ndarray:
+    """The length (ms) of each of the detection's ``bands`` split across two frames (its
+    reading in use): from its leading edge's frame to the next, and its trailing edge's
+    readout rows less its leading edge's at ``row_time_ms``; shape (len(bands),)."""
+    frames = detection.events.frame[bands.leading]
+    period = detection.frame_times_ms[frames + 1] - detection.frame_times_ms[frames]
+    return period + _rows_between(detection, bands) * row_time_ms
+
+
+def _rows_between(detection: CameraDetection, bands: Bands) -> np.ndarray:
+    """Each band's trailing edge's readout row less its leading edge's, rows."""
+    rows = readout_rows(detection.events.row, detection.height, detection.flipped)
+    return rows[bands.trailing] - rows[bands.leading]
+
+
+def _outside(events: Events, spans: list[ExposureSpan]) -> np.ndarray:
+    """Boolean mask of the events: the flash bands' trailing edges outside the span of the
+    most bands (beyond its bands only where no other span lies that way: the frames between
+    two spans' bands may have either exposure)."""
     main = max(spans, key=lambda span: span.n_bands)
     first = main.first_frame if main is not spans[0] else -np.inf
     last = main.last_frame if main is not spans[-1] else np.inf
     inside = (events.frame >= first) & (events.frame <= last)
-    pulse_trailing = (events.edge == Edge.TRAILING) & (events.band == Band.PULSE)
-    return events.take(~pulse_trailing | inside)
+    return (events.edge == Edge.TRAILING) & (events.band == Band.PULSE) & ~inside

@@ -34,7 +34,14 @@ from flashsync.detect import (
 )
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
-from flashsync.exposure_changes import exposure_spans, pulse_spans, with_one_exposure, with_pulses_as_exposures
+from flashsync.exposure_changes import (
+    exposure_spans,
+    outreaching_splits,
+    pulse_spans,
+    split_lengths_ms,
+    with_one_exposure,
+    with_pulses_as_exposures,
+)
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
@@ -990,26 +997,40 @@ def _exposure_changes(
 ) -> tuple[list[str], dict[str, float]]:
     """Per camera whose exposure changes while it records (the spans of its ``detections``
     reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`, or of its
-    pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`;
+    pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`, and
+    its bands split across two frames longer in sight,
+    :func:`~flashsync.exposure_changes.outreaching_splits`, timed by its solved clock;
     solved on the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
     warning naming each span's exposure and frames, and how far the farthest lies from the
     one solved, ms (into its exposure's sigma: restamp's t_center_ms takes that one
     throughout)."""
     warnings, changes_ms = [], {}
     for name, solution in zip(best.connected, best.solution.cameras):
-        detection = detections[name].read_flipped(best.cameras[name].flipped)
+        detection = detections[name].retimed(best.cameras[name].frame_times_ms)
+        detection = detection.read_flipped(best.cameras[name].flipped)
         spans = pulse_spans(detection) if name in stepped else exposure_spans(detection)
-        if len(spans) < 2 or not solution.exposure_ms > 0:
+        splits = outreaching_splits(detection)
+        if (len(spans) < 2 and not len(splits)) or not solution.exposure_ms > 0:
             continue
-        main = max(spans, key=lambda span: span.n_bands)
+        main = max(spans, key=lambda span: span.n_bands, default=None)
         exposures_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in spans]
-        changes_ms[name] = max(abs(e - solution.exposure_ms) for e in exposures_ms)
-        seen = ", ".join(
+        split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
+        changes_ms[name] = float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms)))
+        seen = [
             f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
             if s.n_bands > 1
             else f"{e:.2f} ms in frame {s.first_frame} (one band: a change, or a band the others' lengths do not fit)"
-            for e, s in zip(exposures_ms, spans)
-        )
+            for e, s in zip(exposures_ms, spans if len(spans) > 1 else [])
+        ]
+        if len(splits):
+            frames = detection.events.frame[splits.leading]
+            seen.append(
+                f"{split_ms[0]:.2f} ms in a band split across frames {frames[0]} and {frames[0] + 1}"
+                if len(splits) == 1
+                else f"{split_ms.min():.2f}-{split_ms.max():.2f} ms in {len(splits)} bands split across two frames "
+                f"(frames {frames.min()}-{frames.max() + 1})"
+            )
+        seen = ", ".join(seen)
         warnings.append(
             f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show {seen}; its "
             f"times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span, and "

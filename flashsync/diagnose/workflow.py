@@ -393,8 +393,8 @@ def _exposures_as_sync_reads(
 ) -> tuple[list[CameraDetection], tuple[str, ...]]:
     """The detections with their exposures as ``sync`` reads them, so that the edges measured
     are the ones ``sync`` solved on, and a warning for each camera changed: where the
-    exposure changes while it records, the trailing edges outside the span of the most bands
-    left out (:func:`~flashsync.exposure_changes.with_one_exposure`); each exposure ``sync``
+    exposure changes while it records, the trailing edges not of the exposure solved left
+    out (:func:`~flashsync.exposure_changes.with_one_exposure`); each exposure ``sync``
     made longer made so in the reading its model uses
     (:attr:`~flashsync.pipeline.SyncReport.longer_exposures`: a camera read the other way
     round by the flashes the others see), and each read the other way round band by band so
@@ -408,7 +408,8 @@ def _exposures_as_sync_reads(
         if steady is not detection:
             warnings.append(
                 f"{detection.video}: its exposure changes while it records; measured without the trailing edges of its "
-                "bands outside the span of the most bands, as sync solves it"
+                "bands not of the exposure solved (outside the span of the most bands, or split across two frames and "
+                "longer in sight), as sync solves it"
             )
         detection, rows = steady, longer.get(detection.camera)
         if synced and detection.camera in synced[1].stepped_exposures:
