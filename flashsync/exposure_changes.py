@@ -194,9 +194,9 @@ def _lone_end(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int]]:
     recipes twice), 44 of the 269 cameras whose exposure changes have such a band, and 6 of
     the 608 steady ones (a damaged band, a pre-flash's)."""
     n = len(lengths)
-    ends = ((0, lengths[1:], frames[1:2] - frames[:1]), (n - 1, lengths[:-1], frames[-1:] - frames[-2:-1]))
+    ends = ((0, lengths[1:], frames[1] - frames[0]), (n - 1, lengths[:-1], frames[-1] - frames[-2]))
     for lone, others, apart in ends:
-        if len(others) < MIN_SPAN_BANDS or not np.all(apart > 1):
+        if len(others) < MIN_SPAN_BANDS or apart <= 1:
             continue
         noise = mad_sigma(np.diff(others), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
         median = float(np.median(others))
@@ -270,7 +270,7 @@ def with_one_exposure(detection: CameraDetection) -> CameraDetection:
 def outreaching_splits(detection: CameraDetection) -> Bands:
     """The flash bands of the detection's reading in use that are split across two frames and
     whose rows in sight alone (from the leading edge to the frame's end, and from the next
-    frame's start to the trailing edge) outreach its exposure (:func:`_exposure_rows`)
+    frame's start to the trailing edge) outreach its exposure (:func:`_exposure_or_longest_rows`)
     as a change does (:data:`MIN_STEP_SHARE` and :data:`MIN_STEP_ROWS`). A band is one
     exposure long, the rows hidden between frames counted, so such a band's exposure is
     longer: the camera's changed (random rig 546's reference, 114 rows and then 216, its four
@@ -284,7 +284,7 @@ def outreaching_splits(detection: CameraDetection) -> Bands:
     bands = detection.events.bands()
     bands = bands.take(bands.complete)
     events, lead, trail = detection.events, bands.leading, bands.trailing
-    exposure = _exposure_rows(detection, bands)
+    exposure = _exposure_or_longest_rows(detection, bands)
     if exposure is None:
         return bands.take(np.zeros(len(bands), dtype=bool))
     sight = _rows_between(detection, bands) + detection.height
@@ -308,7 +308,7 @@ def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.nda
     return (frames >= measured[a]) & (frames <= measured[b - 1])
 
 
-def _exposure_rows(detection: CameraDetection, bands: Bands) -> float | None:
+def _exposure_or_longest_rows(detection: CameraDetection, bands: Bands) -> float | None:
     """The camera's exposure, readout rows: the one its bands were read to share, else (fewer
     than three fitted whole) the longest of its unclipped flash bands within one frame (of
     ``bands``, complete ones; random rig 653's cam8: two of 127 rows, then four split across

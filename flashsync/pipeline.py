@@ -1012,28 +1012,29 @@ def _exposure_changes(
         splits = outreaching_splits(detection)
         if (len(spans) < 2 and not len(splits)) or not solution.exposure_ms > 0:
             continue
+        spans = spans if len(spans) > 1 else []
         main = max(spans, key=lambda span: span.n_bands, default=None)
         exposures_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in spans]
         split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
         changes_ms[name] = float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms)))
-        seen = [
+        parts = [
             f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
             if s.n_bands > 1
             else f"{e:.2f} ms in frame {s.first_frame} (one band: a change, or a band the others' lengths do not fit)"
-            for e, s in zip(exposures_ms, spans if len(spans) > 1 else [])
+            for e, s in zip(exposures_ms, spans)
         ]
         if len(splits):
             frames = detection.events.frame[splits.leading]
-            seen.append(
+            parts.append(
                 f"{split_ms[0]:.2f} ms in a band split across frames {frames[0]} and {frames[0] + 1}"
                 if len(splits) == 1
                 else f"{split_ms.min():.2f}-{split_ms.max():.2f} ms in {len(splits)} bands split across two frames "
                 f"(frames {frames.min()}-{frames.max() + 1})"
             )
-        seen = ", ".join(seen)
         warnings.append(
-            f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show {seen}; its "
-            f"times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span, and "
+            f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show "
+            f"{', '.join(parts)}; its times take only the leading edges of the bands outside the "
+            f"{solution.exposure_ms:.2f} ms span, and "
             f"restamp's t_center_ms takes {solution.exposure_ms:.2f} ms throughout (its sigma ± "
             f"{changes_ms[name]:.2f} ms); set the camera's shutter to one exposure to record with it"
         )
