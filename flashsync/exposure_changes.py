@@ -297,7 +297,7 @@ def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.nda
     """Boolean mask of ``frames`` (decoded frames, shape (n,)): within the frames of the span
     of the detection's most bands (:func:`length_spans`) where that span is of one length
     (:data:`SPAN_INLIERS` of its bands within :data:`MIN_STEP_SHARE` of its median, or as
-    long as a pulse that outlasts the exposure, :func:`_pulse_outlasts`: LED strobes at two
+    long as a pulse that outlasts the exposure, :func:`pulse_excess_rows`: LED strobes at two
     powers, 2-3 ms over a 1 ms exposure, gave a steady camera a quarter of such bands, and
     its one split band of 2.3 ms was taken for a change)."""
     measured, lengths, event = _measured(detection, pulses=False)
@@ -307,20 +307,21 @@ def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.nda
     a, b = max(spans, key=lambda span: span[1] - span[0])
     median = np.median(lengths[a:b])
     inlier = np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median
-    if np.mean(inlier | _pulse_outlasts(detection, event[a:b])) < SPAN_INLIERS:
+    if np.mean(inlier | (pulse_excess_rows(detection, event[a:b]) > 0)) < SPAN_INLIERS:
         return np.zeros(len(frames), dtype=bool)
     return (frames >= measured[a]) & (frames <= measured[b - 1])
 
 
-def _pulse_outlasts(detection: CameraDetection, event: np.ndarray) -> np.ndarray:
-    """Boolean mask of ``event`` (pulse events fitted whole, shape (n,)): the pulse its band
-    was read with at the camera's exposure (:attr:`~flashsync.pipeline.CameraDetection.pulse_rows`)
-    outlasts that exposure as a change outreaches it (:data:`MIN_STEP_SHARE`,
-    :data:`MIN_STEP_ROWS`): the band is as long as its pulse, not a sign of another exposure."""
-    if detection.exposure_rows is None:
-        return np.zeros(len(event), dtype=bool)
+def pulse_excess_rows(detection: CameraDetection, event: np.ndarray) -> np.ndarray:
+    """How far (rows) the pulse each event's band was read with at the camera's exposure
+    (:attr:`~flashsync.detect.CameraDetection.pulse_rows`) outlasts that exposure, where it
+    does as a change outreaches it (:data:`MIN_STEP_SHARE`, :data:`MIN_STEP_ROWS`), else 0;
+    shape of ``event`` (event numbers). Such a band may be as long as its pulse: a rectangle
+    longer than the exposure widens it by that much (a pulse that decays does not)."""
+    if detection.exposure_rows is None or detection.pulse_rows is None:
+        return np.zeros(len(event))
     excess = detection.pulse_rows[event] - detection.exposure_rows
-    return excess > max(MIN_STEP_SHARE * detection.exposure_rows, MIN_STEP_ROWS)
+    return np.where(excess > max(MIN_STEP_SHARE * detection.exposure_rows, MIN_STEP_ROWS), excess, 0.0)
 
 
 def _exposure_or_longest_rows(detection: CameraDetection, bands: Bands) -> float | None:

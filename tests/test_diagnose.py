@@ -6,6 +6,7 @@ xenon and LED pulses in turn, tone curves, black levels, x264 at crf 23)."""
 
 import json
 from dataclasses import fields, replace
+from itertools import takewhile
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -18,7 +19,7 @@ from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.adopt import _moved_back, written_model
 from flashsync.diagnose.agreement import agreement, model_gaps
 from flashsync.diagnose.candidate import Term, _pseudo_rows, fit_candidate
-from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED, ROW_TIME
+from flashsync.diagnose.effects import DRIFT_RATE, FLIPPED, PULSE_SHAPE, ROW_TIME
 from flashsync.diagnose.measure import Edges, Measurement, measure
 from flashsync.diagnose.verdict import noise_test
 from flashsync.diagnose.workflow import SYNC_SHAPE, Diagnosis, _candidates, _diagnosis, in_sync_shape, residual_test
@@ -30,7 +31,7 @@ from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import CameraClock, SyncModel
 from flashsync.pipeline import detect_videos, row_time_prior_ms, synchronize
 from flashsync.simulation import CameraSpec, FlashSpec, GroundTruth, Scenario, render_scenario
-from flashsync.simulation.rigs import NTSC_30, NTSC_60, random_rig, recipe, second_world
+from flashsync.simulation.rigs import NTSC_30, NTSC_60, random_rig, recipe, second_world, with_flash_powers
 from flashsync.solve import SHARED_READOUT_CORRELATION
 
 DURATION_MS = 6000.0
@@ -193,6 +194,48 @@ def test_hidden_saturation_is_named_first_and_the_gap_closes(rendered):
     assert 0.2 < d.model[1]["saturation_share"] < 0.6, d.model[1]
     assert d.written == f"sync's solve on the readouts found, band edges moved back by the saturation on {step.camera}"
     assert pooled_error_ms(d.sync_model, truth) <= 1.05 * pooled_error_ms(synchronize(cameras)[0], truth)
+
+
+@pytest.fixture(scope="module", params=[FIRST, SECOND])
+def strobed(request, tmp_path_factory) -> tuple[list, GroundTruth, str]:
+    """Two cameras at 1 ms exposures (25 and 30 fps, 320x180) under strobes fired at two
+    powers (:func:`~flashsync.simulation.rigs.with_flash_powers`, seed 1: 30 % of them
+    2-3 ms long, the rest 0.05-0.3), rendered and detected once per world: LED rectangles on
+    linear sensors in the first; in the second, xenon and LED pulses in turn (:func:`dress`).
+    Their detections, the truth and the world."""
+    cameras = (
+        CameraSpec("cam0", 320, 180, 25.0, exposure_ms=1.0),
+        CameraSpec("cam1", 320, 180, 30.0, exposure_ms=1.0, start_ms=3000.0, offset_ms=-2830.0),
+    )
+    rectangles = tuple(replace(flash, decay_ms=0.0) for flash in flashes(1))
+    scenario = Scenario("strobed", cameras, duration_ms=DURATION_MS, flashes=rectangles, n_players=0, seed=1)
+    scenario = with_flash_powers(dress(scenario, request.param), seed=1)
+    folder = tmp_path_factory.mktemp("strobed")
+    truth = render_scenario(scenario, folder)
+    return detect_videos([folder / f"{spec.name}.{spec.container}" for spec in cameras]), truth, request.param
+
+
+def test_strobes_that_outlast_the_exposure_are_named_first_as_the_pulse_shape_and_the_gap_closes(strobed):
+    """A rectangle longer than the exposure widens its band to its own length, the leading
+    edge early and the trailing one late by half the excess each (0.6-0.9 ms here): the
+    plain model's gap is 0.21-0.35 ms. The flash pulse shape is named first, on one camera
+    or on each in turn, with shares near a half, and closes the gap to the noise (first
+    world 0.347 -> 0.044 ms, second 0.215 -> 0.045); ``diagnose -o`` writes ``sync``'s solve
+    with the widened bands' edges moved back, as near the truth as ``sync``'s. Until
+    2026-12-03 nothing was named: the widened bands counted as the edge noise (a camera's
+    0.25-0.47 ms) and the verdict called the gap noise."""
+    cameras, truth, world = strobed
+    d = diagnose(cameras)
+    shape = list(takewhile(lambda step: step.effect == PULSE_SHAPE, d.steps))
+    assert shape, format_diagnosis(d)
+    first = d.model[[c.camera for c in cameras].index(shape[0].camera)]
+    assert 0.35 < first["pulse_trailing"] < 0.65 and 0.35 < first["pulse_leading"] < 0.65, first
+    before, after, floor = shape[0].rms_before_ms, shape[-1].rms_after_ms, FLOOR * d.expected_ms
+    assert before > floor, "the hidden effect must show above the noise"
+    assert after <= max(before / 5.0, floor), format_diagnosis(d)
+    assert_settled(d, cameras, truth, world)
+    assert "flash pulse shape" in d.written
+    assert pooled_error_ms(d.sync_model, truth) <= 1.1 * pooled_error_ms(synchronize(cameras)[0], truth) + 0.005
 
 
 @pytest.mark.parametrize("name", ["cam0", f"{CAMERA['flipped']}+declared"])

@@ -84,7 +84,12 @@ ordinary band's (:attr:`~flashsync.diagnose.measure.Edges.excess_ms`), so ``puls
 of it on the trailing and on the leading edge per camera. Every late trailing edge seen
 there belongs to a band split across two frames (its trailing edge in the next frame's
 top 35 rows); where such a band is no longer than the camera's other split bands, the
-excess does not show its delay and the effect cannot take it up.
+excess does not show its delay and the effect cannot take it up. A rectangular pulse that
+outlasts the exposure (an LED strobe at full power over a short exposure) widens its band
+to its own length, its leading edge early and its trailing edge late by half the excess
+each; the detector read its pulse so, which is evidence too where the band is as long
+(:data:`~flashsync.diagnose.measure.PULSE_LENGTH_SHARE`; ``tests/test_diagnose.py``'s
+strobed pair names the effect first, with shares of 0.47-0.52, in either world).
 """
 
 from __future__ import annotations

@@ -42,6 +42,7 @@ import numpy as np
 from flashsync.detect import CameraDetection
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Bands, Events, Flag
+from flashsync.exposure_changes import pulse_excess_rows
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.match import (
@@ -74,6 +75,13 @@ OUTLIER_BAND_SIGMAS = 20.0
 #: camera's widened bands are 17 and 58 robust sigmas long; on the shipped sample the
 #: longest band is 8 (cam2, 0.12 ms).
 WIDE_BAND_SIGMAS = 10.0
+#: A band is widened, too, where the detector read it with a pulse that outlasts the
+#: exposure (:func:`~flashsync.exposure_changes.pulse_excess_rows`) and it is longer than its
+#: camera's others by at least this share of that: a rectangle longer than the exposure makes
+#: the band as long as itself. Under LED strobes at two powers (2-3 ms over 1 ms exposures,
+#: the second world) such bands were 0.93-1.04 of it longer, 8-14 robust sigmas of lengths
+#: that xenon and LED pulses scatter; a decay read as long, 0.3 or less.
+PULSE_LENGTH_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -99,7 +107,8 @@ class Edges:
     excess_ms : float array
         How much longer the edge's band is than the median of its camera's bands of its kind
         (:func:`_length_excess_ms`), ms, where that is more than :data:`WIDE_BAND_SIGMAS`
-        robust standard deviations of the camera's band lengths (a widened band); else 0.
+        robust standard deviations of the camera's band lengths or as long as its pulse
+        outlasts the exposure (:data:`PULSE_LENGTH_SHARE`): a widened band; else 0.
     clip_ms : float array
         For an edge of a band clipped at white, how much longer its band is than the median
         of its camera's clipped bands of its kind (:func:`_length_excess_ms`), ms: the deeper
@@ -141,10 +150,13 @@ class Measurement:
         (the exposure over the time per row), and so are bands split across two frames
         (shorter by the hidden rows); NaN without three bands of a kind. Bands clipped at
         white are left out (their length varies with the clip: the saturation effect's
-        evidence, not noise). Errors common to both edges of a band do not show in its
-        length, so this is a lower bound (per camera, not quite: :attr:`camera_noise_ms`).
+        evidence, not noise), and so are widened bands (:attr:`Edges.excess_ms`: the pulse
+        shape's; one of 1.33 ms, 19 robust sigmas, made a camera's noise 0.25 ms, four
+        times its other bands', and hid its widened edges in it). Errors common to both
+        edges of a band do not show in its length, so this is a lower bound (per camera, not
+        quite: :attr:`camera_noise_ms`).
     camera_noise_ms : float array of shape (n_cameras,)
-        The same per camera (its own unclipped bands), shrunk towards :attr:`noise_ms` as
+        The same per camera (its own unclipped, unwidened bands), shrunk towards :attr:`noise_ms` as
         ``sync``'s solve shrinks its groups' scales (the pooled noise counts as
         :data:`~flashsync.solve.POOLED_EQUATIONS` of the camera's band lengths: three bands
         as long as each other to 0.025 rows made the shipped sample's cam3 claim a noise of
@@ -260,21 +272,16 @@ def measure(
     cameras = tuple(kept)
     pulses = [pulses[d.camera] for d in kept]
     excess = [_length_excess_ms(camera, mine) for camera, mine in zip(cameras, pulses)]
-    deviations = [e[np.isfinite(e)] for e in excess]
-    edges = _edges(
-        pulses,
-        matching.flashes,
-        cameras,
-        [_widening_ms(e, d) for e, d in zip(excess, deviations)],
-        [np.where(np.isfinite(e), e, 0.0) for e in excess],
-    )
+    widening = [_widening_ms(camera, mine, e) for camera, mine, e in zip(cameras, pulses, excess)]
+    edges = _edges(pulses, matching.flashes, cameras, widening, [np.where(np.isfinite(e), e, 0.0) for e in excess])
     if len(edges) == 0:
         raise NotEnoughDataError(
             "no flash band with both edges inside the image is seen by two cameras; "
             "record more flashes, away from the top and bottom of the image"
         )
     unclipped = [
-        e[np.isfinite(e) & ~mine.events.has_flag(Flag.SATURATED)[mine.bands.leading]] for e, mine in zip(excess, pulses)
+        e[np.isfinite(e) & ~mine.events.has_flag(Flag.SATURATED)[mine.bands.leading] & (wide == 0)]
+        for e, mine, wide in zip(excess, pulses, widening)
     ]
     pooled = _edge_noise_ms(np.concatenate(unclipped))
     own = np.array([_edge_noise_ms(d) for d in unclipped])
@@ -480,12 +487,19 @@ def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
     return excess
 
 
-def _widening_ms(excess_ms: np.ndarray, deviations: np.ndarray) -> np.ndarray:
-    """Each band's excess length where it is more than :data:`WIDE_BAND_SIGMAS` robust
-    standard deviations of the camera's band lengths ``deviations``, else 0, ms, shape of
-    ``excess_ms``; all 0 where those do not scatter."""
+def _widening_ms(camera: CameraDetection, mine: _Pulses, excess_ms: np.ndarray) -> np.ndarray:
+    """Each band's excess length ``excess_ms`` (:func:`_length_excess_ms`) where it is more
+    than :data:`WIDE_BAND_SIGMAS` robust standard deviations of the camera's (all 0 where
+    they do not scatter), or at least :data:`PULSE_LENGTH_SHARE` of how far its pulse
+    outlasts the exposure, else 0, ms, shape (n_bands,)."""
+    deviations = excess_ms[np.isfinite(excess_ms)]
     spread = mad_sigma(deviations) if deviations.size else 0.0
-    return np.where((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread), excess_ms, 0.0)
+    event = mine.events.event[np.maximum(mine.bands.leading, 0)]
+    outlasting_ms = pulse_excess_rows(camera, event) * median_step_ms(camera.frame_times_ms) / camera.height
+    wide = ((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread)) | (
+        (outlasting_ms > 0) & (excess_ms >= PULSE_LENGTH_SHARE * outlasting_ms)
+    )
+    return np.where(wide, excess_ms, 0.0)
 
 
 def _edge_noise_ms(deviations: np.ndarray) -> float:

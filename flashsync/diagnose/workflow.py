@@ -641,6 +641,8 @@ def _camera_models(fit: Candidate) -> list[dict]:
             "exposure_ms": e.exposure_ms,
             "saturation_ms": e.saturation_ms,
             "saturation_share": e.saturation_share,
+            "pulse_trailing": e.pulse_trailing,
+            "pulse_leading": e.pulse_leading,
             "effects": e.effects,
         }
         for e in fit.estimates()
