@@ -351,14 +351,20 @@ def test_diagnose_measures_a_camera_read_the_other_way_round_as_sync_reads_it(re
     2 rows of an event of ``sync``'s flashes, so ``diagnose`` found no band seen by two
     cameras and stopped with an error where ``sync`` had solved. Measured as ``sync`` reads
     it, the workflow pairs the 19 flashes both saw, says why cam1 is measured so, and
-    ``-o`` writes ``sync``'s model."""
+    ``-o`` writes ``sync``'s model: since 2026-12-03 with cam0's bands that the strobes
+    widened moved back by the pulse shape the workflow names there (0.0135 ms RMS off the
+    truth, ``sync`` 0.0138)."""
     (detections, report, _, truth), _ = read_otherwise
     d = diagnose(detections)
     assert d.n_flashes >= 10, format_diagnosis(d)
     assert any("measured with its exposure" in warning and "cam1" in warning for warning in d.warnings), d.warnings
     sync_ms = d.sync_model.cameras["cam1"].exposure_ms
     assert sync_ms == pytest.approx(truth.cameras["cam1"].exposure_ms, abs=0.1)
-    assert d.written.endswith("(the same as sync's own)"), d.written
+    assert d.written.startswith("sync's solve on the readouts found"), d.written
+    written, synced = (
+        sync_errors(model, truth)["rms_ms"].max() for model in (d.sync_model, synchronize(detections)[0])
+    )
+    assert written <= 1.05 * synced + 0.002, (written, synced)
 
 
 @pytest.mark.parametrize(
