@@ -79,8 +79,8 @@ WIDE_BAND_SIGMAS = 10.0
 #: exposure (:func:`~flashsync.exposure_changes.pulse_excess_rows`) and it is longer than its
 #: camera's others by at least this share of that: a rectangle longer than the exposure makes
 #: the band as long as itself. Under LED strobes at two powers (2-3 ms over 1 ms exposures,
-#: the second world) such bands were 0.93-1.04 of it longer, 8-14 robust sigmas of lengths
-#: that xenon and LED pulses scatter; a decay read as long, 0.3 or less.
+#: in either world) such bands were 0.93-1.04 of it longer, 5-14 robust sigmas of lengths
+#: that the short pulses scatter; a decay read as long, 0.3 or less.
 PULSE_LENGTH_SHARE = 0.5
 
 
@@ -494,7 +494,7 @@ def _widening_ms(camera: CameraDetection, mine: _Pulses, excess_ms: np.ndarray) 
     outlasts the exposure, else 0, ms, shape (n_bands,)."""
     deviations = excess_ms[np.isfinite(excess_ms)]
     spread = mad_sigma(deviations) if deviations.size else 0.0
-    event = mine.events.event[np.maximum(mine.bands.leading, 0)]
+    event = mine.events.event[mine.bands.first_edges()]
     outlasting_ms = pulse_excess_rows(camera, event) * median_step_ms(camera.frame_times_ms) / camera.height
     wide = ((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread)) | (
         (outlasting_ms > 0) & (excess_ms >= PULSE_LENGTH_SHARE * outlasting_ms)
