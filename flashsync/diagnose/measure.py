@@ -482,9 +482,14 @@ def _length_excess_ms(camera: CameraDetection, mine: _Pulses) -> np.ndarray:
         kind = (frames == span) & (clipped == saturated) & ~fixed
         if np.count_nonzero(kind) >= 3:
             rows = lengths[kind]
-            scale = median_step_ms(camera.frame_times_ms) / camera.height * np.sqrt(len(rows) / (len(rows) - 1))
+            scale = _plain_row_time_ms(camera) * np.sqrt(len(rows) / (len(rows) - 1))
             excess[clean[kind]] = (rows - np.median(rows)) * scale
     return excess
+
+
+def _plain_row_time_ms(camera: CameraDetection) -> float:
+    """The plain model's time per row: the camera's median frame step / its height, ms."""
+    return median_step_ms(camera.frame_times_ms) / camera.height
 
 
 def _widening_ms(camera: CameraDetection, mine: _Pulses, excess_ms: np.ndarray) -> np.ndarray:
@@ -495,7 +500,7 @@ def _widening_ms(camera: CameraDetection, mine: _Pulses, excess_ms: np.ndarray) 
     deviations = excess_ms[np.isfinite(excess_ms)]
     spread = mad_sigma(deviations) if deviations.size else 0.0
     event = mine.events.event[mine.bands.first_edges()]
-    outlasting_ms = pulse_excess_rows(camera, event) * median_step_ms(camera.frame_times_ms) / camera.height
+    outlasting_ms = pulse_excess_rows(camera, event) * _plain_row_time_ms(camera)
     wide = ((spread > 0) & (excess_ms > WIDE_BAND_SIGMAS * spread)) | (
         (outlasting_ms > 0) & (excess_ms >= PULSE_LENGTH_SHARE * outlasting_ms)
     )
