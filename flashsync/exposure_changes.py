@@ -73,12 +73,18 @@ class ExposureSpan:
         Its bands' median length, rows: the exposure in readout rows.
     n_bands : int
         Its bands.
+    one_length : bool
+        :data:`SPAN_INLIERS` of its bands within :data:`MIN_STEP_SHARE` of its median, or, of
+        :func:`exposure_spans`, as long as a pulse that outlasts the exposure
+        (:func:`pulse_excess_rows`): lengths that scatter more are of no one exposure (the
+        span of a camera whose lengths do not step apart).
     """
 
     first_frame: int
     last_frame: int
     length_rows: float
     n_bands: int
+    one_length: bool
 
 
 def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
@@ -88,7 +94,8 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     bands 4-13 rows long) but those fitted at the exposure it read its bands to share (pulses
     longer than it: their length is that exposure, not measured), split where their
     lengths step (:func:`length_spans`)."""
-    return _spans(*_measured(detection, pulses=False)[:2])
+    frames, lengths, events = _measured(detection, pulses=False)
+    return _spans(frames, lengths, pulse_excess_rows(detection, events) > 0)
 
 
 def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
@@ -98,7 +105,8 @@ def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
     shorter, each is an exposure read the other way round, and the camera's exposure
     changes (random rig 542's cam8, 9.8 ms and then 3.9 under LED pulses of 0.2-1.9 ms,
     read as 0.35 ms under pulses of 45.7, 45.4, 18.3, 18.3 and 18.3 rows)."""
-    return _spans(*_measured(detection, pulses=True)[:2])
+    frames, pulses, _ = _measured(detection, pulses=True)
+    return _spans(frames, pulses, np.zeros(len(frames), dtype=bool))
 
 
 def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
@@ -108,7 +116,7 @@ def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
     bands' its exposure, and the trailing edges outside that span left out (as
     :func:`with_one_exposure`)."""
     frames, pulses, events = _measured(detection, pulses=True)
-    spans = _spans(frames, pulses)
+    spans = _spans(frames, pulses, np.zeros(len(frames), dtype=bool))
     rows = np.zeros(len(detection.pulse_rows))
     rows[events] = pulses - detection.exposure_rows
     main = max(spans, key=lambda span: span.n_bands)
@@ -144,12 +152,17 @@ def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.
     return events.frame[lead][usable][order], measured[usable][order], events.event[lead][usable][order]
 
 
-def _spans(frames: np.ndarray, lengths: np.ndarray) -> list[ExposureSpan]:
-    """The :class:`ExposureSpan` of each of :func:`length_spans`."""
-    return [
-        ExposureSpan(int(frames[a]), int(frames[b - 1]), float(np.median(lengths[a:b])), b - a)
-        for a, b in length_spans(frames, lengths)
-    ]
+def _spans(frames: np.ndarray, lengths: np.ndarray, excused: np.ndarray) -> list[ExposureSpan]:
+    """The :class:`ExposureSpan` of each of :func:`length_spans`; ``excused`` (shape of
+    ``lengths``) the bands that count as of its one length whatever theirs."""
+    spans = []
+    for a, b in length_spans(frames, lengths):
+        median = float(np.median(lengths[a:b]))
+        inlier = (np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median) | excused[a:b]
+        spans.append(
+            ExposureSpan(int(frames[a]), int(frames[b - 1]), median, b - a, bool(np.mean(inlier) >= SPAN_INLIERS))
+        )
+    return spans
 
 
 def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int]]:
@@ -295,21 +308,14 @@ def outreaching_splits(detection: CameraDetection) -> Bands:
 
 def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.ndarray:
     """Boolean mask of ``frames`` (decoded frames, shape (n,)): within the frames of the span
-    of the detection's most bands (:func:`length_spans`) where that span is of one length
-    (:data:`SPAN_INLIERS` of its bands within :data:`MIN_STEP_SHARE` of its median, or as
-    long as a pulse that outlasts the exposure, :func:`pulse_excess_rows`: LED strobes at two
-    powers, 2-3 ms over a 1 ms exposure, gave a steady camera a quarter of such bands, and
-    its one split band of 2.3 ms was taken for a change)."""
-    measured, lengths, event = _measured(detection, pulses=False)
-    spans = length_spans(measured, lengths)
-    if not spans:
+    of the detection's most bands (:func:`exposure_spans`) where that span is of one length
+    (:attr:`ExposureSpan.one_length`; its bands as long as a pulse that outlasts the exposure
+    count: LED strobes at two powers, 2-3 ms over a 1 ms exposure, gave a steady camera a
+    quarter of such bands, and its one split band of 2.3 ms was taken for a change)."""
+    main = max(exposure_spans(detection), key=lambda span: span.n_bands, default=None)
+    if main is None or not main.one_length:
         return np.zeros(len(frames), dtype=bool)
-    a, b = max(spans, key=lambda span: span[1] - span[0])
-    median = np.median(lengths[a:b])
-    inlier = np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median
-    if np.mean(inlier | (pulse_excess_rows(detection, event[a:b]) > 0)) < SPAN_INLIERS:
-        return np.zeros(len(frames), dtype=bool)
-    return (frames >= measured[a]) & (frames <= measured[b - 1])
+    return (frames >= main.first_frame) & (frames <= main.last_frame)
 
 
 def pulse_excess_rows(detection: CameraDetection, event: np.ndarray) -> np.ndarray:
