@@ -20,6 +20,32 @@ import pandas as pd
 from flashsync.errors import InputError
 
 
+@dataclass(frozen=True)
+class HeldExposure:
+    """An exposure a camera held while it recorded, as its flash bands tell (auto exposure).
+
+    Attributes
+    ----------
+    first_frame, last_frame : int
+        Decoded frames of the first and last band that show it.
+    exposure_ms, exposure_std_ms : float
+        The exposure and its standard deviation, ms.
+    n_bands : int
+        Bands that show it.
+    holds_frames : bool
+        Its bands are two or more and of one length: the frames from its first to its last
+        held it. Otherwise it only tells what the frames near it may hold (one band is a
+        change, or a band the others' lengths do not fit; see :meth:`CameraClock.exposure_at`).
+    """
+
+    first_frame: int
+    last_frame: int
+    exposure_ms: float
+    exposure_std_ms: float
+    n_bands: int
+    holds_frames: bool
+
+
 @dataclass
 class CameraClock:
     """One camera's frame timestamps and its map onto the reference clock.
@@ -60,6 +86,10 @@ class CameraClock:
     display_rotation_deg : int
         Degrees counterclockwise a player turns the stored frames for showing (-90, 0, 90 or
         180: the display matrix of a phone held upright); rows are always the stored frame's.
+    exposure_spans : tuple of HeldExposure
+        Where the exposure changes while the camera records, the exposures its bands show, in
+        frame order (:attr:`exposure_ms` is the one the solve took); empty for one exposure
+        throughout. :meth:`exposure_at` gives each frame's.
     """
 
     name: str
@@ -78,6 +108,7 @@ class CameraClock:
     frame_std_ms: np.ndarray | None = None
     display_rotation_deg: int = 0
     exposure_std_ms: float | None = None
+    exposure_spans: tuple[HeldExposure, ...] = ()
 
     def __post_init__(self):
         if self.frame_std_ms is None:
@@ -105,6 +136,45 @@ class CameraClock:
         x, y = np.asarray(x_shown, dtype=np.float64), np.asarray(y_shown, dtype=np.float64)
         last = self.height - 1.0
         return {0: y, 90: x, 180: last - y, -90: last - x}[self.display_rotation_deg]
+
+    def exposure_at(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The exposure of each decoded ``frame`` and its standard deviation, ms (shape of
+        ``frame``; NaN where the model states none).
+
+        Without :attr:`exposure_spans`, :attr:`exposure_ms` throughout. With them, a frame
+        within a span that :attr:`~HeldExposure.holds_frames` takes its exposure; any other
+        takes the middle of the exposures that may hold it (a span that reaches over it, the
+        nearest span on each side and the nearest of two bands or more on each side), its
+        standard deviation covering them all (half their range, and the largest of theirs):
+        a change came somewhere between two bands, and one band may be a change or not.
+        Before the first band and after the last, the nearest span's, its standard deviation
+        covering half the range of all of them: a camera on auto exposure may change again
+        where no band shows it."""
+        frame = np.asarray(frame, dtype=np.int64)
+        if not self.exposure_spans:
+            ms = np.nan if self.exposure_ms is None else self.exposure_ms
+            std = np.nan if self.exposure_std_ms is None else self.exposure_std_ms
+            return np.full(frame.shape, ms, dtype=np.float64), np.full(frame.shape, std, dtype=np.float64)
+        first, last, ms, std, bands, holds = (
+            np.array([getattr(span, key) for span in self.exposure_spans])
+            for key in ("first_frame", "last_frame", "exposure_ms", "exposure_std_ms", "n_bands", "holds_frames")
+        )
+        f = frame.reshape(-1, 1)
+        over = (first <= f) & (f <= last)
+        candidates = over.copy()
+        order = np.arange(len(first))
+        for rank, reached in ((order, last < f), (-order, first > f)):
+            for among in (reached, reached & (bands >= 2)):
+                nearest = np.where(among, rank, -len(order)).argmax(axis=1)
+                candidates[np.arange(len(f)), nearest] |= among.any(axis=1)
+        inside = over & holds
+        candidates = np.where(inside.any(axis=1, keepdims=True), inside, candidates)
+        low = np.where(candidates, ms, np.inf).min(axis=1)
+        high = np.where(candidates, ms, -np.inf).max(axis=1)
+        spread = np.where(candidates, std, 0.0).max(axis=1)
+        beyond = (frame.ravel() < first[0]) | (frame.ravel() > last[-1])
+        half_range = np.where(beyond, 0.5 * (ms.max() - ms.min()), 0.5 * (high - low))
+        return (0.5 * (low + high)).reshape(frame.shape), np.hypot(half_range, spread).reshape(frame.shape)
 
     def t_global_ms(self, frame: np.ndarray, row: np.ndarray) -> np.ndarray:
         """Global time (ms) of the end of exposure of ``row`` in ``frame``.

@@ -191,6 +191,22 @@ def _duplicate(document):
     document["cameras"].append(document["cameras"][1])
 
 
+def _exposure_spans(first_frames):
+    """Camera f's exposure in spans of one frame each, beginning at ``first_frames``."""
+    spans = [
+        {
+            "first_frame": frame,
+            "last_frame": frame,
+            "exposure_ms": 2.0,
+            "exposure_std_ms": 0.1,
+            "n_bands": 1,
+            "holds_frames": False,
+        }
+        for frame in first_frames
+    ]
+    return _set("exposure_spans", spans)
+
+
 def _knots(document):
     _camera(document)["drift_knots_ms"] = [0.0, 100.0, 200.0]
 
@@ -367,6 +383,18 @@ CASES = [
         _restamp_with_model(_set("display_rotation_deg", 45)),
         1,
         ['"display_rotation_deg"', "is 45", "-90, 0, 90, 180"],
+    ),
+    (
+        "model exposure spans out of order",
+        _restamp_with_model(_exposure_spans([3, 1])),
+        1,
+        ["exposure_spans[1]", '"first_frame" is 1, not after the span before (to frame 3)'],
+    ),
+    (
+        "model exposure span past the frames",
+        _restamp_with_model(_exposure_spans([10**6])),
+        1,
+        ["exposure_spans[0]", '"last_frame" is 1000000, past the camera', "frames"],
     ),
     (
         "restamp --as-shown without x",

@@ -1,10 +1,12 @@
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from flashsync.errors import FlashsyncError
 from flashsync.io import load_model, save_model
-from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, HeldExposure, SyncModel
 
 
 def camera(flipped=False):
@@ -63,10 +65,33 @@ def test_uncertainty_grows_with_distance_from_known_rows():
     assert std.shape == (2,) and np.all(std > 0)
 
 
+#: cam2's exposure as its bands show it: 12 ms over frames 0-1 (two bands), one band of 9 ms
+#: in frame 2 (a change, or a band that does not fit), 8 ms in frame 3 (two bands).
+SPANS = (
+    HeldExposure(0, 1, 12.0, 0.1, 2, True),
+    HeldExposure(2, 2, 9.0, 0.3, 1, False),
+    HeldExposure(3, 3, 8.0, 0.05, 2, True),
+)
+
+
+def test_exposure_at_each_frame_is_its_span_s_between_spans_the_middle_and_beyond_them_wider():
+    """Frames within a span of two bands or more take its exposure; the lone band's frame
+    takes the middle of the exposures it and its neighbours show, its sigma half their range;
+    the frame after the last band the last span's, its sigma half the range of them all."""
+    clock = replace(camera(), exposure_ms=8.0, exposure_spans=SPANS)
+    exposure, std = clock.exposure_at(np.arange(5))
+    np.testing.assert_allclose(exposure, [12.0, 12.0, 10.0, 8.0, 8.0])
+    np.testing.assert_allclose(std, [0.1, 0.1, np.hypot(2.0, 0.3), 0.05, np.hypot(2.0, 0.05)])
+    np.testing.assert_allclose(camera().exposure_at(np.arange(5)), [[10.0] * 5, [0.05] * 5])  # no spans
+
+
 def test_model_file_round_trip(tmp_path):
     model = SyncModel(
         "cam1",
-        {"cam1": CameraClock("cam1", np.arange(5) * 33.4, 120, 160, row_time_ms=0.25), "cam2": camera(True)},
+        {
+            "cam1": CameraClock("cam1", np.arange(5) * 33.4, 120, 160, row_time_ms=0.25),
+            "cam2": replace(camera(True), exposure_spans=SPANS),
+        },
         pd.DataFrame(
             {
                 "flash": [0, 0],
@@ -88,6 +113,7 @@ def test_model_file_round_trip(tmp_path):
     for field in ("alpha", "beta_ms", "row_time_ms", "flipped", "height", "width", "exposure_ms", "video"):
         assert getattr(again, field) == getattr(original, field)
     assert again.exposure_std_ms == 0.05 and loaded.camera("cam1").exposure_std_ms is None
+    assert again.exposure_spans == SPANS and loaded.camera("cam1").exposure_spans == ()
     np.testing.assert_array_equal(again.frame_times_ms, original.frame_times_ms)
     np.testing.assert_array_equal(again.covariance, original.covariance)
     pd.testing.assert_frame_equal(loaded.events, model.events)

@@ -86,10 +86,11 @@ _BATCH_ROWS = 1 << 20
 
 
 class Exposure(NamedTuple):
-    """A camera's exposure and its standard deviation, ms (NaN: not stated)."""
+    """A camera's exposure in each of its decoded frames and its standard deviation, ms,
+    shape (n_frames,) each (NaN: not stated)."""
 
-    ms: float
-    std_ms: float
+    ms: np.ndarray
+    std_ms: np.ndarray
 
 
 def _coordinate_columns(as_shown: bool) -> tuple[str, ...]:
@@ -545,9 +546,11 @@ def _stamp(
                 columns["t_global_std_ms"][rows] = clock.t_global_std_ms(frames, stored)
         exposure = exposures[clock.name]
         if "t_center_ms" in columns and exposure is not None:
-            columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposure.ms / 2
+            columns["t_center_ms"][rows] = columns["t_global_ms"][rows] - exposure.ms[frames] / 2
             if "t_center_std_ms" in columns:
-                columns["t_center_std_ms"][rows] = np.hypot(columns["t_global_std_ms"][rows], exposure.std_ms / 2)
+                columns["t_center_std_ms"][rows] = np.hypot(
+                    columns["t_global_std_ms"][rows], exposure.std_ms[frames] / 2
+                )
     computed = [columns[name] for name in ("t_global_ms", "t_global_std_ms") if name in columns]
     infinite = ~np.all([np.isfinite(values) for values in computed], axis=0)
     reasons[infinite & (reasons == 0)] = len(REASONS)
@@ -637,7 +640,9 @@ def _count(reasons: np.ndarray, cameras: pa.Array, summary: RestampSummary) -> N
 
 
 def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dict[str, Exposure | None]:
-    """Each model camera's exposure (None if unknown); the caller's values first, taken as exact."""
+    """Each model camera's exposure frame by frame (None if unknown): the caller's, taken as
+    exact throughout, else the model's (:meth:`~flashsync.model.CameraClock.exposure_at`: where
+    it changes while the camera records, each frame's)."""
     given = dict(exposure_ms or {})
     unknown = [name for name in given if name not in model.cameras]
     if unknown:
@@ -656,11 +661,12 @@ def _exposures(model: SyncModel, exposure_ms: Mapping[str, float] | None) -> dic
                 "each frame within its period - give the exposure in ms",
                 parameter="exposure_ms",
             )
-    exposures = {name: Exposure(value, 0.0) for name, value in given.items()}
+    exposures = {}
     for name, clock in model.cameras.items():
-        if name not in exposures and clock.exposure_ms is not None:
-            std = clock.exposure_std_ms
-            exposures[name] = Exposure(clock.exposure_ms, std if std is not None else float("nan"))
+        if name in given:
+            exposures[name] = Exposure(np.full(clock.n_frames, float(given[name])), np.zeros(clock.n_frames))
+        elif clock.exposure_ms is not None:
+            exposures[name] = Exposure(*clock.exposure_at(np.arange(clock.n_frames)))
     return {name: exposures.get(name) for name in model.cameras}
 
 

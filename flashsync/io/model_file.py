@@ -11,7 +11,7 @@ import pandas as pd
 from flashsync.atomic import write_text
 from flashsync.errors import ModelFileError
 from flashsync.io.fields import Fields, describe, is_number
-from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, HeldExposure, SyncModel
 
 FORMAT = "flashsync.sync"
 VERSION = 1
@@ -47,7 +47,9 @@ def load_model(path: str | Path) -> SyncModel:
     Checked: types (``"flipped": "false"`` is text, not false), finite numbers, the
     covariance's shape (3 + k, 3 + k) and the drift knots' and warp's lengths (k + 2, k),
     increasing frame times and knots, unique camera names, a reference camera that is
-    there with ``alpha`` 1 and ``beta_ms`` 0, and matched events of known cameras and frames.
+    there with ``alpha`` 1 and ``beta_ms`` 0, matched events of known cameras and frames, and
+    exposure spans (optional; none where absent, as in files before them) in frame order within
+    the frames, apart, each of one band or more.
     """
     path = Path(path)
     if path.is_dir():
@@ -117,6 +119,17 @@ def _camera_to_dict(camera: CameraClock) -> dict:
         "frame_times_ms": camera.frame_times_ms.tolist(),
         "frame_std_ms": float(std[0]) if std.size and np.all(std == std[0]) else std.tolist(),
         "display_rotation_deg": camera.display_rotation_deg,
+        "exposure_spans": [
+            {
+                "first_frame": span.first_frame,
+                "last_frame": span.last_frame,
+                "exposure_ms": span.exposure_ms,
+                "exposure_std_ms": span.exposure_std_ms,
+                "n_bands": span.n_bands,
+                "holds_frames": span.holds_frames,
+            }
+            for span in camera.exposure_spans
+        ],
     }
 
 
@@ -157,7 +170,34 @@ def _camera_from_fields(entry: Fields) -> CameraClock:
         frame_times_ms=frame_times,
         frame_std_ms=frame_std,
         display_rotation_deg=rotation,
+        exposure_spans=_exposure_spans(entry, len(frame_times)) if entry.has("exposure_spans") else (),
     )
+
+
+def _exposure_spans(entry: Fields, n_frames: int) -> tuple[HeldExposure, ...]:
+    """A camera's exposure spans, checked: frames within its ``n_frames``, in order and apart."""
+    spans, after = [], -1
+    for span in entry.objects("exposure_spans", f"{entry.where}, exposure_spans[{{}}]"):
+        first = span.integer("first_frame", minimum=0)
+        if first <= after:
+            span.fail(
+                "first_frame", f"is {first}, not after the span before (to frame {after}): spans are in frame order"
+            )
+        last = span.integer("last_frame", minimum=first)
+        if last >= n_frames:
+            span.fail("last_frame", f"is {last}, past the camera's {n_frames} frames")
+        spans.append(
+            HeldExposure(
+                first,
+                last,
+                span.number("exposure_ms", minimum=0.0),
+                span.number("exposure_std_ms", minimum=0.0),
+                span.integer("n_bands", minimum=1),
+                span.boolean("holds_frames"),
+            )
+        )
+        after = last
+    return tuple(spans)
 
 
 def _events_from_fields(top: Fields, clocks: dict[str, CameraClock]) -> pd.DataFrame:
