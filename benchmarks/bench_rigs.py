@@ -412,6 +412,11 @@ def camera_block(cameras: pd.DataFrame) -> list[str]:
         ("exposure > 6 ms, err ms", cameras[cameras["exposure_ms"] > 6.0]),
     ):
         lines.append(f"  {label:<25}{distribution(part['exposure_error_ms'], 'ms')}")
+    if "exposure_frames_rms_ms" in cameras:  # not in the --json files of runs before 2026-12-03
+        lines += [
+            f"  exposure by frame, ms    {distribution(cameras['exposure_frames_rms_ms'], 'ms')}",
+            f"  its error/σ RMS          {distribution(cameras['exposure_frames_z_rms'])}",
+        ]
     for label, part in (
         ("|T_row error| %, equal", cameras[cameras["equal_rate"]]),
         ("|T_row error| %, mixed", cameras[~cameras["equal_rate"]]),

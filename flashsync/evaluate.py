@@ -131,6 +131,14 @@ def true_location(
     return frame, row, recording
 
 
+def _true_exposures_ms(true, frames: np.ndarray) -> np.ndarray:
+    """A camera's true exposure in each of ``frames`` (decoded frames), ms: a simulation's
+    ``exposure_changes`` where it has them."""
+    if not getattr(true, "exposure_changes", None):
+        return np.full(len(frames), float(true.exposure_ms))
+    return true.exposure_of_ms(frames)
+
+
 def _true_exposure_ms(true) -> float:
     """A camera's true exposure, ms: where it changes while the camera records (a
     simulation's ``exposure_changes``), the one it held over the most frames."""
@@ -179,7 +187,10 @@ def camera_accuracy(
     NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
     ``exposure_error_ms`` (model - truth, the exposure held over the most frames where it
     changes; NaN where the model has none) and ``exposure_z``
-    (over its standard deviation; NaN where the model states none);
+    (over its standard deviation; NaN where the model states none); ``exposure_frames_rms_ms``
+    and ``exposure_frames_z_rms`` (RMS over its frames of the model's exposure of each,
+    :meth:`~flashsync.model.CameraClock.exposure_at`, less the truth's, and of that over
+    its standard deviation);
     ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
     error over its predicted standard deviation); ``z_rms`` and
     ``within_2sigma`` (RMS of error / sigma and the fraction of probes within 2 sigma; NaN
@@ -210,6 +221,9 @@ def camera_accuracy(
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
         exposure_std = camera.exposure_std_ms if camera.exposure_std_ms is not None else float("nan")
+        every_frame = np.arange(camera.n_frames)
+        by_frame, by_frame_std = camera.exposure_at(every_frame)
+        by_frame_error = by_frame - _true_exposures_ms(true, every_frame)
         row.update(
             rms_ms=float(np.sqrt(np.mean(error**2))),
             max_ms=float(np.max(np.abs(error))),
@@ -217,6 +231,8 @@ def camera_accuracy(
             sigma_rms_ms=float(np.sqrt(np.mean(std**2))),
             exposure_error_ms=exposure - _true_exposure_ms(true),
             exposure_z=_over(exposure - _true_exposure_ms(true), exposure_std),
+            exposure_frames_rms_ms=float(np.sqrt(np.mean(by_frame_error**2))),
+            exposure_frames_z_rms=_z_stats(by_frame_error, by_frame_std)[0],
             row_time_error_pct=100.0 * (camera.row_time_ms / true.row_time_ms - 1.0),
             row_time_z=_over(camera.row_time_ms - true.row_time_ms, float(np.sqrt(camera.covariance[2, 2]))),
             z_rms=z_rms,

@@ -19,8 +19,9 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from itertools import combinations, compress, product
+from itertools import combinations, compress, pairwise, product
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -35,6 +36,7 @@ from flashsync.detect import (
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
 from flashsync.exposure_changes import (
+    ExposureSpan,
     exposure_spans,
     outreaching_splits,
     pulse_spans,
@@ -67,7 +69,7 @@ from flashsync.match import (
     parse_anchors,
     shared_flashes,
 )
-from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
+from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, HeldExposure, SyncModel, readout_rows
 from flashsync.ramp import MAX_BLUR
 from flashsync.segments import SEGMENT_MS
 from flashsync.solve import DRIFT_PRIOR_STD, Observations, Priors, Solution, solve_with_drift_model
@@ -386,9 +388,7 @@ def _synchronized(
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
     for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
-    change_warnings, changes_ms = _exposure_changes(best, {d.camera: d for d in detections}, stepped)
-    for name, spread in changes_ms.items():
-        exposure_spreads[name] = np.hypot(exposure_spreads.get(name, 0.0), spread)
+    change_warnings, changes_ms, shown = _exposure_changes(best, {d.camera: d for d in detections}, stepped)
     best = best.with_scatter(exposure_spreads)
     report.alignments = best.alignments
     report.warnings = (
@@ -414,6 +414,9 @@ def _synchronized(
     model = best.model(reference)
     for name, clock in model.cameras.items():
         clock.frame_std_ms = frame_std[name]
+        if name in changes_ms:
+            clock.exposure_spans = _held_exposures(clock, shown[name]) if shown.get(name) else ()
+            clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
     return model, report
 
 
@@ -994,29 +997,32 @@ EXPOSURE_DOUBT_MS = 0.1
 
 def _exposure_changes(
     best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str]
-) -> tuple[list[str], dict[str, float]]:
+) -> tuple[list[str], dict[str, float], dict[str, list[_ShownExposure]]]:
     """Per camera whose exposure changes while it records (the spans of its ``detections``
     reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`, or of its
     pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`, and
     its bands split across two frames longer in sight,
     :func:`~flashsync.exposure_changes.outreaching_splits`, timed by its solved clock;
     solved on the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
-    warning naming each span's exposure and frames, and how far the farthest lies from the
-    one solved, ms (into its exposure's sigma: restamp's t_center_ms takes that one
-    throughout)."""
-    warnings, changes_ms = [], {}
+    warning naming each span's exposure and frames; how far the farthest lies from the one
+    solved, ms (into its exposure's sigma); and, where the span solved on is known, what the
+    bands show frame by frame (:func:`_shown_exposures`, for :func:`_held_exposures`)."""
+    warnings, changes_ms, shown = [], {}, {}
     for name, solution in zip(best.connected, best.solution.cameras):
         detection = detections[name].retimed(best.cameras[name].frame_times_ms)
         detection = detection.read_flipped(best.cameras[name].flipped)
-        spans = pulse_spans(detection) if name in stepped else exposure_spans(detection)
+        every_span = pulse_spans(detection) if name in stepped else exposure_spans(detection)
         splits = outreaching_splits(detection)
-        if (len(spans) < 2 and not len(splits)) or not solution.exposure_ms > 0:
+        if (len(every_span) < 2 and not len(splits)) or not solution.exposure_ms > 0:
             continue
-        spans = spans if len(spans) > 1 else []
-        main = max(spans, key=lambda span: span.n_bands, default=None)
+        main = max(every_span, key=lambda span: span.n_bands, default=None)
+        spans = every_span if len(every_span) > 1 else []
         exposures_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in spans]
         split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
         changes_ms[name] = float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms)))
+        if main is not None:
+            split_frames = detection.events.frame[splits.leading]
+            shown[name] = _shown_exposures(every_span, main, solution, split_frames, split_ms)
         parts = [
             f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
             if s.n_bands > 1
@@ -1034,11 +1040,73 @@ def _exposure_changes(
         warnings.append(
             f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show "
             f"{', '.join(parts)}; its times take only the leading edges of the bands outside the "
-            f"{solution.exposure_ms:.2f} ms span, and "
-            f"restamp's t_center_ms takes {solution.exposure_ms:.2f} ms throughout (its sigma ± "
-            f"{changes_ms[name]:.2f} ms); set the camera's shutter to one exposure to record with it"
+            f"{solution.exposure_ms:.2f} ms span, and restamp's t_center_ms "
+            + (
+                "takes each span's exposure (between spans, and beyond a lone band, the middle of the two, its sigma "
+                "half their difference)"
+                if shown.get(name)
+                else f"takes {solution.exposure_ms:.2f} ms throughout (its sigma ± {changes_ms[name]:.2f} ms)"
+            )
+            + "; set the camera's shutter to one exposure to record with it"
         )
-    return warnings, changes_ms
+    return warnings, changes_ms, shown
+
+
+class _ShownExposure(NamedTuple):
+    """An exposure a camera's bands show (:func:`_shown_exposures`): its first and last frame,
+    ms, bands, whether it holds those frames (:attr:`~flashsync.model.HeldExposure.holds_frames`)
+    and whether the solve was on it."""
+
+    first_frame: int
+    last_frame: int
+    exposure_ms: float
+    n_bands: int
+    holds_frames: bool
+    solved: bool
+
+
+def _shown_exposures(
+    spans: list[ExposureSpan], main: ExposureSpan, solution, split_frames: np.ndarray, split_ms: np.ndarray
+) -> list[_ShownExposure]:
+    """What a camera's bands show of its exposure, in frame order: each span (``spans``,
+    :func:`~flashsync.exposure_changes.exposure_spans`; ``main`` the one solved on, of the
+    solved camera ``solution``) and each band split across frames at ``split_frames`` (its
+    exposure ``split_ms``, ms; those within a span of more bands left out: that span holds
+    those frames). None (an empty list) where that leaves one, or where two overlap (a band
+    split into the frame that ends a span): the camera's sigma covers them all then."""
+    shown = [
+        _ShownExposure(
+            s.first_frame,
+            s.last_frame,
+            solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms,
+            s.n_bands,
+            s.n_bands >= 2 and s.one_length,
+            s is main,
+        )
+        for s in spans
+    ]
+    for frame, ms in zip(split_frames.tolist(), split_ms.tolist()):
+        if not any(s.holds_frames and s.first_frame <= frame <= s.last_frame for s in shown):
+            shown.append(_ShownExposure(frame, frame, ms, 1, False, False))
+    shown.sort()
+    overlap = any(after.first_frame <= before.last_frame for before, after in pairwise(shown))
+    return [] if overlap or len(shown) < 2 else shown
+
+
+def _held_exposures(clock: CameraClock, shown: list[_ShownExposure]) -> tuple[HeldExposure, ...]:
+    """The exposures a camera's bands show (``shown``), each with its standard deviation, ms:
+    the solved one's (``clock``'s), for a median of fewer bands than the solved one's as much
+    more (``sqrt(1 + solved bands / bands)``, every band's length as noisy), and the time per
+    row's over the rows it differs by."""
+    row_time_std = float(np.sqrt(clock.covariance[2, 2]))
+    solved_bands = next(s.n_bands for s in shown if s.solved)
+    held = []
+    for s in shown:
+        share = 1.0 if s.solved else np.sqrt(1.0 + solved_bands / s.n_bands)
+        rows = (s.exposure_ms - clock.exposure_ms) / clock.row_time_ms
+        std = float(np.hypot(clock.exposure_std_ms * share, rows * row_time_std))
+        held.append(HeldExposure(s.first_frame, s.last_frame, float(s.exposure_ms), std, s.n_bands, s.holds_frames))
+    return tuple(held)
 
 
 def _exposure_doubts(best: _Attempt, told: set[str]) -> list[str]:

@@ -6,16 +6,19 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 from test_diagnose import DURATION_MS, flashes
 
 from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose
-from flashsync.evaluate import camera_accuracy
+from flashsync.evaluate import camera_accuracy, clock_origin_ms
 from flashsync.events import Band, Edge, Events
 from flashsync.exposure_changes import exposure_spans, with_one_exposure
+from flashsync.io import load_model, save_model
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
+from tracking_adapter.restamp import restamp
 
 
 def bands(lengths_rows, frames=None, fitted=True, exposure_rows=None) -> CameraDetection:
@@ -200,6 +203,32 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     d = diagnose(detections)  # measures cam1 as sync solves it, and writes sync's model
     assert any(w.startswith(f"{tmp_path / 'cam1.mp4'}: its exposure changes while it records") for w in d.warnings)
     assert d.written.endswith("(the same as sync's own)"), d.written
+
+
+def test_restamp_takes_each_span_s_exposure_from_the_model_file(tmp_path):
+    """The pair above (cam1 from 4 ms to 2 ms at frame 90), synchronised, its model saved and
+    read back, a point in every frame of cam1 re-stamped: the model holds both exposures and
+    their frames, and each point's mid-exposure time ``t_center_ms`` is within 0.1 ms of the
+    truth in both spans (one exposure throughout put the 4 ms span's a millisecond off),
+    its sigma covering the frames between them, where the change came."""
+    detections, truth = rendered_rig(tmp_path, ((90, 2.0),))
+    model, _ = synchronize(detections)
+    save_model(model, tmp_path / "sync.json")
+    model = load_model(tmp_path / "sync.json")
+    spans = [span for span in model.cameras["cam1"].exposure_spans if span.holds_frames]
+    assert [span.exposure_ms for span in spans] == pytest.approx([4.0, 2.0], abs=0.1), spans
+    assert spans[0].last_frame < 90 <= spans[1].first_frame, spans
+    frames = np.arange(model.cameras["cam1"].n_frames)
+    points = pd.DataFrame({"camera": "cam1", "frame": frames, "x": 160.0, "y": 90.0})
+    stamped = restamp(points, model, with_std=True)
+    true_end = truth.global_time_ms("cam1", frames, np.full(len(frames), 90.0)) + clock_origin_ms(model, truth)
+    error = stamped["t_center_ms"].to_numpy() - (true_end - truth.cameras["cam1"].exposure_of_ms(frames) / 2)
+    within = np.zeros(len(frames), dtype=bool)
+    for span in spans:
+        within[span.first_frame : span.last_frame + 1] = True
+    assert np.abs(error[within]).max() < 0.1, np.abs(error[within]).max()
+    z = error / stamped["t_center_std_ms"].to_numpy()
+    assert np.sqrt(np.mean(z**2)) < 2.0 and np.abs(z).max() < 3.0, (np.sqrt(np.mean(z**2)), np.abs(z).max())
 
 
 def test_an_auto_exposure_read_as_pulses_that_step_is_read_the_other_way_round(tmp_path):
