@@ -162,7 +162,7 @@ class CameraClock:
         f = frame.reshape(-1, 1)
         over = (first <= f) & (f <= last)
         candidates = over.copy()
-        order = np.arange(len(first))
+        order = np.arange(len(first))  # spans in frame order: the nearest before ranks last, after first
         for rank, reached in ((order, last < f), (-order, first > f)):
             for among in (reached, reached & (bands >= 2)):
                 nearest = np.where(among, rank, -len(order)).argmax(axis=1)

@@ -1016,13 +1016,15 @@ def _exposure_changes(
         if (len(every_span) < 2 and not len(splits)) or not solution.exposure_ms > 0:
             continue
         main = max(every_span, key=lambda span: span.n_bands, default=None)
-        spans = every_span if len(every_span) > 1 else []
-        exposures_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in spans]
+        every_ms = [
+            solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in every_span
+        ]
+        spans, exposures_ms = (every_span, every_ms) if len(every_span) > 1 else ([], [])
         split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
         changes_ms[name] = float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms)))
         if main is not None:
             split_frames = detection.events.frame[splits.leading]
-            shown[name] = _shown_exposures(every_span, main, solution, split_frames, split_ms)
+            shown[name] = _shown_exposures(every_span, every_ms, main, split_frames, split_ms)
         parts = [
             f"{e:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} bands)"
             if s.n_bands > 1
@@ -1066,24 +1068,21 @@ class _ShownExposure(NamedTuple):
 
 
 def _shown_exposures(
-    spans: list[ExposureSpan], main: ExposureSpan, solution, split_frames: np.ndarray, split_ms: np.ndarray
+    spans: list[ExposureSpan],
+    spans_ms: list[float],
+    main: ExposureSpan,
+    split_frames: np.ndarray,
+    split_ms: np.ndarray,
 ) -> list[_ShownExposure]:
     """What a camera's bands show of its exposure, in frame order: each span (``spans``,
-    :func:`~flashsync.exposure_changes.exposure_spans`; ``main`` the one solved on, of the
-    solved camera ``solution``) and each band split across frames at ``split_frames`` (its
-    exposure ``split_ms``, ms; those within a span of more bands left out: that span holds
-    those frames). None (an empty list) where that leaves one, or where two overlap (a band
-    split into the frame that ends a span): the camera's sigma covers them all then."""
+    :func:`~flashsync.exposure_changes.exposure_spans`, their exposures ``spans_ms``, ms;
+    ``main`` the one solved on) and each band split across frames at ``split_frames`` (its
+    exposure ``split_ms``, ms; those within a span that holds its frames left out). None (an
+    empty list) where that leaves one, or where two overlap (a band split into the frame that
+    ends a span): the camera's sigma covers them all then."""
     shown = [
-        _ShownExposure(
-            s.first_frame,
-            s.last_frame,
-            solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms,
-            s.n_bands,
-            s.n_bands >= 2 and s.one_length,
-            s is main,
-        )
-        for s in spans
+        _ShownExposure(s.first_frame, s.last_frame, ms, s.n_bands, s.n_bands >= 2 and s.one_length, s is main)
+        for s, ms in zip(spans, spans_ms)
     ]
     for frame, ms in zip(split_frames.tolist(), split_ms.tolist()):
         if not any(s.holds_frames and s.first_frame <= frame <= s.last_frame for s in shown):
