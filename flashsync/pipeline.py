@@ -36,6 +36,7 @@ from flashsync.detect import (
 from flashsync.errors import FlashsyncError, InputError, NotEnoughDataError, UntiedReferenceError
 from flashsync.events import Band, Bands, Edge, Events, Flag
 from flashsync.exposure_changes import (
+    MIN_STEP_SHARE,
     ExposureSpan,
     exposure_spans,
     outreaching_splits,
@@ -1077,9 +1078,11 @@ def _shown_exposures(
     """What a camera's bands show of its exposure, in frame order: each span (``spans``,
     :func:`~flashsync.exposure_changes.exposure_spans`, their exposures ``spans_ms``, ms;
     ``main`` the one solved on) and each band split across frames at ``split_frames`` (its
-    exposure ``split_ms``, ms; those within a span that holds its frames left out). None (an
-    empty list) where that leaves one, or where two overlap (a band split into the frame that
-    ends a span): the camera's sigma covers them all then."""
+    exposure ``split_ms``, ms; those within a span that holds its frames left out). Lone bands
+    one after the other whose exposures agree (:data:`~flashsync.exposure_changes.MIN_STEP_SHARE`
+    of their median) hold the frames from the first to the last (:func:`_lone_runs`). None
+    (an empty list) where that leaves one, or where two overlap (a band split into the frame
+    that ends a span): the camera's sigma covers them all then."""
     shown = [
         _ShownExposure(s.first_frame, s.last_frame, ms, s.n_bands, s.n_bands >= 2 and s.one_length, s is main)
         for s, ms in zip(spans, spans_ms)
@@ -1089,7 +1092,41 @@ def _shown_exposures(
             shown.append(_ShownExposure(frame, frame, ms, 1, False, False))
     shown.sort()
     overlap = any(after.first_frame <= before.last_frame for before, after in pairwise(shown))
-    return [] if overlap or len(shown) < 2 else shown
+    return [] if overlap or len(shown) < 2 else _lone_runs(shown)
+
+
+def _lone_runs(shown: list[_ShownExposure]) -> list[_ShownExposure]:
+    """``shown`` (in frame order) with each run of lone bands (one band each, holding no
+    frames) whose exposures lie within :data:`~flashsync.exposure_changes.MIN_STEP_SHARE` of
+    the run's median made one span that holds its frames: a camera whose exposure grew till
+    its bands split across frames shows it band by band (on six auto-exposure benches, 15
+    runs of 2-7 such bands, each within 0.65 ms of the one exposure the truth held over
+    their frames, 0.1 ms but one)."""
+
+    def lone(s: _ShownExposure) -> bool:
+        return s.n_bands == 1 and not (s.holds_frames or s.solved)
+
+    runs: list[list[_ShownExposure]] = []
+    for s in shown:
+        run = runs[-1] if runs and lone(runs[-1][-1]) and lone(s) else []
+        median = float(np.median([r.exposure_ms for r in run])) if run else 0.0
+        if run and abs(s.exposure_ms - median) <= MIN_STEP_SHARE * median:
+            run.append(s)
+        else:
+            runs.append([s])
+    return [
+        run[0]
+        if len(run) == 1
+        else _ShownExposure(
+            run[0].first_frame,
+            run[-1].last_frame,
+            float(np.median([r.exposure_ms for r in run])),
+            len(run),
+            True,
+            False,
+        )
+        for run in runs
+    ]
 
 
 def _held_exposures(clock: CameraClock, shown: list[_ShownExposure]) -> tuple[HeldExposure, ...]:

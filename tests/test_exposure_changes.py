@@ -379,7 +379,8 @@ def test_an_exposure_that_grows_till_its_bands_split_across_frames_is_found(tmp_
     the frame's end (three bands in one frame before). Their trailing edges, solved as of
     4 ms bands, tied its time per row to the frame period a third off: both cameras 37 and
     47 ms off the truth at error/sigma 6. Their rows in sight outreach 4 ms: left out, both
-    within 0.05 ms (0.024, 0.028), and a warning names their 7 ms."""
+    within 0.05 ms (0.024, 0.028), and a warning names their 7 ms. The model holds their
+    frames at 7 ms (three lone bands that agree are one span), 4 ms from the others'."""
     detections, truth = rendered_rig(tmp_path, ((100, 7.0),), every=3)
     model, report = synchronize(detections)
     accuracy = camera_accuracy(model, truth).set_index("camera")
@@ -388,6 +389,12 @@ def test_an_exposure_that_grows_till_its_bands_split_across_frames_is_found(tmp_
     low, high = (float(ms) for ms in re.findall(r"(\d+\.\d\d)-(\d+\.\d\d) ms in 3 bands split", warning)[0])
     assert 6.8 < low <= high < 7.2, warning
     assert model.cameras["cam1"].exposure_std_ms > 2.5
+    spans = model.cameras["cam1"].exposure_spans
+    assert [span.holds_frames for span in spans] == [True, True], spans
+    assert [span.exposure_ms for span in spans] == pytest.approx([4.0, 7.0], abs=0.2), spans
+    frames = np.arange(spans[-1].first_frame, spans[-1].last_frame + 1)
+    exposure, std = model.cameras["cam1"].exposure_at(frames)
+    assert np.all(np.abs(exposure - 7.0) < 0.2) and np.all(std < 0.2), (exposure, std)
 
 
 @pytest.mark.parametrize(
