@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from scipy.linalg import lapack
 
 #: A Gaussian's standard deviation over its median absolute deviation.
 MAD_TO_SIGMA = 1.4826
@@ -24,6 +25,16 @@ ITERATIONS = 100
 CONVERGED = 1e-5
 #: Columns whose smallest singular value (unit-norm columns) is below this are undetermined.
 MIN_SINGULAR = 1e-9
+#: Smallest reciprocal condition number (LAPACK's 1-norm estimate) of the weighted normal
+#: equations, columns scaled to unit norm, that :func:`cauchy_fit` solves by Cholesky; below it
+#: (nearly dependent columns, or the rows that tell them apart all but weighed out), by lstsq's
+#: SVD. The normal equations square the design's condition number: at 1e6 (a weighted design's
+#: 400-1000) their error bound is 2e-10 relative, lstsq's 2e-13. Over the 185,039 weighted
+#: solves of ``diagnose`` on eight cached rigs of 3-8 cameras, the weighted designs' condition
+#: numbers were at most 387 (unweighted 101) and Cholesky's solutions lay at most 2e-12
+#: relative from lstsq's, 6x faster (0.085 ms against 0.55 ms); the 12-camera rig S620-630
+#: falls back on 103 of its 158,939 (condition numbers 404-4,770).
+NORMAL_RCOND = 1e-6
 
 
 def mad_sigma(values: np.ndarray, floor: float = 0.0) -> float:
@@ -112,8 +123,7 @@ def cauchy_fit(
     robust = len(observed) - n_fixed
 
     def solve(weights: np.ndarray) -> np.ndarray:
-        root = np.sqrt(np.concatenate([weights[:robust], np.ones(n_fixed)]))
-        return np.linalg.lstsq(scaled * root[:, None], observed * root, rcond=None)[0]
+        return _weighted_least_squares(scaled, observed, np.concatenate([weights[:robust], np.ones(n_fixed)]))
 
     def scale(residual: np.ndarray, previous: float | None) -> float:
         residual = residual[:robust]
@@ -125,6 +135,21 @@ def cauchy_fit(
         solve, lambda x: observed - scaled @ x, len(observed), scale, ITERATIONS, CONVERGED
     )
     return solution / norms, residual, final
+
+
+def _weighted_least_squares(design: np.ndarray, observed: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Weighted least-squares solution (p,) of ``observed ≈ design @ solution``, design (n, p),
+    observed (n,) ms, row weights (n,): by Cholesky of the normal equations (their columns
+    scaled to unit norm) where these are well conditioned (:data:`NORMAL_RCOND`), else by lstsq."""
+    weighted = design * weights[:, None]
+    normal = design.T @ weighted
+    unit = 1.0 / np.sqrt(np.diag(normal))
+    normal *= unit[:, None] * unit
+    factor, info = lapack.dpotrf(normal)
+    if info == 0 and lapack.dpocon(factor, np.abs(normal).sum(axis=0).max())[0] >= NORMAL_RCOND:
+        return unit * lapack.dpotrs(factor, unit * (weighted.T @ observed))[0]
+    root = np.sqrt(weights)
+    return np.linalg.lstsq(design * root[:, None], observed * root, rcond=None)[0]
 
 
 def cauchy_scale(residual: np.ndarray) -> float:

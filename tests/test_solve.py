@@ -386,3 +386,66 @@ def test_observations_taken_keep_their_bands_pairs():
     kept = events.take(np.array([False, False, True, True, True]))
     assert kept.leading_of.tolist() == [-1, -1, 1] and kept.flash.tolist() == [0, 1, 1]
     assert events.take(np.array([True, True, True, False, True])).leading_of.tolist() == [-1, 0, -1, -1]
+
+
+def _lstsq_cauchy_fit(design: np.ndarray, observed: np.ndarray) -> np.ndarray:
+    """The parameters of :func:`~flashsync.robust.cauchy_fit` (no Gaussian rows) with every
+    weighted solve by lstsq's SVD."""
+    from flashsync.robust import CONVERGED, ITERATIONS, MIN_SCALE_MS, cauchy_irls
+
+    norms = np.linalg.norm(design, axis=0)
+    scaled = design / norms
+
+    def solve(weights: np.ndarray) -> np.ndarray:
+        root = np.sqrt(weights)
+        return np.linalg.lstsq(scaled * root[:, None], observed * root, rcond=None)[0]
+
+    def scale(residual: np.ndarray, previous: float | None) -> float:
+        if previous is None:
+            return max(float(np.median(np.abs(residual))), MIN_SCALE_MS)
+        weights = 1.0 / (1.0 + (residual / previous) ** 2)
+        return max(float(np.sqrt(2.0 * np.mean(weights * residual**2))), MIN_SCALE_MS)
+
+    solution, _, _ = cauchy_irls(solve, lambda x: observed - scaled @ x, len(observed), scale, ITERATIONS, CONVERGED)
+    return solution / norms
+
+
+@pytest.mark.parametrize("dependent", [False, True])
+def test_the_dense_cauchy_fit_solves_as_lstsq_does_where_the_normal_equations_would_not(dependent):
+    """``cauchy_fit`` solves its weighted least squares by the normal equations only where
+    they are well conditioned: on a plain design (condition 3) it matches IRLS by lstsq to
+    1e-12, on columns nearly dependent (condition 1e7: the normal equations' 1e14) to 1e-9."""
+    from flashsync.robust import cauchy_fit
+
+    rng = np.random.default_rng(5)
+    x = np.linspace(-1.0, 1.0, 60)
+    design = np.column_stack([np.ones_like(x), x, x + 1e-7 * rng.normal(size=len(x)) if dependent else x**2])
+    observed = 2.0 + 0.5 * x - 0.3 * x**2 + rng.normal(0.0, 0.01, len(x))
+    observed[[3, 41]] += [4.0, -6.0]
+    singular = np.linalg.svd(design / np.linalg.norm(design, axis=0), compute_uv=False)
+    assert singular[0] / singular[-1] == pytest.approx(1e7 if dependent else 3.0, rel=0.5)
+    parameters, _, _ = cauchy_fit(design, observed)
+    np.testing.assert_allclose(parameters, _lstsq_cauchy_fit(design, observed), rtol=1e-9 if dependent else 1e-12)
+
+
+def test_the_weighted_least_squares_of_the_dense_cauchy_fit_hold_where_the_weights_drop_rows():
+    """Two columns told apart only by two rows whose weights are 1e-12 (unweighted condition
+    11, weighted 1e7): the solution is lstsq's to 1e-9, not the normal equations' (1e14)."""
+    from flashsync.robust import _weighted_least_squares
+
+    rng = np.random.default_rng(6)
+    x = np.linspace(-1.0, 1.0, 60)
+    design = np.column_stack([np.ones_like(x), x, np.ones_like(x)])
+    design[[10, 20], 2] = [2.0, 0.0]
+    design /= np.linalg.norm(design, axis=0)
+    observed = 2.0 + 0.5 * x + rng.normal(0.0, 0.01, len(x))
+    weights = np.ones_like(x)
+    weights[[10, 20]] = 1e-12
+    root = np.sqrt(weights)
+    singular = np.linalg.svd(design * root[:, None], compute_uv=False)
+    assert np.linalg.cond(design) < 20.0 and singular[0] / singular[-1] > 1e6
+    np.testing.assert_allclose(
+        _weighted_least_squares(design, observed, weights),
+        np.linalg.lstsq(design * root[:, None], observed * root, rcond=None)[0],
+        rtol=1e-9,
+    )
