@@ -29,7 +29,7 @@ from flashsync.events import Edge, Flag
 from flashsync.io import events_from_frame, events_to_frame, load_ground_truth, load_model, save_model
 from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import CameraClock, SyncModel
-from flashsync.pipeline import detect_videos, row_time_prior_ms, synchronize
+from flashsync.pipeline import detect_videos, row_time_prior_ms, shared_readouts, synchronize
 from flashsync.simulation import CameraSpec, FlashSpec, GroundTruth, Scenario, render_scenario
 from flashsync.simulation.rigs import NTSC_30, NTSC_60, random_rig, recipe, second_world, with_flash_powers
 from flashsync.solve import SHARED_READOUT_CORRELATION
@@ -543,7 +543,12 @@ def test_the_fits_priors_on_the_times_per_row_are_syncs_identical_cameras_sharin
         for c, (w, h, period) in enumerate(sizes)
     ]
     measurement = SimpleNamespace(
-        cameras=cameras, noise_ms=0.02, free_drift=(), n_flashes=0, flicker_row_time_ms=lambda c: (np.nan, np.nan)
+        cameras=cameras,
+        noise_ms=0.02,
+        free_drift=(),
+        n_flashes=0,
+        flicker_row_time_ms=lambda c: (np.nan, np.nan),
+        readout_groups=shared_readouts(cameras, set()),  # Measurement.readout_groups: none told by flicker
     )
     timing = [SimpleNamespace(period_ms=period) for _, _, period in sizes]
     keys = [(ROW_TIME, c) for c in range(3)]

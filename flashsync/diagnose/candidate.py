@@ -51,8 +51,8 @@ from flashsync.diagnose.measure import Measurement
 from flashsync.frame_clock import FrameClock
 from flashsync.match import NOMINAL_HIDDEN_ROWS
 from flashsync.model import MATCHED_EVENT_COLUMNS, CameraClock, SyncModel, readout_rows
-from flashsync.pipeline import row_time_prior_ms, shared_readouts
-from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll, cauchy_scale
+from flashsync.pipeline import row_time_prior_ms
+from flashsync.robust import MIN_SCALE_MS, cauchy_fit, cauchy_nll
 from flashsync.solve import DRIFT_PRIOR_STD, Priors
 
 
@@ -331,15 +331,14 @@ def fit_candidate(measurement: Measurement, terms: frozenset[Term]) -> Candidate
     cameras = measurement.cameras
     reflected = np.array([Term(FLIPPED, c) in terms for c in range(len(cameras))])
     flipped = [bool(camera.flipped != flip) for camera, flip in zip(cameras, reflected)]
-    clocks = [
-        measurement.frame_clock(c, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms)
-        for c in range(len(cameras))
-    ]
+    parts = [(c, Term(DROPPED_FRAMES, c) in terms, Term(FRAME_CLOCK, c) in terms) for c in range(len(cameras))]
+    clocks = [measurement.frame_clock(*part) for part in parts]
+    stamp_nll = sum(measurement.stamp_nll(*part) for part in parts)
     choices = [frame_timings(clock, Term(STAMP_RATE, c) in terms) for c, clock in enumerate(clocks)]
     fits = [
         fit
         for timing in product(*choices)
-        if (fit := _fit(measurement, terms, clocks, list(timing), flipped, reflected)) is not None
+        if (fit := _fit(measurement, terms, clocks, stamp_nll, list(timing), flipped, reflected)) is not None
     ]
     return min(fits, key=lambda fit: fit.bic) if fits else None
 
@@ -348,11 +347,13 @@ def _fit(
     measurement: Measurement,
     terms: frozenset[Term],
     clocks: list[FrameClock],
+    stamp_nll: float,
     timing: list[FrameTiming],
     flipped: list[bool],
     reflected: np.ndarray,
 ) -> Candidate | None:
-    """The model with these frame clocks (stamps) and frame times (edges)."""
+    """The model with these frame clocks (stamps; ``stamp_nll`` the negative log-likelihood
+    of the stamps about them, :meth:`Measurement.stamp_nll` summed) and frame times (edges)."""
     cameras, edges = measurement.cameras, measurement.edges
     frame_ms, q, observed = (np.empty(len(edges)) for _ in range(3))
     for c, (camera, times) in enumerate(zip(cameras, timing)):
@@ -386,14 +387,11 @@ def _fit(
     parameters, weighted, scale = solved
     weighted = weighted[: len(edges)]
     residual = weighted / weight
-    stamp_residuals = [clock.residual_ms for clock in clocks]
     coefficients = dict(zip(keys, parameters[: len(keys)].tolist()))
     flicker_nll, n_flicker = _flicker_nll(measurement, terms, timing, coefficients)
-    log_likelihood = (
-        -cauchy_nll(weighted, scale) - sum(cauchy_nll(r, cauchy_scale(r)) for r in stamp_residuals) - flicker_nll
-    )
+    log_likelihood = -cauchy_nll(weighted, scale) - stamp_nll - flicker_nll
     n_parameters = design.shape[1] + 1 + 3 * len(cameras)  # + scales and frame clocks
-    n_observations = len(residual) + sum(len(r) for r in stamp_residuals) + n_flicker
+    n_observations = len(residual) + sum(len(clock.stamps_ms) for clock in clocks) + n_flicker
     bic = -2.0 * log_likelihood + n_parameters * np.log(n_observations)
     return Candidate(
         measurement,
@@ -428,23 +426,21 @@ def _pseudo_rows(
     rolling flicker's time per row - base`` where it saw flicker, else the weak prior's
     (:func:`~flashsync.pipeline.row_time_prior_ms` of the frame period /
     (:data:`~flashsync.match.NOMINAL_HIDDEN_ROWS` x height)), the weak priors of cameras of
-    one size and rate correlated (:func:`~flashsync.pipeline.shared_readouts`); per camera
+    one size and rate correlated (:attr:`Measurement.readout_groups`); per camera
     whose drift it fits (but those of :attr:`Measurement.free_drift`), the drift prior (0,
     std :data:`~flashsync.solve.DRIFT_PRIOR_STD`). Design rows of shape
     (k, len(keys) + n_flashes), whitened (a root of the priors' information), right-hand
     sides (k,) and weights (k,) that put them on the edges' scale (the pooled edge noise)."""
     noise = measurement.noise_ms if np.isfinite(measurement.noise_ms) else MIN_SCALE_MS
-    row_times, base, told = {}, {}, set()
+    row_times, base = {}, {}
     for c, camera in enumerate(measurement.cameras):
         if (ROW_TIME, c) in keys:
             base[c] = _base_row_time_ms(measurement, terms, timing, c)
             row_times[c] = measurement.flicker_row_time_ms(c)
-            if np.isfinite(row_times[c][0]):
-                told.add(camera.camera)
-            else:
+            if not np.isfinite(row_times[c][0]):
                 row_times[c] = row_time_prior_ms(timing[c].period_ms / (NOMINAL_HIDDEN_ROWS * camera.height))
-    groups = shared_readouts(list(measurement.cameras), told)
-    priors = Priors(row_times, shared_readout=tuple(tuple(c for c in g if c in row_times) for g in groups))
+    groups = tuple(tuple(c for c in group if c in row_times) for group in measurement.readout_groups)
+    priors = Priors(row_times, shared_readout=groups)
     cameras, mean, information = priors.row_time_information()
     root = linalg.cholesky(information) if len(cameras) else np.zeros((0, 0))
     drifts = [c for c in range(len(measurement.cameras)) if (DRIFT, c) in keys and c not in measurement.free_drift]

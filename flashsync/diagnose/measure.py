@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from itertools import product
 
 import numpy as np
@@ -54,8 +55,8 @@ from flashsync.match import (
     shared_flashes,
 )
 from flashsync.model import SyncModel
-from flashsync.pipeline import another_reference, flicker_row_time_ms, mains_flicker
-from flashsync.robust import mad_sigma
+from flashsync.pipeline import another_reference, flicker_row_time_ms, mains_flicker, shared_readouts
+from flashsync.robust import cauchy_nll, cauchy_scale, mad_sigma
 from flashsync.solve import POOLED_EQUATIONS
 from flashsync.timestamps import median_step_ms
 
@@ -182,6 +183,7 @@ class Measurement:
     flicker: tuple[Flicker | None, ...] = ()
     free_drift: frozenset[int] = frozenset()
     _clocks: dict = field(default_factory=dict, repr=False, compare=False)
+    _stamp_nll: dict = field(default_factory=dict, repr=False, compare=False)
 
     def frame_clock(self, camera: int, count_gaps: bool, least_squares: bool) -> FrameClock:
         """The camera's frame clock with those parts switched on (never smoothed), fitted once."""
@@ -191,6 +193,24 @@ class Measurement:
                 self.cameras[camera].frame_times_ms, count_gaps=count_gaps, least_squares=least_squares, smoothing=False
             )
         return self._clocks[key]
+
+    def stamp_nll(self, camera: int, count_gaps: bool, least_squares: bool) -> float:
+        """Negative log-likelihood of the camera's stamps about that frame clock
+        (:meth:`frame_clock`) under a Cauchy distribution of their own maximum-likelihood
+        scale (:func:`~flashsync.robust.cauchy_scale`), computed once."""
+        key = (camera, count_gaps, least_squares)
+        if key not in self._stamp_nll:
+            residual = self.frame_clock(*key).residual_ms
+            self._stamp_nll[key] = cauchy_nll(residual, cauchy_scale(residual))
+        return self._stamp_nll[key]
+
+    @cached_property
+    def readout_groups(self) -> tuple[tuple[int, ...], ...]:
+        """The groups of two or more camera indices whose weak priors on their time per row
+        ``sync``'s solve correlates (:func:`~flashsync.pipeline.shared_readouts`: one size and
+        frame rate, and no rolling flicker to time their rows), found once."""
+        told = {camera.camera for c, camera in enumerate(self.cameras) if np.isfinite(self.flicker_row_time_ms(c)[0])}
+        return shared_readouts(list(self.cameras), told)
 
     @property
     def n_flashes(self) -> int:
