@@ -37,6 +37,7 @@ from dataclasses import asdict, dataclass, field, replace
 from itertools import combinations
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from flashsync.detect import CameraDetection
 from flashsync.diagnose.adopt import written_model
@@ -272,6 +273,12 @@ def diagnose(detections: Sequence[CameraDetection], reference: str | None = None
     >>> d = diagnose(detect_videos(["cam1.mp4", "cam2.mkv"]))   # doctest: +SKIP
     >>> print(format_diagnosis(d))                               # doctest: +SKIP
     """
+    with threadpool_limits(1, user_api="blas"):  # thousands of small dense fits: threads only cost
+        return _diagnosed(detections, reference)
+
+
+def _diagnosed(detections: Sequence[CameraDetection], reference: str | None) -> Diagnosis:
+    """:func:`diagnose`'s workflow."""
     detections = [d.read_as_rolled() for d in detections]  # as sync reads them
     synced = _synchronized(detections, reference)
     if reference is None and synced:  # sync's, where the first video could not be the reference
