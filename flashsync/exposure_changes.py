@@ -105,8 +105,7 @@ def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
     shorter, each is an exposure read the other way round, and the camera's exposure
     changes (random rig 542's cam8, 9.8 ms and then 3.9 under LED pulses of 0.2-1.9 ms,
     read as 0.35 ms under pulses of 45.7, 45.4, 18.3, 18.3 and 18.3 rows)."""
-    frames, pulses, _ = _measured(detection, pulses=True)
-    return _spans(frames, pulses, np.zeros(len(frames), dtype=bool))
+    return _spans(*_measured(detection, pulses=True)[:2])
 
 
 def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
@@ -116,7 +115,7 @@ def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
     bands' its exposure, and the trailing edges outside that span left out (as
     :func:`with_one_exposure`)."""
     frames, pulses, events = _measured(detection, pulses=True)
-    spans = _spans(frames, pulses, np.zeros(len(frames), dtype=bool))
+    spans = _spans(frames, pulses)
     rows = np.zeros(len(detection.pulse_rows))
     rows[events] = pulses - detection.exposure_rows
     main = max(spans, key=lambda span: span.n_bands)
@@ -152,13 +151,15 @@ def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.
     return events.frame[lead][usable][order], measured[usable][order], events.event[lead][usable][order]
 
 
-def _spans(frames: np.ndarray, lengths: np.ndarray, excused: np.ndarray) -> list[ExposureSpan]:
+def _spans(frames: np.ndarray, lengths: np.ndarray, excused: np.ndarray | None = None) -> list[ExposureSpan]:
     """The :class:`ExposureSpan` of each of :func:`length_spans`; ``excused`` (shape of
-    ``lengths``) the bands that count as of its one length whatever theirs."""
+    ``lengths``; default none) the bands that count as of its one length whatever theirs."""
     spans = []
     for a, b in length_spans(frames, lengths):
         median = float(np.median(lengths[a:b]))
-        inlier = (np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median) | excused[a:b]
+        inlier = np.abs(lengths[a:b] - median) <= MIN_STEP_SHARE * median
+        if excused is not None:
+            inlier |= excused[a:b]
         spans.append(
             ExposureSpan(int(frames[a]), int(frames[b - 1]), median, b - a, bool(np.mean(inlier) >= SPAN_INLIERS))
         )

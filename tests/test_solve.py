@@ -391,7 +391,7 @@ def test_observations_taken_keep_their_bands_pairs():
 def _lstsq_cauchy_fit(design: np.ndarray, observed: np.ndarray) -> np.ndarray:
     """The parameters of :func:`~flashsync.robust.cauchy_fit` (no Gaussian rows) with every
     weighted solve by lstsq's SVD."""
-    from flashsync.robust import CONVERGED, ITERATIONS, MIN_SCALE_MS, cauchy_irls
+    from flashsync.robust import CONVERGED, ITERATIONS, MIN_SCALE_MS, _scale_step, cauchy_irls
 
     norms = np.linalg.norm(design, axis=0)
     scaled = design / norms
@@ -403,8 +403,7 @@ def _lstsq_cauchy_fit(design: np.ndarray, observed: np.ndarray) -> np.ndarray:
     def scale(residual: np.ndarray, previous: float | None) -> float:
         if previous is None:
             return max(float(np.median(np.abs(residual))), MIN_SCALE_MS)
-        weights = 1.0 / (1.0 + (residual / previous) ** 2)
-        return max(float(np.sqrt(2.0 * np.mean(weights * residual**2))), MIN_SCALE_MS)
+        return max(_scale_step(residual, previous), MIN_SCALE_MS)
 
     solution, _, _ = cauchy_irls(solve, lambda x: observed - scaled @ x, len(observed), scale, ITERATIONS, CONVERGED)
     return solution / norms
