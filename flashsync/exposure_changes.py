@@ -347,6 +347,27 @@ def _exposure_or_longest_rows(detection: CameraDetection, bands: Bands) -> float
     return float(np.max(lengths)) if len(lengths) >= MIN_SPAN_BANDS else None
 
 
+def all_band_spans(detection: CameraDetection, row_time_ms: float) -> list[ExposureSpan]:
+    """The spans of frames, in frame order, over which every flash band of the detection's
+    reading in use that tells its exposure shares one length (rows at ``row_time_ms``, a
+    solved time per row): those of :func:`exposure_spans` and those split across two frames,
+    timed by the camera's frames (:func:`split_lengths_ms`), split where their lengths step
+    (:func:`length_spans`). A camera whose exposure grew till most of its bands split shows
+    its change only so (random rig 561's cam7: one band fitted whole, 5.9 ms, then three
+    split, 13.7 ms)."""
+    frames, lengths, _ = _measured(detection, pulses=False)
+    events = detection.events
+    bands = events.bands()
+    bands = bands.take(bands.complete)
+    split = bands.take(
+        (events.frame[bands.trailing] == events.frame[bands.leading] + 1) & (events.band[bands.leading] == Band.PULSE)
+    )
+    frames = np.concatenate([frames, events.frame[split.leading]])
+    lengths = np.concatenate([lengths, split_lengths_ms(detection, split, row_time_ms) / row_time_ms])
+    order = np.argsort(frames, kind="stable")
+    return _spans(frames[order], lengths[order])
+
+
 def split_lengths_ms(detection: CameraDetection, bands: Bands, row_time_ms: float) -> np.ndarray:
     """The length (ms) of each of the detection's ``bands`` split across two frames (its
     reading in use): from its leading edge's frame to the next, and its trailing edge's
