@@ -4,6 +4,7 @@ rejected events, as DataFrames, aligned text and JSON-able dicts."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import asdict
 
 import numpy as np
 import pandas as pd
@@ -86,6 +87,7 @@ def camera_table(model: SyncModel, report=None) -> pd.DataFrame:
             "sync_std_ms": sync_uncertainty_ms(camera),
             "exposure_ms": camera.exposure_ms,
             "exposure_std_ms": camera.exposure_std_ms,
+            "exposure_spans": [asdict(span) for span in camera.exposure_spans],
             "events": len(inliers),
             "rejected": len(events) - len(inliers),
             "residual_std_ms": float(np.std(inliers["residual_ms"])) if len(inliers) else float("nan"),

@@ -2,7 +2,9 @@
 bands' lengths step at a frame; made-up bands here, a rendered pair in
 ``test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_there``."""
 
+import json
 import re
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +19,7 @@ from flashsync.evaluate import camera_accuracy, clock_origin_ms
 from flashsync.events import Band, Edge, Events
 from flashsync.exposure_changes import all_band_spans, exposure_spans, with_one_exposure
 from flashsync.io import load_model, save_model
+from flashsync.report import sync_summary
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
 from tracking_adapter.restamp import restamp
 
@@ -219,9 +222,12 @@ def test_restamp_takes_each_span_s_exposure_from_the_model_file(tmp_path):
     read back, a point in every frame of cam1 re-stamped: the model holds both exposures and
     their frames, and each point's mid-exposure time ``t_center_ms`` is within 0.1 ms of the
     truth in both spans (one exposure throughout put the 4 ms span's a millisecond off),
-    its sigma covering the frames between them, where the change came."""
+    its sigma covering the frames between them, where the change came. ``sync --json``
+    lists the spans too."""
     detections, truth = rendered_rig(tmp_path, ((90, 2.0),))
-    model, _ = synchronize(detections)
+    model, report = synchronize(detections)
+    (cam1,) = [row for row in json.loads(json.dumps(sync_summary(model, report)))["cameras"] if row["camera"] == "cam1"]
+    assert cam1["exposure_spans"] == [asdict(span) for span in model.cameras["cam1"].exposure_spans], cam1
     save_model(model, tmp_path / "sync.json")
     model = load_model(tmp_path / "sync.json")
     spans = [span for span in model.cameras["cam1"].exposure_spans if span.holds_frames]

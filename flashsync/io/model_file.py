@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -119,17 +120,7 @@ def _camera_to_dict(camera: CameraClock) -> dict:
         "frame_times_ms": camera.frame_times_ms.tolist(),
         "frame_std_ms": float(std[0]) if std.size and np.all(std == std[0]) else std.tolist(),
         "display_rotation_deg": camera.display_rotation_deg,
-        "exposure_spans": [
-            {
-                "first_frame": span.first_frame,
-                "last_frame": span.last_frame,
-                "exposure_ms": span.exposure_ms,
-                "exposure_std_ms": span.exposure_std_ms,
-                "n_bands": span.n_bands,
-                "holds_frames": span.holds_frames,
-            }
-            for span in camera.exposure_spans
-        ],
+        "exposure_spans": [asdict(span) for span in camera.exposure_spans],
     }
 
 
