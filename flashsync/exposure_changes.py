@@ -171,11 +171,12 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
     ``lengths``, rows, shape (n,) each), over which the lengths stay one: one span where they
     do not step, none without :data:`MIN_SPAN_BANDS` bands.
     The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
-    to the next) about the median of its neighbours (a lone length that a codec moved leans
-    on no split), are split in two between bands in frames apart where that leaves the least
-    squared deviation from each side's mean, and again within each side, while the means
-    step (:data:`STEP_SIGMAS` of the noise, or of the sides' RMS about their medians where
-    that is less, and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
+    to the next) about the median of it and its neighbours (at either end its one neighbour
+    counted twice; a lone length that a codec moved leans on no split), are split in two
+    between bands in frames apart where that leaves the least squared deviation from each
+    side's mean, and again within each side, while the means step (:data:`STEP_SIGMAS` of
+    the noise, or of the sides' RMS about their medians where that is less, and
+    :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
     :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
     (:data:`SPAN_INLIERS`, against the noise or the step to its neighbour), they are taken
     as one. Where that leaves one span, its first or last band may be a span alone
@@ -184,7 +185,7 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
     if len(lengths) < MIN_SPAN_BANDS:
         return []
     noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
-    local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="nearest")
+    local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="mirror")
     clipped = np.clip(lengths, local - INLIER_SIGMAS * noise, local + INLIER_SIGMAS * noise)
     bursts = np.concatenate([[0], np.cumsum(np.diff(frames) > 1)])
     cuts = _merged(lengths, _cuts(clipped, bursts, 0, len(lengths), noise))

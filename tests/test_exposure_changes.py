@@ -158,6 +158,22 @@ def test_lengths_that_scatter_far_less_than_their_step_make_two_spans(lengths, f
     assert [s.n_bands for s in exposure_spans(bands(lengths, frames=frames))] == counts
 
 
+def test_a_wild_length_at_either_end_leans_on_its_neighbour():
+    """Random rig 642's cam2 (13.7 ms, then 5.8 ms from frame 169): six bands of 27-29 rows,
+    then four of 12-14 and a last one of 31 (a damaged band). Each length is held to the
+    lengths' noise about the median of it and its neighbours, so that one wild length leans
+    on no split; the last band was its own neighbour (the window padded with its own
+    length), a 31-row side of its own, and the lengths made one span: the model put 13.7 ms
+    on every frame (0.66 ms RMS off the truth frame by frame, error/sigma 17). Padded with its
+    neighbour's length instead, it is held to 14 rows: two spans, the wild band with the
+    second."""
+    lengths = [28.11, 29.05, 28.67, 28.04, 28.50, 27.27, 12.33, 11.83, 13.08, 13.57, 30.65]
+    frames = [32, 57, 81, 111, 134, 157, 227, 255, 291, 329, 360]
+    for order in (1, -1):  # the wild band last, then first
+        spans = exposure_spans(bands(lengths[::order], frames=np.cumsum([32, *np.abs(np.diff(frames))[::order]])))
+        assert sorted(s.n_bands for s in spans) == [5, 6], spans
+
+
 def test_wild_lengths_on_a_side_hold_a_step_back():
     """Random rig 545's cam1 (50 fps, 180 rows, a steady 13 ms exposure: 121 rows; auto
     exposure bench at seed 545): its clean bands measure 88, 18, 38 and 39 rows, then 121,
