@@ -40,6 +40,7 @@ from flashsync.exposure_changes import (
     ExposureSpan,
     all_band_spans,
     exposure_spans,
+    length_scatter_rows,
     outreaching_splits,
     pulse_spans,
     split_lengths_ms,
@@ -390,7 +391,9 @@ def _synchronized(
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
     for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
-    change_warnings, changes_ms, shown = _exposure_changes(best, {d.camera: d for d in detections}, stepped)
+    change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
+        best, {d.camera: d for d in detections}, stepped
+    )
     best = best.with_scatter(exposure_spreads)
     report.alignments = best.alignments
     report.warnings = (
@@ -403,7 +406,7 @@ def _synchronized(
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, told=set(changes_ms))
+        + _exposure_doubts(best, scatters_ms, told=set(changes_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -419,6 +422,8 @@ def _synchronized(
         if name in changes_ms:
             clock.exposure_spans = _held_exposures(clock, shown[name]) if shown.get(name) else ()
             clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
+        if name in scatters_ms:
+            clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, scatters_ms[name]))
     return model, report
 
 
@@ -999,7 +1004,7 @@ EXPOSURE_DOUBT_MS = 0.1
 
 def _exposure_changes(
     best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str]
-) -> tuple[list[str], dict[str, float], dict[str, list[_ShownExposure]]]:
+) -> tuple[list[str], dict[str, float], dict[str, list[_ShownExposure]], dict[str, float]]:
     """Per camera whose exposure changes while it records (the spans of its ``detections``
     reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`, or of its
     pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`, and
@@ -1011,8 +1016,10 @@ def _exposure_changes(
     bands show frame by frame (:func:`_shown_exposures`, for :func:`_held_exposures`). Where
     that shows nothing, all the bands that tell their exposure, those split across frames
     among them, may show a change after the solve (:func:`_shown_by_all_bands`); the solve
-    then took every band's edges, as the warning says."""
-    warnings, changes_ms, shown = [], {}, {}
+    then took every band's edges, as the warning says. Last, per other camera whose bands'
+    lengths scatter, that scatter about the solved exposure, ms, into its exposure's sigma
+    (:func:`~flashsync.exposure_changes.length_scatter_rows`)."""
+    warnings, changes_ms, shown, scatters_ms = [], {}, {}, {}
     for name, solution in zip(best.connected, best.solution.cameras):
         if not solution.exposure_ms > 0:
             continue
@@ -1053,6 +1060,10 @@ def _exposure_changes(
                 farthest = max(abs(s.exposure_ms - solution.exposure_ms) for s in by_all)
                 changes_ms[name] = max(changes_ms.get(name, 0.0), farthest)
         if name not in changes_ms:
+            solved_rows = solution.exposure_ms / solution.row_time_ms
+            scatter_rows = 0.0 if name in stepped else length_scatter_rows(detection, solved_rows)
+            if scatter_rows > 0:
+                scatters_ms[name] = scatter_rows * solution.row_time_ms
             continue
         warnings.append(
             f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show "
@@ -1065,7 +1076,7 @@ def _exposure_changes(
             )
             + "; set the camera's shutter to one exposure to record with it"
         )
-    return warnings, changes_ms, shown
+    return warnings, changes_ms, shown, scatters_ms
 
 
 def _shown_part(exposure_ms: float, first_frame: int, last_frame: int, n_bands: int) -> str:
@@ -1188,19 +1199,23 @@ def _held_exposures(clock: CameraClock, shown: list[_ShownExposure]) -> tuple[He
     return tuple(held)
 
 
-def _exposure_doubts(best: _Attempt, told: set[str]) -> list[str]:
+def _exposure_doubts(best: _Attempt, scatters_ms: dict[str, float], told: set[str]) -> list[str]:
     """A warning per camera whose exposure the band lengths pin down more loosely than
     :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, lengths that differ from flash to
-    flash, or a time per row the flashes leave loose: a length is in rows), but the cameras
-    ``told`` of already. Its sigma says so already."""
-    return [
-        f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {solution.exposure_std_ms:.2f} ms: "
-        "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash "
-        "to flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp --exposure "
-        "CAMERA=MS) if known"
-        for name, solution in zip(best.connected, best.solution.cameras)
-        if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS and name not in told
-    ]
+    flash, or a time per row the flashes leave loose: a length is in rows), its sigma the
+    solve's with its lengths' scatter (``scatters_ms``, ms; :func:`_exposure_changes`), but
+    the cameras ``told`` of already. Its sigma says so already."""
+    warnings = []
+    for name, solution in zip(best.connected, best.solution.cameras):
+        std_ms = float(np.hypot(solution.exposure_std_ms, scatters_ms.get(name, 0.0)))
+        if solution.exposure_ms > 0 and std_ms > EXPOSURE_DOUBT_MS and name not in told:
+            warnings.append(
+                f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {std_ms:.2f} ms: its bands' "
+                "lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash to "
+                "flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp "
+                "--exposure CAMERA=MS) if known"
+            )
+    return warnings
 
 
 def _free_drifts(best: _Attempt, reference: str) -> list[str]:

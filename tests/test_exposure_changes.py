@@ -4,7 +4,7 @@ bands' lengths step at a frame; made-up bands here, a rendered pair in
 
 import json
 import re
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +17,7 @@ from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy, clock_origin_ms
 from flashsync.events import Band, Edge, Events
-from flashsync.exposure_changes import all_band_spans, exposure_spans, with_one_exposure
+from flashsync.exposure_changes import all_band_spans, exposure_spans, length_scatter_rows, with_one_exposure
 from flashsync.io import load_model, save_model
 from flashsync.report import sync_summary
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
@@ -174,6 +174,31 @@ def test_a_wild_length_at_either_end_leans_on_its_neighbour():
         assert sorted(s.n_bands for s in spans) == [5, 6], spans
 
 
+@pytest.mark.parametrize(
+    "lengths, scatter",
+    [
+        pytest.param([20.0, 35.0, 12.0, 28.0, 20.0, 40.0], np.sqrt((15**2 + 8**2 + 8**2 + 20**2) / 6), id="scatter"),
+        pytest.param([20.0, 20.5, 19.6, 20.2, 19.9, 20.1], 0.0, id="one-length"),
+        pytest.param([20.0, 20.5, 19.6, 12.2, 11.9, 12.1], 0.0, id="two-spans"),
+    ],
+)
+def test_lengths_that_scatter_about_one_span_are_the_exposure_s_doubt(lengths, scatter):
+    """Lengths of one span that scatter (flashes at two powers, or a change no split found)
+    give their RMS about the solved exposure (20 rows) to its sigma; lengths of one exposure,
+    or of two spans (held span by span), give none."""
+    assert length_scatter_rows(bands(lengths), 20.0) == pytest.approx(scatter)
+
+
+def test_bands_as_long_as_a_pulse_that_outlasts_the_exposure_do_not_scatter_it():
+    """Bands of 45 and 40 rows amid four of 20 scatter the lengths (13 rows RMS about 20),
+    unless each was read with a pulse as long that outlasts the exposure (LED strobes at
+    two powers over a 1 ms exposure: the test pair of ``tests/test_exposure.py`` at seed 3
+    was given a sigma of 1 ms for a 1 ms exposure within 0.03)."""
+    lengths = (20.0, 45.0, 20.0, 20.0, 40.0, 20.0)
+    assert length_scatter_rows(split_bands([], before=lengths, outlasting=True), 20.0) == 0.0
+    assert length_scatter_rows(split_bands([], before=lengths, outlasting=False), 20.0) > 10.0
+
+
 def test_wild_lengths_on_a_side_hold_a_step_back():
     """Random rig 545's cam1 (50 fps, 180 rows, a steady 13 ms exposure: 121 rows; auto
     exposure bench at seed 545): its clean bands measure 88, 18, 38 and 39 rows, then 121,
@@ -231,6 +256,27 @@ def test_a_camera_whose_exposure_changes_halfway_is_timed_by_its_leading_edges_t
     d = diagnose(detections)  # measures cam1 as sync solves it, and writes sync's model
     assert any(w.startswith(f"{tmp_path / 'cam1.mp4'}: its exposure changes while it records") for w in d.warnings)
     assert d.written.endswith("(the same as sync's own)"), d.written
+
+
+def test_a_camera_whose_band_lengths_scatter_is_given_that_scatter_in_its_exposure_s_sigma(tmp_path):
+    """The pair above with one exposure (cam1 4 ms), every other band of cam1 that its
+    detector fitted whole made a third longer (as a flash at another power might, or a
+    change no split finds): its lengths make one span that scatters, and the bands do not
+    say which it is. The exposure's sigma takes their RMS about the solved exposure, and a
+    warning says the lengths do not pin it down (it was the solve's alone, 0.09 ms)."""
+    detections, _ = rendered_rig(tmp_path, ())
+    cam1 = detections[1]
+    events, height = cam1.top_down, cam1.height
+    bands = events.bands()
+    bands = bands.take(bands.complete & (events.frame[bands.leading] == events.frame[bands.trailing]))
+    lengths = events.row[bands.trailing] - events.row[bands.leading]
+    longer = events.row[bands.trailing] + lengths / 3.0 < height - 1
+    rows = events.row.copy()
+    rows[bands.trailing[longer][::2]] += lengths[longer][::2] / 3.0
+    scattered = replace(cam1, top_down=replace(events, row=rows))
+    model, report = synchronize([detections[0], scattered])
+    assert model.cameras["cam1"].exposure_std_ms > 0.3, model.cameras["cam1"].exposure_std_ms
+    assert any(w.startswith(f"{cam1.video}: its exposure is") and "do not pin it down" in w for w in report.warnings)
 
 
 def test_restamp_takes_each_span_s_exposure_from_the_model_file(tmp_path):
