@@ -1005,19 +1005,12 @@ EXPOSURE_DOUBT_MS = 0.1
 def _exposure_changes(
     best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str]
 ) -> tuple[list[str], dict[str, float], dict[str, list[_ShownExposure]], dict[str, float]]:
-    """Per camera whose exposure changes while it records (the spans of its ``detections``
-    reading that ``best`` uses, :func:`~flashsync.exposure_changes.exposure_spans`, or of its
-    pulses for the cameras ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`, and
-    its bands split across two frames longer in sight,
-    :func:`~flashsync.exposure_changes.outreaching_splits`, timed by its solved clock;
-    solved on the span of the most bands, :func:`~flashsync.exposure_changes.with_one_exposure`): a
-    warning naming each span's exposure and frames; how far the farthest lies from the one
-    solved, ms (into its exposure's sigma); and, where the span solved on is known, what the
-    bands show frame by frame (:func:`_shown_exposures`, for :func:`_held_exposures`). Where
-    that shows nothing, all the bands that tell their exposure, those split across frames
-    among them, may show a change after the solve (:func:`_shown_by_all_bands`); the solve
-    then took every band's edges, as the warning says. Last, per other camera whose bands'
-    lengths scatter, that scatter about the solved exposure, ms, into its exposure's sigma
+    """Per camera whose exposure changes while it records (:func:`_change_by_spans`, else
+    :func:`_change_by_all_bands`): a warning naming what its bands show; how far the
+    farthest exposure lies from the one solved, ms (into its exposure's sigma); and what the
+    bands show frame by frame (:func:`_shown_exposures`, for :func:`_held_exposures`; empty
+    where that is not known). Last, per other camera whose bands' lengths scatter, that
+    scatter about the solved exposure, ms, into its exposure's sigma
     (:func:`~flashsync.exposure_changes.length_scatter_rows`)."""
     warnings, changes_ms, shown, scatters_ms = [], {}, {}, {}
     for name, solution in zip(best.connected, best.solution.cameras):
@@ -1025,58 +1018,72 @@ def _exposure_changes(
             continue
         detection = detections[name].retimed(best.cameras[name].frame_times_ms)
         detection = detection.read_flipped(best.cameras[name].flipped)
-        every_span = pulse_spans(detection) if name in stepped else exposure_spans(detection)
-        splits = outreaching_splits(detection)
-        parts = []
-        solved_on = f"its times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span"
-        if len(every_span) > 1 or len(splits):
-            main = max(every_span, key=lambda span: span.n_bands, default=None)
-            every_ms = [
-                solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in every_span
-            ]
-            spans, exposures_ms = (every_span, every_ms) if len(every_span) > 1 else ([], [])
-            split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
-            changes_ms[name] = float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms)))
-            if main is not None:
-                split_frames = detection.events.frame[splits.leading]
-                shown[name] = _shown_exposures(every_span, every_ms, main, split_frames, split_ms)
-            parts = [_shown_part(e, s.first_frame, s.last_frame, s.n_bands) for e, s in zip(exposures_ms, spans)]
-            if len(splits):
-                frames = detection.events.frame[splits.leading]
-                parts.append(
-                    f"{split_ms[0]:.2f} ms in a band split across frames {frames[0]} and {frames[0] + 1}"
-                    if len(splits) == 1
-                    else f"{split_ms.min():.2f}-{split_ms.max():.2f} ms in {len(splits)} bands split across two "
-                    f"frames (frames {frames.min()}-{frames.max() + 1})"
-                )
-        if not shown.get(name) and name not in stepped:
-            by_all = _shown_by_all_bands(detection, solution)
-            if by_all and name not in changes_ms:  # no edge of it was left out of the solve
-                parts = [_shown_part(s.exposure_ms, s.first_frame, s.last_frame, s.n_bands) for s in by_all]
-                parts[-1] += " (bands split across frames among them, timed by its solved clock)"
-                solved_on = "its times take every band's edges"
-            if by_all:
-                shown[name] = by_all
-                farthest = max(abs(s.exposure_ms - solution.exposure_ms) for s in by_all)
-                changes_ms[name] = max(changes_ms.get(name, 0.0), farthest)
-        if name not in changes_ms:
+        change = _change_by_spans(detection, solution, name in stepped)
+        if not (change and change.shown) and name not in stepped:
+            change = _change_by_all_bands(detection, solution, change)
+        if change is None:
             solved_rows = solution.exposure_ms / solution.row_time_ms
             scatter_rows = 0.0 if name in stepped else length_scatter_rows(detection, solved_rows)
             if scatter_rows > 0:
                 scatters_ms[name] = scatter_rows * solution.row_time_ms
             continue
+        changes_ms[name], shown[name] = change.farthest_ms, change.shown
         warnings.append(
             f"{detection.video}: its exposure changes while it records (auto exposure?): its bands show "
-            f"{', '.join(parts)}; {solved_on}, and restamp's t_center_ms "
+            f"{', '.join(change.parts)}; {change.solved_on}, and restamp's t_center_ms "
             + (
                 "takes each span's exposure (between spans, and beyond a lone band, the middle of the two, its sigma "
                 "half their difference)"
-                if shown.get(name)
-                else f"takes {solution.exposure_ms:.2f} ms throughout (its sigma ± {changes_ms[name]:.2f} ms)"
+                if change.shown
+                else f"takes {solution.exposure_ms:.2f} ms throughout (its sigma ± {change.farthest_ms:.2f} ms)"
             )
             + "; set the camera's shutter to one exposure to record with it"
         )
     return warnings, changes_ms, shown, scatters_ms
+
+
+class _Change(NamedTuple):
+    """A change of exposure a camera's bands show (:func:`_exposure_changes`): what its
+    warning names of them, how its times were solved, how far the farthest exposure lies
+    from the one solved (ms) and what they show frame by frame (empty where not known)."""
+
+    parts: list[str]
+    solved_on: str
+    farthest_ms: float
+    shown: list[_ShownExposure]
+
+
+def _change_by_spans(detection: CameraDetection, solution: CameraSolution, stepped: bool) -> _Change | None:
+    """The change the spans of the detection's reading in use show
+    (:func:`~flashsync.exposure_changes.exposure_spans`, or of its pulses for a camera
+    ``stepped``, :func:`~flashsync.exposure_changes.pulse_spans`), and its bands split across
+    two frames longer in sight (:func:`~flashsync.exposure_changes.outreaching_splits`),
+    timed by its solved clock (``solution``): solved on the span of the most bands
+    (:func:`~flashsync.exposure_changes.with_one_exposure`), what the bands show frame by
+    frame known where that span is. None without either."""
+    every_span = pulse_spans(detection) if stepped else exposure_spans(detection)
+    splits = outreaching_splits(detection)
+    if len(every_span) < 2 and not len(splits):
+        return None
+    main = max(every_span, key=lambda span: span.n_bands, default=None)
+    every_ms = [solution.exposure_ms + (s.length_rows - main.length_rows) * solution.row_time_ms for s in every_span]
+    spans, exposures_ms = (every_span, every_ms) if len(every_span) > 1 else ([], [])
+    split_ms = split_lengths_ms(detection, splits, solution.row_time_ms)
+    split_frames = detection.events.frame[splits.leading]
+    parts = [_shown_part(e, s.first_frame, s.last_frame, s.n_bands) for e, s in zip(exposures_ms, spans)]
+    if len(splits):
+        parts.append(
+            f"{split_ms[0]:.2f} ms in a band split across frames {split_frames[0]} and {split_frames[0] + 1}"
+            if len(splits) == 1
+            else f"{split_ms.min():.2f}-{split_ms.max():.2f} ms in {len(splits)} bands split across two frames "
+            f"(frames {split_frames.min()}-{split_frames.max() + 1})"
+        )
+    return _Change(
+        parts,
+        f"its times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span",
+        float(np.max(np.abs(np.array([*exposures_ms, *split_ms]) - solution.exposure_ms))),
+        _shown_exposures(every_span, every_ms, main, split_frames, split_ms) if main is not None else [],
+    )
 
 
 def _shown_part(exposure_ms: float, first_frame: int, last_frame: int, n_bands: int) -> str:
@@ -1086,27 +1093,39 @@ def _shown_part(exposure_ms: float, first_frame: int, last_frame: int, n_bands: 
     return f"{exposure_ms:.2f} ms in frame {first_frame} (one band: a change, or a band the others' lengths do not fit)"
 
 
-def _shown_by_all_bands(detection: CameraDetection, solution: CameraSolution) -> list[_ShownExposure]:
-    """What all of a camera's bands that tell their exposure show of it (as
+def _change_by_all_bands(
+    detection: CameraDetection, solution: CameraSolution, change: _Change | None
+) -> _Change | None:
+    """``change`` (:func:`_change_by_spans`; None where it found none) with what all of a
+    camera's bands that tell their exposure show of it frame by frame (as
     :func:`_shown_exposures`), those split across two frames timed by its solved clock
     (``solution``; :func:`~flashsync.exposure_changes.all_band_spans`): the span nearest the
     solved exposure has it, where within :data:`~flashsync.exposure_changes.MIN_STEP_SHARE`
-    of it, and each other one as much more or less as its bands are longer or shorter. None
-    (an empty list) where they show one span, or spans whose lengths scatter (not one
+    of it, and each other one as much more or less as its bands are longer or shorter. The
+    same ``change`` where they show one span, or spans whose lengths scatter (not one
     exposure and then another: a steady camera under flashes at two powers), or none near
-    the solved exposure. On six auto-exposure benches, of the 105 cameras whose change the
-    bands fitted whole did not show, it found 10 (their exposure frame by frame 4.54 ms RMS
-    off the truth, error/sigma up to 160; now 1.93 ms, up to 1.9), and it took a steady
+    the solved exposure. After the solve: where ``change`` is None, every band's edges were
+    solved on. On six auto-exposure benches, of the 105 cameras whose change the bands
+    fitted whole did not show, it found 10 (their exposure frame by frame 4.54 ms RMS off
+    the truth, error/sigma up to 160; now 1.93 ms, up to 1.9), and it took a steady
     camera's one split band 0.68 ms too long for a change."""
     spans = all_band_spans(detection, solution.row_time_ms)
     if len(spans) < 2 or not all(span.one_length for span in spans):
-        return []
+        return change
     solved_rows = solution.exposure_ms / solution.row_time_ms
     near = min(spans, key=lambda span: abs(span.length_rows - solved_rows))
     if abs(near.length_rows - solved_rows) > MIN_STEP_SHARE * max(near.length_rows, solved_rows):
-        return []
+        return change
     spans_ms = [solution.exposure_ms + (s.length_rows - near.length_rows) * solution.row_time_ms for s in spans]
-    return _shown_exposures(spans, spans_ms, near, np.empty(0, np.int64), np.empty(0))
+    shown = _shown_exposures(spans, spans_ms, near, np.empty(0, np.int64), np.empty(0))
+    if not shown:
+        return change
+    farthest_ms = max(abs(s.exposure_ms - solution.exposure_ms) for s in shown)
+    if change is None:
+        parts = [_shown_part(s.exposure_ms, s.first_frame, s.last_frame, s.n_bands) for s in shown]
+        parts[-1] += " (bands split across frames among them, timed by its solved clock)"
+        return _Change(parts, "its times take every band's edges", farthest_ms, shown)
+    return change._replace(farthest_ms=max(change.farthest_ms, farthest_ms), shown=shown)
 
 
 class _ShownExposure(NamedTuple):
