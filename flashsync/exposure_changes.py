@@ -94,8 +94,7 @@ def exposure_spans(detection: CameraDetection) -> list[ExposureSpan]:
     bands 4-13 rows long) but those fitted at the exposure it read its bands to share (pulses
     longer than it: their length is that exposure, not measured), split where their
     lengths step (:func:`length_spans`)."""
-    frames, lengths, events = _measured(detection, pulses=False)
-    return _spans(frames, lengths, pulse_excess_rows(detection, events) > 0)
+    return _lengths_and_spans(detection)[2]
 
 
 def pulse_spans(detection: CameraDetection) -> list[ExposureSpan]:
@@ -134,12 +133,19 @@ def length_scatter_rows(detection: CameraDetection, exposure_rows: float) -> flo
     which: on six auto-exposure benches 43 steady cameras and 45 changing ones had such
     lengths, the changing ones' exposure frame by frame 0.37 ms off (median) under a sigma
     of 0.06 ms."""
-    frames, lengths, events = _measured(detection, pulses=False)
-    excused = pulse_excess_rows(detection, events) > 0  # as long as their pulses: explained
-    spans = _spans(frames, lengths, excused)
+    lengths, excused, spans = _lengths_and_spans(detection)
     if len(spans) != 1 or spans[0].one_length:
         return 0.0
     return float(np.sqrt(np.mean((lengths[~excused] - exposure_rows) ** 2)))
+
+
+def _lengths_and_spans(detection: CameraDetection) -> tuple[np.ndarray, np.ndarray, list[ExposureSpan]]:
+    """The lengths (rows, in frame order, shape (n,)) of the bands :func:`exposure_spans`
+    takes, whether each is as long as a pulse that outlasts the exposure
+    (:func:`pulse_excess_rows`: of the span's one length whatever its own), and their spans."""
+    frames, lengths, events = _measured(detection, pulses=False)
+    excused = pulse_excess_rows(detection, events) > 0
+    return lengths, excused, _spans(frames, lengths, excused)
 
 
 def _measured(detection: CameraDetection, pulses: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -316,14 +322,21 @@ def outreaching_splits(detection: CameraDetection) -> Bands:
     camera whose exposure changed."""
     bands = detection.events.bands()
     bands = bands.take(bands.complete)
-    events, lead, trail = detection.events, bands.leading, bands.trailing
+    events, lead = detection.events, bands.leading
     exposure = _exposure_or_longest_rows(detection, bands)
     if exposure is None:
         return bands.take(np.zeros(len(bands), dtype=bool))
     sight = _rows_between(detection, bands) + detection.height
-    split = (events.frame[trail] == events.frame[lead] + 1) & (events.band[lead] == Band.PULSE)
     outreach = sight - exposure > np.maximum(MIN_STEP_SHARE * sight, MIN_STEP_ROWS)
-    return bands.take(split & outreach & ~_amid_one_exposure(detection, events.frame[lead]))
+    return bands.take(_split(events, bands) & outreach & ~_amid_one_exposure(detection, events.frame[lead]))
+
+
+def _split(events: Events, bands: Bands) -> np.ndarray:
+    """Boolean mask of ``bands`` (of ``events``): the flash bands split across two frames,
+    the trailing edge in the frame after the leading edge's."""
+    return (events.frame[bands.trailing] == events.frame[bands.leading] + 1) & (
+        events.band[bands.leading] == Band.PULSE
+    )
 
 
 def _amid_one_exposure(detection: CameraDetection, frames: np.ndarray) -> np.ndarray:
@@ -378,9 +391,7 @@ def all_band_spans(detection: CameraDetection, row_time_ms: float) -> list[Expos
     events = detection.events
     bands = events.bands()
     bands = bands.take(bands.complete)
-    split = bands.take(
-        (events.frame[bands.trailing] == events.frame[bands.leading] + 1) & (events.band[bands.leading] == Band.PULSE)
-    )
+    split = bands.take(_split(events, bands))
     frames = np.concatenate([frames, events.frame[split.leading]])
     lengths = np.concatenate([lengths, split_lengths_ms(detection, split, row_time_ms) / row_time_ms])
     order = np.argsort(frames, kind="stable")
