@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -176,12 +176,16 @@ class BandFit:
     free : bool array of shape (6,)
         The parameters that were fitted (the hold is fixed at 0 where an exponential pulse
         explained the band).
+    noise : float
+        The least :attr:`variance` taken (0: the fit's own; :func:`common_width` gives a
+        band that cannot measure its own its camera's).
     """
 
     x: np.ndarray
     y: np.ndarray
     p: np.ndarray
     free: np.ndarray
+    noise: float = 0.0
 
     @property
     def leading(self) -> float:
@@ -205,8 +209,17 @@ class BandFit:
 
     @property
     def variance(self) -> float:
-        """The cost per degree of freedom (about the variance of a row's change)."""
-        return _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)
+        """The cost per degree of freedom (about the variance of a row's change), at least
+        :attr:`noise`."""
+        own = _data_cost(self.x, self.y, self.p, _f_scale(self.p), BAND) / max(self.x.size - self.free.sum(), 1)
+        return max(own, self.noise)
+
+    @property
+    def measures_noise(self) -> bool:
+        """The band has more rows the change reached than fitted parameters: its fit leaves
+        a residual to measure its noise by (the rows around it, no change at all, the model
+        meets exactly)."""
+        return int(np.count_nonzero(self.y)) > int(self.free.sum())
 
     def excess(self, width: float, longer: bool, unsettled: bool = False) -> tuple[float, BandFit | None]:
         """This band's cost refitted with its exposure fixed at ``width`` rows
@@ -375,7 +388,7 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     none longer, and every other camera's times came out 0.2 ms off."""
     if len(fits) < 3:
         return None
-    fits = fits[:: math.ceil(len(fits) / MAX_WIDTH_BANDS)]  # evenly over the recording
+    fits = _with_camera_noise(fits[:: math.ceil(len(fits) / MAX_WIDTH_BANDS)])  # evenly over the recording
     read = _read_width(fits)
     shortest = min(fit.width for fit in fits)
     if read is None or not read[1] or len(fits) <= 3 or read[0] * (1 + PINNED_SHARE) > shortest:
@@ -384,6 +397,19 @@ def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     k = int(np.argmax(asks))
     again = _read_width(fits[:k] + fits[k + 1 :])
     return again if again is not None and again[1] and again[0] >= (1 + PINNED_SHARE) * read[0] else read
+
+
+def _with_camera_noise(fits: list[BandFit]) -> list[BandFit]:
+    """The bands, each that cannot measure its own noise (:attr:`BandFit.measures_noise`)
+    given the median of the others' (its own fit leaves no residual: any other width cost
+    it :data:`BAND_COST_CAP`, and that one band chose the camera's exposure; rig-641's
+    5.9-row sRGB camera under 0.2-1.8 ms LED pulses, one band of four rows of light among
+    nine, was read 1.5 rows, its exposure 0.39 ms short at 18σ)."""
+    measured = [fit.variance for fit in fits if fit.measures_noise]
+    if not measured or len(measured) == len(fits):
+        return fits
+    noise = float(np.median(measured))
+    return [fit if fit.measures_noise else replace(fit, noise=noise) for fit in fits]
 
 
 def _read_width(fits: list[BandFit]) -> tuple[float, bool] | None:
