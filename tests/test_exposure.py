@@ -370,21 +370,23 @@ def test_diagnose_measures_a_camera_read_the_other_way_round_as_sync_reads_it(re
 @pytest.mark.parametrize(
     "seed, bound_ms",
     [
-        pytest.param(2, 0.06, id="its-pulses-disagree"),
-        pytest.param(8, 0.25, id="the-other-camera's-readings-disagree"),
+        pytest.param(2, 0.1, id="its-pulses-disagree"),
+        pytest.param(8, 0.1, id="the-other-camera's-readings-disagree"),
     ],
 )
 def test_a_camera_is_not_read_the_other_way_round_on_evidence_that_does_not_hold(tmp_path, seed, bound_ms):
     """0.5 ms exposures under full-power pulses of 1.5-2.25 ms; cam1's bands read as a
-    0.27-0.29 ms exposure under longer pulses. Seed 2: the three flashes cam0 sees at most
+    0.37-0.38 ms exposure under longer pulses (0.27-0.29 ms while a band with no noise of its
+    own chose it, :func:`~flashsync.ramp.common_width`). Seed 2: the three flashes cam0 sees at most
     half as long cam1 saw 0.39-0.89 ms long, no one length (read so, cam1's times came out
-    0.17 ms off against 0.03). Seed 8: cam0's pulses were fitted at the 1.53 ms its bands share, which
-    its solve does not confirm (0.61 ms): read so, cam1's exposure came out 1.1 ms long and
-    its times 0.51 ms off against 0.16."""
+    0.17 ms off against 0.03; 0.07 since the reading is 0.37 ms). Seed 8: cam0's pulses were fitted
+    at the 1.53 ms its bands share, which its solve does not confirm (0.61 ms): read so, cam1's
+    exposure came out 1.1 ms long and its times 0.51 ms off against 0.16 (0.04 since)."""
     detections, report, accuracy, truth = two_powers_pair(tmp_path, seed, 0.5, (1.5, 2.25))
-    assert detections[1].exposure_rows * truth.cameras["cam1"].row_time_ms < 0.3
+    assert detections[1].exposure_rows * truth.cameras["cam1"].row_time_ms < 0.4
     assert turned(report) == [], report.warnings
     assert accuracy.loc["cam1", "rms_ms"] < bound_ms, accuracy
+    assert accuracy.loc["cam1", "z_rms"] < 2, accuracy
 
 
 @pytest.mark.parametrize("flipped", [False, True])
