@@ -206,9 +206,10 @@ def test_a_short_exposure_two_bands_ask_for_is_taken():
 
 
 def test_a_band_that_cannot_measure_its_own_noise_does_not_choose_the_exposure():
-    """The nine bands of the second world's rig-641 cam6 (``random_rig(641, max_height=360,
-    duration_ms=8000)`` of the auto-exposure bench: sRGB, crf 24, a 5.88-row exposure under
-    rectangular pulses of 2.6-21 rows) as the detector fitted them whole from its H.264 file.
+    """The nine bands of the second world's rig-641 cam6 (``python benchmarks/bench_rigs.py
+    --seeds 640:656 --max-height 360 --duration-s 8 --exposure-changes 0.5``: sRGB, crf 24, a
+    steady 5.88-row exposure under rectangular pulses of 2.6-21 rows) as the detector fitted
+    them whole from its H.264 file.
     One band has four rows of light and five parameters: its fit meets them exactly, so in
     units of its own noise every other width cost it the most a band counts, and it alone
     read the exposure as 1.5 rows (0.39 ms short, at 18σ). With the others' noise it counts
