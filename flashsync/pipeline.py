@@ -394,7 +394,12 @@ def _synchronized(
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
         best, {d.camera: d for d in detections}, stepped
     )
-    best = best.with_scatter(exposure_spreads)
+    best = best.with_scatter(
+        {
+            name: float(np.hypot(exposure_spreads.get(name, 0.0), scatters_ms.get(name, 0.0)))
+            for name in exposure_spreads | scatters_ms
+        }
+    )
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -406,7 +411,7 @@ def _synchronized(
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, scatters_ms, told=set(changes_ms))
+        + _exposure_doubts(best, told=set(changes_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -422,8 +427,6 @@ def _synchronized(
         if name in changes_ms:
             clock.exposure_spans = _held_exposures(clock, shown[name]) if shown.get(name) else ()
             clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
-        if name in scatters_ms:
-            clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, scatters_ms[name]))
     return model, report
 
 
@@ -1218,23 +1221,20 @@ def _held_exposures(clock: CameraClock, shown: list[_ShownExposure]) -> tuple[He
     return tuple(held)
 
 
-def _exposure_doubts(best: _Attempt, scatters_ms: dict[str, float], told: set[str]) -> list[str]:
+def _exposure_doubts(best: _Attempt, told: set[str]) -> list[str]:
     """A warning per camera whose exposure the band lengths pin down more loosely than
     :data:`EXPOSURE_DOUBT_MS` (few bands with both edges, lengths that differ from flash to
-    flash, or a time per row the flashes leave loose: a length is in rows), its sigma the
-    solve's with its lengths' scatter (``scatters_ms``, ms; :func:`_exposure_changes`), but
-    the cameras ``told`` of already. Its sigma says so already."""
-    warnings = []
-    for name, solution in zip(best.connected, best.solution.cameras):
-        std_ms = float(np.hypot(solution.exposure_std_ms, scatters_ms.get(name, 0.0)))
-        if solution.exposure_ms > 0 and std_ms > EXPOSURE_DOUBT_MS and name not in told:
-            warnings.append(
-                f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {std_ms:.2f} ms: its bands' "
-                "lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash to "
-                "flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp "
-                "--exposure CAMERA=MS) if known"
-            )
-    return warnings
+    flash, or a time per row the flashes leave loose: a length is in rows; its sigma with
+    its lengths' scatter, :func:`_exposure_changes`), but the cameras ``told`` of already.
+    Its sigma says so already."""
+    return [
+        f"{best.cameras[name].video}: its exposure is {solution.exposure_ms:.2f} ± {solution.exposure_std_ms:.2f} ms: "
+        "its bands' lengths do not pin it down to 0.1 ms (few bands with both edges, lengths that differ from flash "
+        "to flash, or a loose time per row); restamp's t_center_ms carries half of it; give it (restamp --exposure "
+        "CAMERA=MS) if known"
+        for name, solution in zip(best.connected, best.solution.cameras)
+        if solution.exposure_ms > 0 and solution.exposure_std_ms > EXPOSURE_DOUBT_MS and name not in told
+    ]
 
 
 def _free_drifts(best: _Attempt, reference: str) -> list[str]:
