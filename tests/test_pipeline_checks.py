@@ -321,6 +321,31 @@ def test_a_camera_of_clipped_bands_alone_states_no_exposure(seed):
     assert np.sqrt(np.mean((error / sigma) ** 2)) < 2.0
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_band_whose_ramp_was_not_measured_does_not_set_the_exposure(seed):
+    """Three synthetic cameras (1080 rows, 2 ms exposures, edges 0.05 ms noisy), 30 flashes;
+    every third of cam1's bands ends 0.2-0.6 ms late on a ramp the detector could not
+    measure (no rise: its foot or its plateau beyond the frame's cut or in blind rows; rig
+    420's cam4 had one such band alone, its exposure 0.45 ms long at error/σ 10.9). Those
+    lengths weigh less (:data:`~flashsync.pipeline.UNMEASURED_RAMP_SIGMA`): cam1's exposure
+    within 0.04 ms (0.025-0.038), at error/σ under 2. Weighed as the others', it was
+    0.043-0.089 ms long."""
+    events, truth, frame_times = synthetic_events(3, 30, seed=seed)
+    detections = synthetic_detections(events, truth, frame_times, seed=seed)
+    bands = detections[1].top_down
+    late = (bands.edge == Edge.TRAILING) & (bands.event % 3 == 0)
+    late_rows = np.random.default_rng(seed).uniform(0.2, 0.6, len(bands)) / truth[1, 2]
+    late &= bands.row + late_rows < detections[1].height - 1
+    bands = replace(
+        bands, row=bands.row + np.where(late, late_rows, 0.0), rise_rows=np.where(late, np.nan, bands.rise_rows)
+    )
+    detections[1] = replace(detections[1], top_down=bands, bottom_up=None)
+    model, _ = synchronize(detections)
+    camera = model.cameras["cam1"]
+    assert abs(camera.exposure_ms - EXPOSURE_MS) < 0.04, (camera.exposure_ms, camera.exposure_std_ms)
+    assert abs(camera.exposure_ms - EXPOSURE_MS) < 2 * camera.exposure_std_ms
+
+
 def test_equal_rate_cameras_without_split_bands_keep_an_honest_time_per_row():
     """Three 50 fps cameras of 1080 rows in one phase over 10 minutes, 100 flashes, edges
     0.05 ms noisy, no band split across frames: the flashes leave the time per row to the
