@@ -256,7 +256,7 @@ class EventDetector:
                     level = sign * float(np.median(signed[start:stop]))
                     stripes.append(Stripe(frame, int(start), int(stop), level, start <= lit_start, stop >= lit_stop))
                     self._recurrence.see(stripes[-1])  # whether or not it is light
-            for start, stop in _runs(signed > threshold, gap=2) if peak > threshold else ():
+            for start, stop in _joined(signed, _runs(signed > threshold, gap=2), searched) if peak > threshold else ():
                 if stop - start < shortest or np.median(agree[start:stop]) < self.settings.agreement:
                     continue
                 stripe = next(s for s in stripes if s.start <= start and stop <= s.stop)
@@ -560,6 +560,25 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
         else:
             merged.append((start, stop))
     return merged
+
+
+def _joined(signed: np.ndarray, runs: list[tuple[int, int]], floor: float) -> list[tuple[int, int]]:
+    """The ``runs`` of rows above the threshold (:func:`_runs`), two in a row joined where
+    every row between them lies above half the lower of their levels (their median change)
+    and above ``floor``: one band whose middle dips under the threshold. Both runs would
+    find its edges at the same half-level crossings (:func:`_local_edge`), and the band was
+    counted twice (rig-771's cam3: a faint band of rows 158-208 as two runs, 176-181 and
+    185-194, each an event with the same two edges)."""
+    joined: list[tuple[int, int]] = []
+    for start, stop in runs:
+        if joined:
+            first, last = joined[-1]
+            half = 0.5 * min(float(np.median(signed[first:last])), float(np.median(signed[start:stop])))
+            if np.all(signed[last:start] > max(half, floor)):
+                joined[-1] = (first, stop)
+                continue
+        joined.append((start, stop))
+    return joined
 
 
 def _local_edge(crossing, segment: _Segment, plateau: float, window: int, kind: Band) -> tuple[float | None, float]:

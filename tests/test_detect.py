@@ -233,6 +233,25 @@ def test_a_band_whose_repeats_stay_under_the_threshold_goes(repeat):
     assert detector.n_recurring == (1 if repeat else 0)
 
 
+def test_a_band_whose_middle_dips_under_the_threshold_is_one_event():
+    """A 6 % band (rows 40-90) over a 4.5 % threshold whose rows 60-66 change by 3.5 %
+    only: under the threshold, above half the band's level. Its two runs above the
+    threshold find the same half-level edges; each was an event, the band counted twice (a
+    faint band of rig-771's cam3). It is one event, its edges at rows 40 and 90."""
+    rng = np.random.default_rng(2)
+    scene = rng.uniform(0.3, 0.6, (120, 8)).astype(np.float32)
+    detector = EventDetector("cam", 120, DetectorSettings(min_change=0.045))
+    for frame in range(40):
+        profile = scene * (1.0 + 0.001 * rng.standard_normal(scene.shape)).astype(np.float32)
+        if frame == 20:
+            profile[40:90] *= 1.06
+            profile[60:66] *= 1.035 / 1.06
+        detector.push(frame, frame * 1000.0 / 30.0, profile)
+    events = events_to_frame(detector.finish())
+    assert list(events["edge"]) == ["leading", "trailing"], events
+    assert np.allclose(events["row"], [40.0, 90.0], atol=1.0), events
+
+
 @pytest.mark.parametrize("tone", ["linear", "srgb"])
 def test_a_split_bands_trailing_edge_at_the_next_frames_top_is_read_at_the_bands_level(tmp_path, tone):
     """Eight bands split across frames (a 16 ms exposure, 0.5 ms flashes, H.264) whose
