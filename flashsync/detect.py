@@ -565,10 +565,11 @@ def _runs(mask: np.ndarray, gap: int) -> list[tuple[int, int]]:
 def _joined(signed: np.ndarray, runs: list[tuple[int, int]], floor: float) -> list[tuple[int, int]]:
     """The ``runs`` of rows above the threshold (:func:`_runs`), two in a row joined where
     every row between them lies above half the lower of their levels (their median change)
-    and above ``floor``: one band whose middle dips under the threshold. Both runs would
-    find its edges at the same half-level crossings (:func:`_local_edge`), and the band was
-    counted twice (rig-771's cam3: a faint band of rows 158-208 as two runs, 176-181 and
-    185-194, each an event with the same two edges)."""
+    and above ``floor`` (the echo search's level: one stripe then holds the joined run): one
+    band whose middle dips under the threshold. Both runs would find its edges at the same
+    half-level crossings (:func:`_local_edge`), and the band was counted twice (rig-771's
+    cam3: a faint band of rows 158-208 as two runs, 176-181 and 185-194, each an event
+    with the same two edges)."""
     joined: list[tuple[int, int]] = []
     for start, stop in runs:
         if joined:

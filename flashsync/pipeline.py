@@ -2182,10 +2182,10 @@ def _trailing_sigma(detection: CameraDetection, edges: Events) -> np.ndarray:
     the exposure its length measures; one with a ramp the detector could not measure
     (:data:`UNMEASURED_RAMP_SIGMA`) noisier. Shape (n,)."""
     long = np.where(np.isin(edges.event, _pulse_lengths(detection)), LONG_PULSE_EDGE_SIGMA, 1.0)
-    unmeasured = np.isin(edges.event, detection.events.event[np.isnan(detection.events.rise_rows)])
-    long = np.maximum(long, np.where(unmeasured, UNMEASURED_RAMP_SIGMA, 1.0))
+    events = detection.events
+    unmeasured = np.where(np.isin(edges.event, events.event[np.isnan(events.rise_rows)]), UNMEASURED_RAMP_SIGMA, 1.0)
     clipped = np.where(edges.has_flag(Flag.SATURATED), SATURATED_EDGE_SIGMA, 1.0)
-    return long * clipped * _faintness(detection, edges)
+    return np.maximum(long, unmeasured) * clipped * _faintness(detection, edges)
 
 
 #: A clean edge's noise, rows: ``hypot(EDGE_NOISE_FLOOR_ROWS, EDGE_NOISE_QUALITY / quality)``,
