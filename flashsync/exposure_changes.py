@@ -39,9 +39,17 @@ from flashsync.robust import mad_sigma
 #: pulse), whose pulses may differ. A camera's first or last band may be a side alone
 #: (:func:`_lone_end`).
 MIN_SPAN_BANDS = 2
-#: A change of exposure steps the bands' mean length by this many standard deviations of a
-#: length at least (robust, from the differences of one band's length to the next's, or the
-#: lengths' RMS about each side's median where that is less) ...
+#: A change of exposure steps the mean length of the bands on either side of it by this many
+#: standard errors of the difference of the two means at least: a length's standard deviation
+#: (robust, from the differences of one band's length to the next's, or the lengths' RMS about
+#: each side's median where that is less) times ``sqrt(1/n1 + 1/n2)`` for sides of ``n1`` and
+#: ``n2`` bands. It was :data:`STEP_SIGMAS` of a length however many bands the sides held: on
+#: the auto-exposure bench rendered again (`bench_rigs.py --seeds 412:428 --exposure-changes
+#: 0.5`) random rig 413's cam1 (its reference; 6 rows, then 2.8: three bands and five, a step
+#: of 2.6 rows in a noise of 0.44) made one span, and its rig was 0.55 ms RMS off the truth.
+STEP_MEAN_SIGMAS = 5.0
+#: ... a lone band at either end steps from the others' median by this many standard
+#: deviations of a length (:func:`_lone_end`: a band the codec damaged looks as much like one) ...
 STEP_SIGMAS = 8.0
 #: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
 MIN_STEP_ROWS = 1.0
@@ -198,9 +206,8 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
     to the next) about the median of it and its neighbours (at either end its one neighbour
     counted twice; a lone length that a codec moved leans on no split), are split in two
     between bands in frames apart where that leaves the least squared deviation from each
-    side's mean, and again within each side, while the means step (:data:`STEP_SIGMAS` of
-    the noise, or of the sides' RMS about their medians where that is less, and
-    :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
+    side's mean, and again within each side, while the means step (:data:`STEP_MEAN_SIGMAS`
+    and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
     :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
     (:data:`SPAN_INLIERS`, against the noise or the step to its neighbour), they are taken
     as one. Where that leaves one span, its first or last band may be a span alone
@@ -270,7 +277,7 @@ def _cuts(lengths: np.ndarray, bursts: np.ndarray, start: int, stop: int, noise:
     step = abs(float(lengths[k:stop].mean() - lengths[start:k].mean()))
     sides = np.concatenate([part - np.median(part) for part in (lengths[start:k], lengths[k:stop])])
     spread = max(float(np.sqrt(np.mean(sides**2))), LENGTH_FLOOR_ROWS)
-    if step < max(STEP_SIGMAS * min(noise, spread), MIN_STEP_ROWS):
+    if step < max(STEP_MEAN_SIGMAS * min(noise, spread) * np.sqrt(1.0 / (k - start) + 1.0 / (stop - k)), MIN_STEP_ROWS):
         return [(start, stop)]
     return _cuts(lengths, bursts, start, k, noise) + _cuts(lengths, bursts, k, stop, noise)
 
