@@ -46,7 +46,7 @@ MIN_SPAN_BANDS = 2
 #: ``n2`` bands. It was :data:`STEP_SIGMAS` of a length however many bands the sides held: on
 #: the auto-exposure bench rendered again (`bench_rigs.py --seeds 412:428 --exposure-changes
 #: 0.5`) random rig 413's cam1 (its reference; 6 rows, then 2.8: three bands and five, a step
-#: of 2.6 rows in a noise of 0.44) made one span, and its rig was 0.55 ms RMS off the truth.
+#: of 2.6 rows in a noise of 0.59) made one span, and its rig was 0.55 ms RMS off the truth.
 STEP_MEAN_SIGMAS = 5.0
 #: ... a lone band at either end steps from the others' median by this many standard
 #: deviations of a length (:func:`_lone_end`: a band the codec damaged looks as much like one) ...

@@ -723,7 +723,7 @@ def _best_readout(
     of the random rigs), and, where neither pays, every undecided camera flipped at once
     (but the detected reading's :func:`_mirror`): the mirror of a reading is the other
     reading that fits a rig of one frame rate, and a rig of mostly one rate ends its ascent
-    there (rig-782 of the random rigs, four 30 fps cameras and one at 25 fps: every camera
+    there (random rig 782 at 720 rows, four 30 fps cameras and one at 25 fps: every camera
     read the wrong way up, log-likelihood 50 against the right reading's 139, 27 ms off).
     Candidates are tried in name order and a reading is solved once,
     so the camera order decides nothing; at most two attempts per undecided camera per step.

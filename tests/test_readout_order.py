@@ -111,7 +111,7 @@ def test_a_rig_of_mostly_one_frame_rate_is_not_read_as_its_mirror(tmp_path):
     """Random rig 782 as bench_rigs renders it at 360 rows: four 30 fps cameras (cam1, cam3
     and cam5 upside down) and one at 25 fps, 12 flashes in 10 s. The ascent of flips from
     the detected readings (all upright) ended with every camera read the wrong way up
-    (log-likelihood 50 against the right reading's 139): at one frame rate a reading's
+    (log-likelihood 56 against the right reading's 122): at one frame rate a reading's
     mirror fits about as well, and no single flip, nor a camera with those that lose by it,
     leads out of it. 17-35 ms off the truth, with no warning. Every undecided camera
     flipped at once is the ascent's last move: all read right, within 0.2 ms."""
