@@ -57,6 +57,8 @@ RIVAL_SHIFT_FRACTION = 0.6
 #: more (random rig 455: its reference saw mostly pre-flashes, five pairs with it lined up at
 #: the pre-flash's delay, six cameras 59 ms off at error/sigma 100-253).
 BRIGHTER_LEFT = 2.5
+#: ... judged only on this many events left unmatched by a camera or more.
+MIN_LEFT_EVENTS = 3
 #: Most rival shifts of a pair that the solve's fit may decide between (a flash with a
 #: pre-flash lines up a camera that saw the pre-flashes with one that did not at two).
 MAX_RIVALS = 2
@@ -217,7 +219,7 @@ def _brighter_left(
         matched = np.zeros(len(times), dtype=bool)
         matched[alignment.matches[:, column]] = True
         left = ~matched & (times >= other.min()) & (times <= other.max())
-        if left.any():
+        if left.sum() >= MIN_LEFT_EVENTS:
             ratios.append(float(np.median(strength[left]) / np.median(strength[matched])))
     return max(ratios)
 

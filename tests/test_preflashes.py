@@ -197,6 +197,29 @@ def test_a_shift_that_leaves_the_bright_events_unmatched_is_not_taken():
     assert by_light.beta == pytest.approx(-5000.0, abs=1.0) and len(by_light.matches) == len(seen)
 
 
+def test_two_bright_events_left_unmatched_do_not_set_a_shift_aside():
+    """Two cameras that both saw seven pre-flashes (faint) and some flashes: the first two,
+    the second four (random rig 817's cam2 and cam4 so). At the true shift nine events line
+    up, most of them faint pre-flashes, and the second camera's two flashes the first missed
+    are left unmatched: brighter than the matched median, but two flashes missed at random
+    are no sign of a wrong shift (:data:`~flashsync.match.MIN_LEFT_EVENTS`). Set aside,
+    the pair was aligned at the pre-flash's delay (four events), and rig 817's cam2 came
+    out 60 ms off."""
+    rng = np.random.default_rng(7)
+    flashes = np.cumsum(rng.uniform(400.0, 900.0, 8))
+
+    def camera(seen: list[int], offset_ms: float) -> tuple[np.ndarray, np.ndarray]:
+        times = np.concatenate([flashes[:7] - 60.0, flashes[seen]]) + offset_ms
+        strengths = np.concatenate([np.full(7, 0.03), np.full(len(seen), 0.1)])
+        order = np.argsort(times)
+        return times[order], strengths[order]
+
+    (a, strength_a), (b, strength_b) = camera([0, 1], 0.0), camera([0, 1, 2, 3], 5000.0)
+    aligned = align_pair(a, b, tolerance_ms=10.0, strengths=(strength_a, strength_b))
+    assert aligned.beta == pytest.approx(-5000.0, abs=1.0) and len(aligned.matches) == 9
+    assert [other.beta for other in aligned.others] == [pytest.approx(-5060.0, abs=1.0)]
+
+
 @pytest.mark.parametrize(
     "missed", [(2, 5, 7, 10), (0, 2, 3, 5, 7, 9, 10)], ids=["more at the wrong shift", "far more at the wrong shift"]
 )
