@@ -203,8 +203,7 @@ def test_two_bright_events_left_unmatched_do_not_set_a_shift_aside():
     up, most of them faint pre-flashes, and the second camera's two flashes the first missed
     are left unmatched: brighter than the matched median, but two flashes missed at random
     are no sign of a wrong shift (:data:`~flashsync.match.MIN_LEFT_EVENTS`). Set aside,
-    the pair was aligned at the pre-flash's delay (four events), and rig 817's cam2 came
-    out 60 ms off."""
+    the pair was aligned at the pre-flash's delay (four events here; six of rig 817's)."""
     rng = np.random.default_rng(7)
     flashes = np.cumsum(rng.uniform(400.0, 900.0, 8))
 
