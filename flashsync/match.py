@@ -16,7 +16,9 @@ into flashes: groups of at most one event per camera (:func:`match_events`). Cam
 tied together through chains of shared flashes (:meth:`Matching.tied_to`). A pair that
 lines up at a few shifts about as well (a flash that fires a pre-flash) is kept aside as
 undecided, with the other shifts of every pair, for the solve's fit to decide
-(:func:`flashsync.pipeline.synchronize`).
+(:func:`flashsync.pipeline.synchronize`); so is a pair whose other shift, too weak to
+convince alone, lies as far from its own as such a pair's rival does (one pre-flash delay
+for the whole rig).
 """
 
 from __future__ import annotations
@@ -121,7 +123,10 @@ class PairAlignment:
     up events as convincingly on their own, most matches first: a flash that fires a weaker
     pre-flash a few tens of ms before it (TTL metering) lines up a camera that saw the
     pre-flashes with one that did not at two shifts, and the counts alone need not tell
-    which (the solve's fit can: :func:`flashsync.pipeline.synchronize`).
+    which (the solve's fit can: :func:`flashsync.pipeline.synchronize`). ``unconvincing``:
+    the other shifts that line up :data:`MIN_SHARED_FLASHES` events or more but would not
+    convince on their own (a rival where the rig shows a pre-flash's delay:
+    :func:`match_events`).
     """
 
     alpha: float
@@ -131,6 +136,7 @@ class PairAlignment:
     ambiguous: bool
     chance: float = float("nan")
     others: tuple[PairAlignment, ...] = ()
+    unconvincing: tuple[PairAlignment, ...] = ()
 
     @property
     def convincing(self) -> bool:
@@ -213,7 +219,8 @@ def align_pair(
     sizes = (len(times_a), len(times_b), np.ptp(times_a), np.ptp(times_b), tolerance_ms, MAX_DRIFT)
     chance = [chance_alignments(_residuals_ms(r, times_a, times_b), *sizes) for r in distinct]
     others = tuple(replace(r, chance=c) for r, c in zip(distinct[1:], chance[1:]) if c <= MAX_CHANCE)
-    return replace(best, ambiguous=ambiguous, chance=chance[0], others=others)
+    unconvincing = tuple(replace(r, chance=c) for r, c in zip(distinct[1:], chance[1:]) if c > MAX_CHANCE)
+    return replace(best, ambiguous=ambiguous, chance=chance[0], others=others, unconvincing=unconvincing)
 
 
 def _brighter_left(
@@ -527,7 +534,8 @@ def match_events(
     -------
     Matching
         With the pairs aligned that share at least :data:`MIN_SHARED_FLASHES` events and
-        have no rival shift.
+        have no rival shift, nor an unconvincing one at an undecided pair's rival's delay
+        (:func:`_at_a_rivals_delay`: those are undecided too).
     """
     anchors = anchors or {}
     memo = {} if memo is None else memo
@@ -563,8 +571,31 @@ def match_events(
     pairs = planned_pairs(names, estimate, convincing, MIN_SHARED_FLASHES)
     alignments = {pair: aligned(*pair) for pair in pairs if convincing(*pair)}
     undecided = {pair: aligned(*pair) for pair in pairs if aligned(*pair) is not None and aligned(*pair).undecided}
+    for pair, alignment in list(alignments.items()):
+        at_delay = _at_a_rivals_delay(alignment, undecided.values(), tolerance_ms)
+        if at_delay:
+            undecided[pair] = replace(alignment, others=alignment.others + at_delay)
+            del alignments[pair]
     n_events = {name: len(times) for name, times in times_ms.items()}
     return Matching(alignments, group_flashes(n_events, alignments), undecided)
+
+
+def _at_a_rivals_delay(
+    alignment: PairAlignment, undecided: Iterable[PairAlignment], tolerance_ms: float
+) -> tuple[PairAlignment, ...]:
+    """The :attr:`~PairAlignment.unconvincing` other shifts of ``alignment`` that line up a
+    rival's share of its events (:data:`RIVAL_SHIFT_FRACTION`) as far from it as an
+    ``undecided`` pair's rival lies from that pair's shift (within ``tolerance_ms``): a TTL
+    flash's pre-flash fires at one delay before it for the whole rig, so such a shift is no
+    chance alignment (random rig 817 with pre-flashes 60 ms early: cam1 and cam2 lined up
+    five events at the delay and three at the true shift, too few to convince alone)."""
+    delays = [abs(rival.beta - pair.beta) for pair in undecided for rival in pair.rivals]
+    return tuple(
+        other
+        for other in alignment.unconvincing
+        if len(other.matches) >= RIVAL_SHIFT_FRACTION * len(alignment.matches)
+        and any(abs(abs(other.beta - alignment.beta) - delay) <= tolerance_ms for delay in delays)
+    )[:MAX_RIVALS]
 
 
 def shared_flashes(camera: np.ndarray, flash: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,7 @@ from flashsync.diagnose import diagnose
 from flashsync.diagnose.measure import measure
 from flashsync.errors import NotEnoughDataError
 from flashsync.evaluate import camera_accuracy
-from flashsync.match import align_pair
+from flashsync.match import align_pair, match_events
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import random_rig, with_preflashes
 
@@ -217,6 +217,29 @@ def test_two_bright_events_left_unmatched_do_not_set_a_shift_aside():
     aligned = align_pair(a, b, tolerance_ms=10.0, strengths=(strength_a, strength_b))
     assert aligned.beta == pytest.approx(-5000.0, abs=1.0) and len(aligned.matches) == 9
     assert [other.beta for other in aligned.others] == [pytest.approx(-5060.0, abs=1.0)]
+
+
+def test_a_shift_at_the_rigs_pre_flash_delay_is_a_rival_though_it_would_not_convince_alone():
+    """x saw every pre-flash and flash, y every flash, w five flashes and then only the
+    pre-flashes of three (random rig 817's cam2 so, against cam1). x and y line up at two
+    shifts 60 ms apart: the rig's pre-flash delay. w and y line up five events at the true
+    shift and three at that delay, too few to convince on their own (chance above
+    :data:`~flashsync.match.MAX_CHANCE`): alone they count at the five; with x they are
+    undecided, the three at the delay their rival, for the solve's fit to decide (rig 817's
+    cam2 was otherwise tied at the delay, 60 ms off at error/sigma 16)."""
+    rng = np.random.default_rng(3)
+    flashes = np.cumsum(rng.uniform(400.0, 900.0, 10))
+    x = np.sort(np.concatenate([flashes - 60.0, flashes]))
+    y = flashes + 3000.0
+    w = np.sort(np.concatenate([flashes[:5], flashes[5:8] - 60.0])) - 2000.0
+    alone = match_events({"y": y, "w": w}, tolerance_ms=10.0)
+    assert ("y", "w") in alone.alignments and not alone.undecided
+    assert alone.alignments[("y", "w")].beta == pytest.approx(5000.0, abs=1.0)
+    rig = match_events({"x": x, "y": y, "w": w}, tolerance_ms=10.0)
+    assert ("y", "w") not in rig.alignments
+    pair = rig.undecided[("y", "w")]
+    assert pair.beta == pytest.approx(5000.0, abs=1.0)
+    assert [rival.beta for rival in pair.rivals] == [pytest.approx(5060.0, abs=1.0)]
 
 
 @pytest.mark.parametrize(
