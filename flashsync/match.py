@@ -67,8 +67,8 @@ BRIGHTER_LEFT = 2.5
 #: events at the true shift, and cam4's two flashes that cam2 missed, 2.75 times the matched
 #: median, set it aside for the pre-flash's delay, six events). Over 73 kept rigs (README,
 #: "Two flashes missed at random") four moved: rig 813 with pre-flashes solved (refused
-#: before), rig 416 with pre-flashes 0.163 -> 0.070 ms RMS, rig 817's cam2 60 ms off as before
-#: (tied through cam1 at the pre-flash's delay) at error/sigma 16 (was 43).
+#: before), rig 416 with pre-flashes 0.163 -> 0.070 ms RMS, rig 817's cam2 still 60 ms off
+#: (tied through cam1 at the pre-flash's delay; :func:`_at_a_rivals_delay` mends it).
 MIN_LEFT_EVENTS = 3
 #: Most rival shifts of a pair that the solve's fit may decide between (a flash with a
 #: pre-flash lines up a camera that saw the pre-flashes with one that did not at two).
