@@ -571,8 +571,9 @@ def match_events(
     pairs = planned_pairs(names, estimate, convincing, MIN_SHARED_FLASHES)
     alignments = {pair: aligned(*pair) for pair in pairs if convincing(*pair)}
     undecided = {pair: aligned(*pair) for pair in pairs if aligned(*pair) is not None and aligned(*pair).undecided}
+    delays_ms = [abs(rival.beta - alignment.beta) for alignment in undecided.values() for rival in alignment.rivals]
     for pair, alignment in list(alignments.items()):
-        at_delay = _at_a_rivals_delay(alignment, undecided.values(), tolerance_ms)
+        at_delay = _at_a_rivals_delay(alignment, delays_ms, tolerance_ms)
         if at_delay:
             undecided[pair] = replace(alignment, others=alignment.others + at_delay)
             del alignments[pair]
@@ -581,20 +582,20 @@ def match_events(
 
 
 def _at_a_rivals_delay(
-    alignment: PairAlignment, undecided: Iterable[PairAlignment], tolerance_ms: float
+    alignment: PairAlignment, delays_ms: list[float], tolerance_ms: float
 ) -> tuple[PairAlignment, ...]:
     """The :attr:`~PairAlignment.unconvincing` other shifts of ``alignment`` that line up a
-    rival's share of its events (:data:`RIVAL_SHIFT_FRACTION`) as far from it as an
-    ``undecided`` pair's rival lies from that pair's shift (within ``tolerance_ms``): a TTL
-    flash's pre-flash fires at one delay before it for the whole rig, so such a shift is no
-    chance alignment (random rig 817 with pre-flashes 60 ms early: cam1 and cam2 lined up
-    five events at the delay and three at the true shift, too few to convince alone)."""
-    delays = [abs(rival.beta - pair.beta) for pair in undecided for rival in pair.rivals]
+    rival's share of its events (:data:`RIVAL_SHIFT_FRACTION`) as far from it as one of
+    ``delays_ms`` (within ``tolerance_ms``): the distances, ms, of the undecided pairs'
+    rivals from their shifts, as the pairs were aligned. A TTL flash's pre-flash fires at
+    one delay before it for the whole rig, so such a shift is no chance alignment (random
+    rig 817 with pre-flashes 60 ms early: cam1 and cam2 lined up five events at the delay
+    and three at the true shift, too few to convince alone)."""
     return tuple(
         other
         for other in alignment.unconvincing
         if len(other.matches) >= RIVAL_SHIFT_FRACTION * len(alignment.matches)
-        and any(abs(abs(other.beta - alignment.beta) - delay) <= tolerance_ms for delay in delays)
+        and any(abs(abs(other.beta - alignment.beta) - delay) <= tolerance_ms for delay in delays_ms)
     )[:MAX_RIVALS]
 
 
