@@ -389,7 +389,8 @@ def _synchronized(
     if any(alignment.others for alignment in best.alignments.values()):
         best = final(best.cameras, other_shifts=True)
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
-    for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
+    rate_spread = {reference: _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)}
+    for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items(), *rate_spread.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
         best, {d.camera: d for d in detections}, stepped
@@ -953,23 +954,30 @@ def _turned_for_display(cameras: dict[str, CameraDetection]) -> list[str]:
     ]
 
 
-#: A reference whose frame clock's rate is uncertain by more than this over half its
-#: recording (ms) is warned about.
-REFERENCE_RATE_DOUBT_MS = 0.03
+def _rate_spread_ms(clock: FrameClock, times_ms: np.ndarray) -> np.ndarray:
+    """Per frame (``times_ms``, shape (n_frames,)), the standard deviation (ms) the error of
+    the clock's rate (:attr:`FrameClock.rate_std`) puts on its time counted from its first
+    frame. The reference's, in its frame times' sigma: the global clock is the reference's
+    and its origin the reference's first frame, so no drift takes that error up and every
+    camera's times share it (not against each other)."""
+    return clock.rate_std * np.abs(times_ms - times_ms[0])
+
+
+#: A reference whose frame clock's rate is uncertain by more than this by its last frame
+#: (ms, :func:`_rate_spread_ms`) is warned about.
+REFERENCE_RATE_DOUBT_MS = 0.06
 
 
 def _reference_rate_doubt(clocks: dict[str, FrameClock], reference: str, best: _Attempt) -> list[str]:
-    """A warning where the reference's stamps leave its clock's rate uncertain
-    (:attr:`FrameClock.rate_std` x half its recording > :data:`REFERENCE_RATE_DOUBT_MS`):
-    the global clock is the reference's, so every camera's times share that error (their
-    times against each other do not); naming the tied camera whose clock is steadiest. A
-    3-hour recording averages jitter away; 8 s of 50 fps stamps jittered by 0.79 ms leave
-    17 ppm (random rig 10: four of its cameras 0.18-0.19 ms RMS off the truth, 0.08-0.09
-    against the reference)."""
+    """A warning where the reference's stamps leave its clock's rate uncertain by more than
+    :data:`REFERENCE_RATE_DOUBT_MS` by its last frame: the global clock is the reference's,
+    so every camera's times share that error (their times against each other do not);
+    naming the tied camera whose clock is steadiest. A 3-hour recording averages jitter
+    away; 8 s of 50 fps stamps jittered by 0.79 ms leave 17 ppm (random rig 10: four of its
+    cameras 0.18-0.19 ms RMS off the truth, 0.08-0.09 against the reference)."""
 
     def spread_ms(name: str) -> float:
-        times = clocks[name].times_ms
-        return clocks[name].rate_std * float(times[-1] - times[0]) / 2.0
+        return float(_rate_spread_ms(clocks[name], clocks[name].times_ms)[-1])
 
     if spread_ms(reference) <= REFERENCE_RATE_DOUBT_MS:
         return []
@@ -978,8 +986,9 @@ def _reference_rate_doubt(clocks: dict[str, FrameClock], reference: str, best: _
         return []
     return [
         f"{best.cameras[reference].video}: the reference's frame stamps leave its clock's rate uncertain by "
-        f"{clocks[reference].rate_std * 1e6:.1f} ppm, the global clock's: every camera's times are off by up to "
-        f"{spread_ms(reference):.3f} ms at the ends of the recording alike (not against each other); "
+        f"{clocks[reference].rate_std * 1e6:.1f} ppm, the global clock's: every camera's times may be off by up to "
+        f"{spread_ms(reference):.3f} ms by the end of the recording alike (in the reference's sigma; not against "
+        "each other); "
         f"{best.cameras[steadiest].video.name} has steadier stamps: make it the reference (--reference {steadiest})"
     ]
 
