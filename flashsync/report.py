@@ -136,8 +136,8 @@ def sync_table(model: SyncModel, report=None) -> str:
 SIGMA_MEANING = (
     "sync ± ms: 1σ of a camera's times on the reference's clock, the edges' noise, the scatter of the solve "
     "with each flash left out and what an error its split bands' lengths share moves (the reference's: its rows' "
-    "below its first, whose times are the clock); a camera against the reference's rows: the root of the sum of "
-    "both squares"
+    "below its first and its stamps' rate's after its first frame, whose first row is the clock); a camera against "
+    "the reference's rows: the root of the sum of both squares"
 )
 
 
