@@ -956,11 +956,18 @@ def _turned_for_display(cameras: dict[str, CameraDetection]) -> list[str]:
 
 def _rate_spread_ms(clock: FrameClock, times_ms: np.ndarray) -> np.ndarray:
     """Per frame (``times_ms``, shape (n_frames,)), the standard deviation (ms) the error of
-    the clock's rate (:attr:`FrameClock.rate_std`) puts on its time counted from its first
-    frame. The reference's, in its frame times' sigma: the global clock is the reference's
-    and its origin the reference's first frame, so no drift takes that error up and every
-    camera's times share it (not against each other)."""
-    return clock.rate_std * np.abs(times_ms - times_ms[0])
+    the clock's rate puts on its time counted from its first frame: the stamps' jitter beyond
+    their grid's rounding (quantum**2 / 12) is white, and its share of
+    :attr:`FrameClock.rate_std` is that rate's error; a steady clock's stamps rounded to a
+    grid are not (their rounding errors spread evenly over a period, and the rate they leave
+    is seven times better than ``rate_std``: 25 references of the kept benches on a 1 ms grid,
+    error over it RMS 0.14; 20 with jittered stamps, 1.00). The reference's, in its frame
+    times' sigma: the global clock is the reference's and its origin the reference's first
+    frame, so no drift takes that error up and every camera's times share it (not against
+    each other)."""
+    beyond_grid = np.sqrt(max(clock.jitter_ms**2 - clock.quantum_ms**2 / 12.0, 0.0))
+    share = beyond_grid / clock.jitter_ms if clock.jitter_ms > 0 else 0.0
+    return share * clock.rate_std * np.abs(times_ms - times_ms[0])
 
 
 #: A reference whose frame clock's rate is uncertain by more than this by its last frame

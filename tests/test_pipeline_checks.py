@@ -19,6 +19,7 @@ from flashsync.diagnose import diagnose
 from flashsync.errors import InputError, NotEnoughDataError
 from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker
+from flashsync.frame_clock import fit_frame_clock
 from flashsync.match import nominal_row_time_ms
 from flashsync.model import SyncModel
 from flashsync.pipeline import (
@@ -499,3 +500,19 @@ def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
     assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5)) == {}
     assert _told(short=dict(rows=3.5, solved=0.35)) == {}
     assert _told(ramps=dict(rows=40.0)) == {}
+
+
+def test_the_references_rate_spread_is_its_stamps_jitter_not_their_grid():
+    """The reference's frame times carry what its stamps leave of its clock's rate, counted
+    from its first frame (:func:`~flashsync.pipeline._rate_spread_ms`): white jitter gives
+    the rate's standard error its full share, by 8 s of 59.94 fps stamps jittered 0.5 ms
+    about 0.1 ms; a steady clock only rounded to a 1 ms grid, whose rounding leaves its rate
+    seven times better than white noise of that RMS would, none."""
+    ladder = 1234.5 + np.arange(480) * 1000.0 / 59.94
+    jittered = fit_frame_clock(ladder + np.random.default_rng(0).normal(0.0, 0.5, len(ladder)))
+    spread = pipeline._rate_spread_ms(jittered, jittered.times_ms)
+    assert spread[0] == 0.0 and spread[-1] == pytest.approx(jittered.rate_std * np.ptp(ladder), rel=0.01)
+    assert 0.05 < spread[-1] < 0.2
+    rounded = fit_frame_clock(np.round(ladder))
+    assert rounded.quantum_ms == 1.0 and rounded.rate_std > 1e-6
+    assert pipeline._rate_spread_ms(rounded, rounded.times_ms)[-1] < 0.002
