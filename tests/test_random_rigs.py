@@ -147,7 +147,9 @@ def test_a_reference_with_jittered_stamps_is_warned_about_and_in_its_sigma(rig_4
     assert "(--reference cam" in warning and "(--reference cam1)" not in warning, warning
     first_and_last = np.array([0, len(reference.frame_times_ms) - 1])
     clock = model.camera(reference.camera)
-    error = np.diff(clock.t_global_ms(first_and_last, 0.0) - truth.global_time_ms("cam1", first_and_last, 0.0))
+    error = np.diff(
+        clock.t_global_ms(first_and_last, 0.0) - truth.global_time_ms(reference.camera, first_and_last, 0.0)
+    )
     sigma = clock.t_global_std_ms(first_and_last, np.zeros(2))
     assert abs(error[0]) > 0.06 and sigma[1] > 0.5 * abs(error[0]) and sigma[1] < 3 * abs(error[0]), (error, sigma)
     model, report = synchronize(detections)
