@@ -389,9 +389,10 @@ def _synchronized(
     if any(alignment.others for alignment in best.alignments.values()):
         best = final(best.cameras, other_shifts=True)
     half_spreads = {name: 0.5 * spread for name, spread in exposure_spreads.items()}
-    rate_spread = {reference: _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)}
-    for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items(), *rate_spread.items()]:
+    for name, spread in [*spreads.items(), *best.shift_spreads.items(), *half_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
+    rate_spread = _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)
+    frame_std[reference] = np.hypot(frame_std[reference], rate_spread)
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
         best, {d.camera: d for d in detections}, stepped
     )
