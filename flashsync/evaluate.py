@@ -9,18 +9,18 @@ Calibration of the predicted uncertainty compares errors with a ``sigma`` functi
 default `predicted_std_ms`, i.e. `CameraClock.t_global_std_ms` from the solve's
 covariance); pass another one to try a new definition of sigma:
 
-- per camera, the error of each probe against ``sigma`` of the camera and of the reference
-  camera at the same true instant, ``sqrt(sigma_c**2 + sigma_ref**2)``: a camera's sigma
-  is its uncertainty on the reference's clock (the reference's edges' share in it: see
-  :mod:`flashsync.jackknife`), the reference's that of its rows below its first, and the
-  error is measured against the reference's clock. The reference camera's own calibration
-  is not defined (NaN);
+- per camera, the error of each probe against its ``sigma``: a camera's sigma is its
+  uncertainty against the true global clock, the reference's, whose share it holds (see
+  :func:`flashsync.pipeline._reference_share_ms`). The reference camera's own calibration
+  is not defined (NaN): at its first frame's first row its error and sigma are 0 by the
+  origin convention, and further down they are its rows' and its clock's rate's;
 - pairwise, for every camera including the reference: each probe of camera ``c`` is
   located in every other camera ``d`` at the same true instant (frame and row, from the
   truth; skipped where ``d`` is not recording then), and the error of the difference
   ``t_c - t_d`` is compared with ``sqrt(sigma_c**2 + sigma_d**2)``. The model keeps only
   each camera's own covariance block, so this treats the cameras' errors as independent
-  (the cross-covariance of the joint solve is not stored).
+  (the cross-covariance of the joint solve is not stored), and two cameras other than the
+  reference count its share twice.
 """
 
 from __future__ import annotations
@@ -184,7 +184,7 @@ def camera_accuracy(
     Columns: ``camera``; ``reference``; ``solved`` (in the model); ``rms_ms``, ``max_ms``
     (sync error over the probes); ``reference_rms_ms`` (RMS of the error of its times
     against the reference's at the same instants: free of the global clock's own error;
-    NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over them);
+    NaN for the reference); ``sigma_rms_ms`` (RMS of the predicted sigma over the probes);
     ``exposure_error_ms`` (model - truth, the exposure held over the most frames where it
     changes; NaN where the model has none) and ``exposure_z``
     (over its standard deviation; NaN where the model states none); ``exposure_frames_rms_ms``
@@ -193,8 +193,8 @@ def camera_accuracy(
     its standard deviation);
     ``row_time_error_pct`` (relative error of the time per row, %) and ``row_time_z`` (its
     error over its predicted standard deviation); ``z_rms`` and
-    ``within_2sigma`` (RMS of error / sigma and the fraction of probes within 2 sigma; NaN
-    for the reference); ``pair_z_rms`` and ``pair_within_2sigma`` (the same for the
+    ``within_2sigma`` (RMS of error / sigma over the probes and the fraction within 2
+    sigma; NaN for the reference); ``pair_z_rms`` and ``pair_within_2sigma`` (the same for the
     differences with every other solved camera, see the module docstring). Cameras the
     model left out have NaN everywhere.
     """
@@ -212,12 +212,12 @@ def camera_accuracy(
         pairs = [pair_errors(model, truth, name, other, row_step, sigma) for other in model.cameras if other != name]
         pair_error = np.concatenate([e for e, _ in pairs]) if pairs else np.empty(0)
         pair_std = np.concatenate([s for _, s in pairs]) if pairs else np.empty(0)
-        against_reference, against_std = (
-            pair_errors(model, truth, name, model.reference, row_step, sigma)
+        against_reference = (
+            pair_errors(model, truth, name, model.reference, row_step, sigma)[0]
             if name != model.reference
-            else (np.empty(0), np.empty(0))
+            else np.empty(0)
         )
-        z_rms, within = _z_stats(against_reference, against_std)
+        z_rms, within = _z_stats(error, std) if name != model.reference else (float("nan"), float("nan"))
         pair_z_rms, pair_within = _z_stats(pair_error, pair_std)
         exposure = camera.exposure_ms if camera.exposure_ms is not None else float("nan")
         exposure_std = camera.exposure_std_ms if camera.exposure_std_ms is not None else float("nan")

@@ -21,7 +21,7 @@ from flashsync.events import Band, Edge, Events, Flag
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import fit_frame_clock
 from flashsync.match import nominal_row_time_ms
-from flashsync.model import SyncModel
+from flashsync.model import CameraClock, SyncModel
 from flashsync.pipeline import (
     EDGE_NOISE_FLOOR_ROWS,
     EDGE_NOISE_QUALITY,
@@ -500,6 +500,23 @@ def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
     assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5)) == {}
     assert _told(short=dict(rows=3.5, solved=0.35)) == {}
     assert _told(ramps=dict(rows=40.0)) == {}
+
+
+def test_a_cameras_reference_share_is_the_references_sigma_then():
+    """Every camera's times against the truth carry the global clock's own error, the
+    reference's (:func:`~flashsync.pipeline._reference_share_ms`): per frame of a camera,
+    the reference's sigma, RMS over its rows, in the frame it records when the camera reads
+    its middle row. Here a 25 fps reference of 200 rows whose frame sigma grows 0.01 ms per
+    frame and whose time per row is 0.00005 ms sure; a 50 fps camera read 3 ms later."""
+    frames = np.arange(100)
+    reference = CameraClock("ref", frames * 40.0, 200, 320, row_time_ms=0.1, covariance=np.diag([0.0, 0.0, 5e-5**2]))
+    reference.frame_std_ms = 0.01 * frames
+    camera = CameraClock("cam", np.arange(200) * 20.0 + 3.0, 100, 160, beta_ms=0.0, row_time_ms=0.05)
+    share = pipeline._reference_share_ms(reference, camera)
+    rows = np.linspace(0.0, 199.0, pipeline.SHARE_ROWS)
+    held = np.minimum((np.arange(200) * 20.0 + 3.0 + 50 * 0.05) // 40.0, 99).astype(int)
+    assert share.shape == (200,)
+    assert share == pytest.approx(np.sqrt((0.01 * held) ** 2 + np.mean((5e-5 * rows) ** 2)))
 
 
 def test_the_references_rate_spread_is_its_stamps_jitter_not_their_grid():
