@@ -10,7 +10,7 @@ default `predicted_std_ms`, i.e. `CameraClock.t_global_std_ms` from the solve's
 covariance); pass another one to try a new definition of sigma:
 
 - per camera, the error of each probe against its ``sigma``: a camera's sigma is its
-  uncertainty against the true global clock, the reference's, whose share it holds (see
+  uncertainty against the true global clock, the reference's, whose shared errors it holds (see
   :func:`flashsync.pipeline._reference_share_ms`). The reference camera's own calibration
   is not defined (NaN): at its first frame's first row its error and sigma are 0 by the
   origin convention, and further down they are its rows' and its clock's rate's;

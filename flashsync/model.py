@@ -82,8 +82,9 @@ class CameraClock:
     frame_std_ms : ndarray of shape (n_frames,)
         Standard deviation of each frame time beyond the map's (the frame clock's: stamps
         kept as they are, a clock's wander, segments of a clock that changed rate; and, of a
-        camera other than the reference, the reference's sigma then, the global clock's own,
-        as :func:`~flashsync.pipeline.synchronize` makes it), ms; zeros where the frame
+        camera other than the reference, the reference's errors then that every camera
+        shares, the global clock's own, as :func:`~flashsync.pipeline.synchronize` makes
+        it), ms; zeros where the frame
         times are exact up to the map (the default).
     display_rotation_deg : int
         Degrees counterclockwise a player turns the stored frames for showing (-90, 0, 90 or

@@ -431,7 +431,8 @@ def _synchronized(
             clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
     for name, clock in model.cameras.items():
         if name != reference:
-            clock.frame_std_ms = np.hypot(clock.frame_std_ms, _reference_share_ms(model.cameras[reference], clock))
+            share = _reference_share_ms(model.cameras[reference], rate_spread, clock)
+            clock.frame_std_ms = np.hypot(clock.frame_std_ms, share)
     return model, report
 
 
@@ -439,19 +440,24 @@ def _synchronized(
 SHARE_ROWS = 16
 
 
-def _reference_share_ms(reference: CameraClock, camera: CameraClock) -> np.ndarray:
-    """Per frame of ``camera`` (shape (n_frames,)), the reference's sigma (ms) in the frame
-    it records when ``camera`` reads its middle row, RMS over its rows: its frame times'
-    own, its clock's rate (:func:`_rate_spread_ms`) and its rows below its first. The global
-    clock is the reference's, so every camera's times against the truth carry that error,
-    whatever the flashes tie them by (their times against each other do not). Against the
-    truth on nine kept benches (586 cameras other than the reference), their errors over their
-    own sigma: RMS 1.16, 37 over 2, 93 % of the probes within 2 sigma; with the reference's
-    share, 0.84, 10 and 98 % (the errors unchanged); with its frame times' and rate's alone
-    (not its rows'), 1.06 and 18 of 424 where 1.20 and 32."""
+def _reference_share_ms(reference: CameraClock, rate_spread_ms: np.ndarray, camera: CameraClock) -> np.ndarray:
+    """Per frame of ``camera`` (shape (n_frames,)), the errors of the reference that every
+    camera's times share (ms), in the frame the reference records when ``camera`` reads its
+    middle row: its rows' below its first (its covariance's, RMS over its rows) and its
+    clock's rate's (``rate_spread_ms``, per reference frame: :func:`_rate_spread_ms`). The
+    global clock is the reference's, so every camera's times against the truth carry them,
+    whatever the flashes tie them by (their times against each other do not); not its frame
+    times' own scatter beyond those (stamps kept as they are: white from frame to frame, which
+    the fit of every camera's clock to many flashes averages). Against the truth on nine kept
+    benches (586 cameras other than the reference), their errors over their own sigma: RMS
+    1.16, 37 over 2, 93 % of the probes within 2 sigma; with the reference's share, 0.84, 10
+    and 98 % (the errors unchanged); with its rate's alone (not its rows'), 1.06 and 18 of
+    424 where 1.20 and 32."""
     frames = np.arange(reference.n_frames)
     rows = np.linspace(0.0, reference.height - 1.0, SHARE_ROWS)
-    share = np.sqrt(np.mean(reference.t_global_std_ms(frames[:, None], rows[None, :]) ** 2, axis=1))
+    rows_only = replace(reference, frame_std_ms=np.zeros(reference.n_frames))
+    rows_ms = np.sqrt(np.mean(rows_only.t_global_std_ms(frames[:, None], rows[None, :]) ** 2, axis=1))
+    share = np.hypot(rows_ms, rate_spread_ms)
     middle = camera.t_global_ms(np.arange(camera.n_frames), np.full(camera.n_frames, camera.height / 2.0))
     return share[np.clip(reference.locate(middle)[0], 0, reference.n_frames - 1)]
 
