@@ -84,8 +84,7 @@ class CameraClock:
         kept as they are, a clock's wander, segments of a clock that changed rate; and, of a
         camera other than the reference, the reference's errors then that every camera
         shares, the global clock's own, as :func:`~flashsync.pipeline.synchronize` makes
-        it), ms; zeros where the frame
-        times are exact up to the map (the default).
+        it), ms; zeros where the frame times are exact up to the map (the default).
     display_rotation_deg : int
         Degrees counterclockwise a player turns the stored frames for showing (-90, 0, 90 or
         180: the display matrix of a phone held upright); rows are always the stored frame's.

@@ -58,8 +58,8 @@ def test_every_camera_is_read_the_right_way_up_or_warned(solved):
 
 def test_sigma_is_calibrated(solved):
     """Error / sigma of the non-reference cameras against the truth (their sigma holds the
-    reference's) has an RMS of at most 2, pairwise too, and over the rigs 90 % of the probes lie within 2
-    sigma (the issue's measure; one camera alone may have fewer). Per camera: none over 3
+    reference's) has an RMS of at most 2, pairwise too, and over the rigs 90 % of the probes
+    lie within 2 sigma (the issue's measure; one camera alone may have fewer). Per camera: none over 3
     and at most one over 2. A camera's RMS is one draw too, and an exact sigma puts it over
     2 for about 2 % of cameras (chi-square of two degrees of freedom over two above 4:
     e^-4), over 3 for 0.01 %: with "every camera at most 2" one suite run in ten or so
