@@ -11,7 +11,7 @@ covariance); pass another one to try a new definition of sigma:
 
 - per camera, the error of each probe against its ``sigma``: a camera's sigma is its
   uncertainty against the true global clock, the reference's, whose shared errors it holds (see
-  :func:`flashsync.pipeline._reference_share_ms`). The reference camera's own calibration
+  :func:`flashsync.pipeline._reference_shares_ms`). The reference camera's own calibration
   is not defined (NaN): at its first frame's first row its error and sigma are 0 by the
   origin convention, and further down they are its rows' and its clock's rate's;
 - pairwise, for every camera including the reference: each probe of camera ``c`` is

@@ -429,21 +429,22 @@ def _synchronized(
         if name in changes_ms:
             clock.exposure_spans = _held_exposures(clock, shown[name]) if shown.get(name) else ()
             clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
-    for name, clock in model.cameras.items():
-        if name != reference:
-            share = _reference_share_ms(model.cameras[reference], rate_spread, clock)
-            clock.frame_std_ms = np.hypot(clock.frame_std_ms, share)
+    others = [clock for name, clock in model.cameras.items() if name != reference]
+    for clock, share in zip(others, _reference_shares_ms(model.cameras[reference], rate_spread, others)):
+        clock.frame_std_ms = np.hypot(clock.frame_std_ms, share)
     return model, report
 
 
-#: Rows of the reference at which its sigma is sampled for :func:`_reference_share_ms`.
+#: Rows of the reference at which its sigma is sampled for :func:`_reference_shares_ms`.
 SHARE_ROWS = 16
 
 
-def _reference_share_ms(reference: CameraClock, rate_spread_ms: np.ndarray, camera: CameraClock) -> np.ndarray:
-    """Per frame of ``camera`` (shape (n_frames,)), the errors of the reference that every
-    camera's times share (ms), in the frame the reference records when ``camera`` reads its
-    middle row: its rows' below its first (its covariance's, RMS over its rows) and its
+def _reference_shares_ms(
+    reference: CameraClock, rate_spread_ms: np.ndarray, cameras: list[CameraClock]
+) -> list[np.ndarray]:
+    """Per camera of ``cameras``, per frame (shape (n_frames,)), the errors of the reference
+    that every camera's times share (ms), in the frame the reference records when the camera
+    reads its middle row: its rows' below its first (its covariance's, RMS over its rows) and its
     clock's rate's (``rate_spread_ms``, per reference frame: :func:`_rate_spread_ms`). The
     global clock is the reference's, so every camera's times against the truth carry them,
     whatever the flashes tie them by (their times against each other do not); not its frame
@@ -458,8 +459,11 @@ def _reference_share_ms(reference: CameraClock, rate_spread_ms: np.ndarray, came
     rows_only = replace(reference, frame_std_ms=np.zeros(reference.n_frames))
     rows_ms = np.sqrt(np.mean(rows_only.t_global_std_ms(frames[:, None], rows[None, :]) ** 2, axis=1))
     share = np.hypot(rows_ms, rate_spread_ms)
-    middle = camera.t_global_ms(np.arange(camera.n_frames), np.full(camera.n_frames, camera.height / 2.0))
-    return share[np.clip(reference.locate(middle)[0], 0, reference.n_frames - 1)]
+    shares = []
+    for camera in cameras:
+        middle = camera.t_global_ms(np.arange(camera.n_frames), np.full(camera.n_frames, camera.height / 2.0))
+        shares.append(share[np.clip(reference.locate(middle)[0], 0, reference.n_frames - 1)])
+    return shares
 
 
 def _without_backward_readings(

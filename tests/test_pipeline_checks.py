@@ -504,7 +504,7 @@ def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
 
 def test_a_cameras_reference_share_is_the_references_rows_and_rate_then():
     """Every camera's times against the truth carry the global clock's own errors, the
-    reference's that all cameras share (:func:`~flashsync.pipeline._reference_share_ms`):
+    reference's that all cameras share (:func:`~flashsync.pipeline._reference_shares_ms`):
     per frame of a camera, the reference's rows' (RMS over them) and its clock's rate's, in
     the frame it records when the camera reads its middle row; not the scatter of its kept
     stamps, white from frame to frame. Here a 25 fps reference of 200 rows whose time per row
@@ -514,7 +514,7 @@ def test_a_cameras_reference_share_is_the_references_rows_and_rate_then():
     reference = CameraClock("ref", frames * 40.0, 200, 320, row_time_ms=0.1, covariance=np.diag([0.0, 0.0, 5e-5**2]))
     reference.frame_std_ms = np.hypot(0.01 * frames, 1.0)
     camera = CameraClock("cam", np.arange(200) * 20.0 + 3.0, 100, 160, beta_ms=0.0, row_time_ms=0.05)
-    share = pipeline._reference_share_ms(reference, 0.01 * frames, camera)
+    (share,) = pipeline._reference_shares_ms(reference, 0.01 * frames, [camera])
     rows = np.linspace(0.0, 199.0, pipeline.SHARE_ROWS)
     held = np.minimum((np.arange(200) * 20.0 + 3.0 + 50 * 0.05) // 40.0, 99).astype(int)
     assert share.shape == (200,)

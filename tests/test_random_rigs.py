@@ -168,7 +168,7 @@ def test_a_reference_with_jittered_stamps_is_warned_about_and_in_its_sigma(rig_4
 def test_every_cameras_sigma_holds_the_references(rig_4_jittered):
     """The errors of the reference's clock, the global clock, are every camera's against the
     truth: each camera's frame times carry the reference's then
-    (:func:`~flashsync.pipeline._reference_share_ms`), its rows' below its first (RMS over
+    (:func:`~flashsync.pipeline._reference_shares_ms`), its rows' below its first (RMS over
     them; here 0.4 ms, its time per row pinned to 3.6 %) and, by its last frame, what its
     jittered stamps leave of its clock's rate (0.14 ms). Before 2026-12-03 the cameras with
     exact stamps had no frame sigma at all."""
