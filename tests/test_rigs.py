@@ -15,6 +15,7 @@ import pytest
 from flashsync.errors import FlashsyncError
 from flashsync.simulation import render_scenario
 from flashsync.simulation.rigs import (
+    NTSC_24,
     NTSC_30,
     NTSC_60,
     RATES,
@@ -157,6 +158,8 @@ def test_recipes_rebuild_the_issue_rigs_in_the_second_world():
     phases = [(c.offset_ms + c.start_ms) % 40.0 for c in locked]  # the world time of a frame's start, mod 40 ms
     assert [c.fps for c in locked] == [25.0] * 3 and all(c.drift_ppm == 0.0 for c in locked)
     assert phases[0] == 0.0 and all(0.0 < p < 0.3 for p in phases[1:])
+    assert [(c.fps, c.exposure_ms) for c in rigs["action-cams"].cameras] == [(120.0, 2.0), (30.0, 4.0), (240.0, 1.0)]
+    assert [c.fps for c in rigs["slow-rates"].cameras] == [15.0, 20.0, NTSC_24]
     long = recipe("long-pair")
     assert long.duration_ms == 900_000.0 and len(long.flashes) == 30
     assert long.cameras[1].drift_rate_ppm_per_s > 0 and long.player_radius_m == (0.55, 1.1)

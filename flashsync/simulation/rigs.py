@@ -73,6 +73,7 @@ from flashsync.simulation.scene import rink_to_image
 
 NTSC_30 = 30000 / 1001
 NTSC_60 = 60000 / 1001
+NTSC_24 = 24000 / 1001
 RATES = (25.0, NTSC_30, 30.0, 50.0, NTSC_60)
 SIZES = ((320, 180), (480, 270), (640, 360), (960, 540), (1280, 720), (1920, 1080))
 PULSES = ("exponential", "xenon", "led", "slow rise")
@@ -404,6 +405,24 @@ _NEAR = dict(_LINEAR, position_m=(30.0, -4.0, 10.0), look_at_m=(30.0, 12.0), hfo
 _FAR_SIDE = dict(_LINEAR, position_m=(30.0, 34.0, 10.0), look_at_m=(30.0, 18.0), hfov_deg=60.0)
 
 
+def _action_cams(seed: int, duration_ms: float) -> Scenario:
+    return _recipe(
+        "action-cams",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 120.0, 2.0, {}), ("cam2", 640, 360, 30.0, 4.0, {}), ("cam3", 640, 360, 240.0, 1.0, {})],
+    )
+
+
+def _slow_rates(seed: int, duration_ms: float) -> Scenario:
+    return _recipe(
+        "slow-rates",
+        seed,
+        duration_ms,
+        [("cam1", 640, 360, 15.0, 10.0, {}), ("cam2", 640, 360, 20.0, 8.0, {}), ("cam3", 640, 360, NTSC_24, 10.0, {})],
+    )
+
+
 def _large_movers(seed: int, duration_ms: float) -> Scenario:
     return _recipe(
         "large-movers",
@@ -476,7 +495,9 @@ def _flash_free(seed: int, duration_ms: float) -> Scenario:
 #: ``jittered-stamps`` (stamps of one camera jittered by 1.2 ms) and ``stamp-rate-change``
 #: (one camera's stamps advance 1.5x as fast from its middle frame on) the stamp faults of
 #: the silent-harm issue; ``line-locked`` (three 25 fps cameras on one clock, in one phase)
-#: the equal-rate case of a time per row the flashes barely pin.
+#: the equal-rate case of a time per row the flashes barely pin; ``action-cams`` (120 and
+#: 240 fps cameras beside a 30 fps one: pulses tens of rows long) and ``slow-rates`` (IP and
+#: cinema cameras at 15, 20 and 23.976 fps) rates outside the random rigs' 25-59.94.
 RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
     "four-ms-drops": (_four_ms_drops, 30_000.0),
     "three-rates-flipped": (_three_rates_flipped, 30_000.0),
@@ -491,6 +512,8 @@ RECIPES: dict[str, tuple[Callable[[int, float], Scenario], float]] = {
     "jittered-stamps": (_jittered_stamps, 30_000.0),
     "stamp-rate-change": (_stamp_rate_change, 30_000.0),
     "line-locked": (_line_locked, 30_000.0),
+    "action-cams": (_action_cams, 12_000.0),
+    "slow-rates": (_slow_rates, 30_000.0),
 }
 
 
