@@ -53,9 +53,9 @@ strobes), where `random_rig` draws each rig's pulse lengths from one range.
 `with_exposure_changes` gives some cameras one auto-exposure change mid-recording.
 
 `RECIPES` names fixed rigs: the independent-footage rigs of the honest-numbers issue's
-table and the real-light issue's cases, re-created with second-world settings (xenon or
-LED pulses, a tone curve, crf 18-30, exposures 2-6 ms); their seed draws only those
-settings, the flash instants and the scene.
+table, the real-light issue's cases and frame rates outside `random_rig`'s (15-24 and
+120-240 fps), re-created with second-world settings (xenon or LED pulses, a tone curve, crf
+18-30); their seed draws only those settings, the flash instants and the scene.
 """
 
 from __future__ import annotations
