@@ -135,8 +135,9 @@ def profile_stacks(draw):
 @given(profile_stacks(), st.floats(0, 0.1), st.floats(0, 0.02))
 def test_relative_change_never_raises(stack, min_level, min_step):
     history, current = stack
-    change, agree, noise, peak, lit_start, lit_stop = _relative_change(history, current, min_level, min_step)
+    change, agree, blocks, noise, peak, lit_start, lit_stop = _relative_change(history, current, min_level, min_step)
     assert change.shape == agree.shape == (current.shape[0],)
+    assert blocks.shape == current.shape
     assert np.all((agree >= 0) & (agree <= 1))
     assert 0 <= lit_start < lit_stop <= current.shape[0]
 
