@@ -125,9 +125,9 @@ class DetectorSettings:
         most are uncoded make a band at the gain's level, their blocks in patches, and the
         frame's quiet rows carry the same patches (random rig 810's reference, 59.94 fps at
         14 ms under TTL flashes: five such bands of 6-32 rows above flashes' bands, three
-        matched in place of flashes, its time per row 6 % short). Of the 9,664 bands of 751
-        cameras on eleven kept benches, it takes out 58 that no flash made and 2 of a flash
-        (7 and 8 rows at a frame's foot, where the band goes on in the next frame).
+        matched in place of flashes, its time per row 6 % short). Of the 10,467 bands of 826
+        cameras on fourteen kept benches, it takes out 77 that no flash made and 4 of
+        flashes (3-13 rows each; two at a frame's foot, the band going on in the next).
     clutter_factor : float
         Threshold in units of the video's clutter: the median over recent frames of each
         frame's largest change (what players, leftover flicker and the codec leave in frames
