@@ -128,13 +128,14 @@ def test_the_demo_syncs_the_sample_and_checks_it_against_the_truth(tmp_path, cap
 
 def test_an_exposure_the_bands_do_not_pin_to_a_tenth_of_a_millisecond_is_warned(tmp_path, capsys):
     """The sample's cam4 (seven flashes, stamps jittered 0.1 ms): its exposure comes out
-    11.87 ± 0.12 ms (truth 12); ``sync`` warns about it, and about no other camera's
-    (± 0.03-0.04 ms)."""
+    11.87 ± 0.15 ms (truth 12), its bands' lengths alone ± 0.12; ``sync`` warns about it,
+    and about no other camera's (± 0.03-0.04 ms by their lengths; 0.07-0.11 with the share
+    an unknown tone curve adds, which is no reason to warn)."""
     samples = Path(__file__).resolve().parents[1] / "samples"
     videos = [samples / name for name in ("cam1.mp4", "cam2.mkv", "cam3.mp4", "cam4.mp4")]
     code, _, err = run(capsys, "sync", *videos, "-o", tmp_path / "sync.json")
     warned = [line for line in err.splitlines() if "its exposure is" in line]
-    assert code == 0 and len(warned) == 1 and "cam4.mp4: its exposure is 11.87 ± 0.12 ms" in warned[0], err
+    assert code == 0 and len(warned) == 1 and "cam4.mp4: its exposure is 11.87 ± 0.15 ms" in warned[0], err
 
 
 def test_help_of_every_command_has_an_example():
