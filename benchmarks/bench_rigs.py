@@ -16,7 +16,8 @@ events on frames that show no flash are false, flashes seen with no event are mi
 every clean edge (no flag) against the row its flash truly marks, by its band's quality, with
 the noise the solve assumes there (`flashsync.pipeline.edge_noise_rows`), and every flash
 edge's median error by its camera's tone curve and its kind (paired, or lone), their
-spread by the encoder's crf, and the lone ones' by their distance from the frame's cut; and
+spread by the encoder's crf, and the lone ones' and those of bands split across two frames
+by their distance from the frame's cut; and
 every rolling flicker period that named the mains frequency against the true one, over the
 standard deviation flashsync takes (``Flicker.period_rows_sigma``) and over its spread alone.
 
@@ -87,15 +88,17 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
     flash had given half its light, rows; for the clean ones (no flag) with their band's
     ``quality`` (``edge_quality``, ``edge_error_rows``), for all with their kind
     (``flash_edge_kinds``: leading or trailing, paired or lone where the other edge is
-    hidden; ``flash_edge_error_rows``) and, for a lone one, how far it lies from the frame's
-    end on the side its partner is hidden, in its ramp's 25 %-to-75 % rises
-    (``flash_edge_cut_rises``: readout rows to the last row from a leading edge, from the
-    first to a trailing one; NaN for a paired edge). An edge on a frame of no flash the
-    camera saw is left out, and every edge of a reading that is not the camera's true one."""
+    hidden; ``flash_edge_error_rows``) and, for a lone one or one of a band split across two
+    frames, how far it lies from the frame's end its band runs past, in its ramp's 25 %-to-75 %
+    rises (``flash_edge_cut_rises``: readout rows to the last row from a leading edge, from the
+    first to a trailing one; NaN for an edge of a band within one frame). An edge on a frame of
+    no flash the camera saw is left out, and every edge of a reading that is not the camera's
+    true one."""
     camera = truth.cameras[detection.camera]
     events = detection.events if detection.flipped == camera.flipped else detection.events.take(slice(0, 0))
     clean = np.array([not flags for flags in events.flags], dtype=bool)
     lone = events.has_flag(Flag.LEADING_HIDDEN) | events.has_flag(Flag.TRAILING_HIDDEN)
+    cut_short = lone | events.has_flag(Flag.SPLIT)
     readout = events.row if not detection.flipped else detection.height - 1 - events.row
     cut = np.where(events.edge == Edge.LEADING, detection.height - 1 - readout, readout) / events.rise_rows
     quality, error, kinds, errors, cuts = [], [], [], [], []
@@ -113,7 +116,7 @@ def edge_errors(detection: CameraDetection, truth: GroundTruth) -> dict:
         true_row = min(rows, key=lambda row: abs(row - events.row[i]))
         kinds.append(f"{events.edge[i]} {'lone' if lone[i] else 'paired'}")
         errors.append(float(events.row[i] - true_row))
-        cuts.append(float(cut[i]) if lone[i] else float("nan"))
+        cuts.append(float(cut[i]) if cut_short[i] else float("nan"))
         if clean[i]:
             quality.append(float(events.quality[i]))
             error.append(errors[-1])
@@ -234,24 +237,28 @@ def spread(error: np.ndarray) -> str:
     return f"robust σ {sigma:.2f} rows  over 2 rows {100 * np.mean(np.abs(error) > 2):4.1f} %"
 
 
-#: The bins of :func:`lone_block`: a lone edge's distance from the frame's cut, in its ramp's rises.
+#: The bins of :func:`cut_block`: an edge's distance from the frame's cut, in its ramp's rises.
 CUT_BINS = ((0, 2), (2, 4), (4, 8), (8, 16), (16, np.inf))
 
 
-def lone_block(cameras: pd.DataFrame) -> list[str]:
-    """Lone flash edges (their partner hidden beyond the frame's first or last row) against
-    the truth by their kind and how many rises of their ramp lie between them and that cut:
-    the median and robust σ (rows) and the share more than 2 rows off. Near the cut the rows
-    the detector reads a band's level from are still on its ramp (a trailing edge's under
-    the leading ramp of a pulse's tail). An edge whose rise was not measured is not binned."""
+def cut_block(cameras: pd.DataFrame) -> list[str]:
+    """Lone flash edges (their partner hidden beyond the frame's first or last row) and the
+    edges of bands split across two frames against the truth by their kind and how many
+    rises of their ramp lie between them and the cut their band runs past: the median and
+    robust σ (rows) and the share more than 2 rows off. Near the cut the rows the detector
+    reads a band's level from are still on its ramp (a trailing edge's under the leading ramp
+    of a pulse's tail). An edge whose rise was not measured is not binned, nor a split band's
+    in the --json files of runs before 2026-12-04, thirty-fifth."""
     edges = flash_edges(cameras, [])
-    lines = ["lone flash edges against the truth by their distance from the frame's cut (ramp rises):"]
-    for kind in ("leading lone", "trailing lone"):
+    lines = ["lone and split flash edges against the truth by their distance from the frame's cut (ramp rises):"]
+    kinds = {"leading lone": "leading lone", "trailing lone": "trailing lone"}
+    kinds |= {"leading paired": "leading split", "trailing paired": "trailing split"}  # a paired edge cut: split
+    for kind, label in kinds.items():
         mine = edges[edges["kind"] == kind]
         for low, high in CUT_BINS:
             error = mine.loc[(mine["cut_rises"] >= low) & (mine["cut_rises"] < high), "error"].to_numpy()
             if error.size:
-                head = f"  {kind:<14} {low:>2}-{high:<3} n {error.size:>4}  median {np.median(error):+.2f}"
+                head = f"  {label:<14} {low:>2}-{high:<3} n {error.size:>4}  median {np.median(error):+.2f}"
                 lines.append(f"{head}  {spread(error)}")
     return lines
 
@@ -510,7 +517,7 @@ def summary(infos: list[dict], tables: pd.DataFrame) -> str:
     if "crf" in tables:  # not in the --json files of runs before 2026-11-29, seventh
         lines += codec_block(tables)
     if "flash_edge_cut_rises" in tables:  # not in the --json files of runs before 2026-11-29, eighth
-        lines += lone_block(tables)
+        lines += cut_block(tables)
     if "flicker_error_pct" in tables:  # not in the --json files of runs before 2026-11-29
         lines += flicker_block(tables)
     return "\n".join(lines)
