@@ -805,7 +805,7 @@ def _best_readout(
         return (
             trial is not None
             and trial.evidence >= than.evidence + DECIDED_LOG_LIKELIHOOD
-            and _tied_turns(trial, cameras)
+            and _tied_turns(trial, than, cameras)
         )
 
     best = tries(cameras, set())
@@ -851,15 +851,17 @@ def _best_readout(
     return best, rivals
 
 
-def _tied_turns(trial: _Attempt, cameras: dict[str, CameraDetection]) -> bool:
-    """Every camera ``trial`` reads the other way than ``cameras`` is tied by :data:`FEW_FLASHES`
-    inlier flashes at least: on fewer, a reading that fits one more flash than the other
-    leads by chance (random rig 15 of ``bench_rigs.py``, two cameras sharing four flashes:
-    its 25 fps camera read upside down on three, its rows 65 % too fast, 30 ms off)."""
+def _tied_turns(trial: _Attempt, current: _Attempt, cameras: dict[str, CameraDetection]) -> bool:
+    """Every camera that ``trial`` turns from its ``current`` reading and from its detected one
+    (``cameras``) is tied by :data:`FEW_FLASHES` inlier flashes at least, but one whose current
+    reading is :attr:`_Attempt.implausible`: on fewer, a reading that fits one more flash than
+    the other leads by chance (random rig 15 of ``bench_rigs.py``, two cameras sharing four
+    flashes: its 25 fps camera read upside down on three, its rows 65 % too fast, 30 ms off)."""
     matches = trial.matches
     inlier = trial.solution.inlier[: len(matches)]
     for name, detection in trial.cameras.items():
-        if detection.flipped != cameras[name].flipped and name not in trial.implausible:
+        turned = detection.flipped != current.cameras[name].flipped and detection.flipped != cameras[name].flipped
+        if turned and name not in current.implausible:
             mine = inlier & (matches.camera == name)
             others = inlier & (matches.camera != name)
             if np.count_nonzero(np.isin(np.unique(matches.flash[mine]), matches.flash[others])) < FEW_FLASHES:
