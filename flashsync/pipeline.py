@@ -856,7 +856,7 @@ def _tied_turns(trial: _Attempt, current: _Attempt, cameras: dict[str, CameraDet
     (``cameras``) is tied by :data:`FEW_FLASHES` inlier flashes at least, but one whose current
     reading is :attr:`_Attempt.implausible`: on fewer, a reading that fits one more flash than
     the other leads by chance (random rig 15 of ``bench_rigs.py``, two cameras sharing four
-    flashes: its 25 fps camera read upside down on three, its rows 65 % too fast, 30 ms off)."""
+    flashes: its 25 fps camera read upside down on three, its time per row 65 % short, 30 ms off)."""
     matches = trial.matches
     inlier = trial.solution.inlier[: len(matches)]
     for name, detection in trial.cameras.items():

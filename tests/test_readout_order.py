@@ -130,7 +130,7 @@ def test_a_camera_is_turned_only_on_enough_flashes_tying_it(tmp_path):
     """Random rig 15 as bench_rigs renders it: two upright cameras, 25 fps at 360 rows (the
     reference, seeing 4 of 8 flashes) and 50 fps at 540, sharing four flashes. Read upside
     down, the first fits one flash more, a lead of 10.5, on three flashes tying it; it was
-    read so, its rows 65 % too fast and both cameras 7-30 ms off (under a sigma of 25-34 ms).
+    read so, its time per row 65 % short and both cameras 7-30 ms off (under a sigma of 25-34 ms).
     A turn needs FEW_FLASHES (4) flashes tying the turned camera: both stay upright, within
     1 ms of the truth, and the first is warned, the other reading's spread in its sigma."""
     scenario = random_rig(15, max_height=540, duration_ms=12000.0)
