@@ -801,42 +801,35 @@ def _best_readout(
                 tried[key] = None
         return tried[key]
 
-    def leads(trial: _Attempt | None, than: _Attempt) -> bool:
-        return (
-            trial is not None
-            and trial.evidence >= than.evidence + DECIDED_LOG_LIKELIHOOD
-            and _tied_turns(trial, than, cameras)
-        )
-
     best = tries(cameras, set())
     every = 2 ** len(undecided) <= EVERY_READING
     if every:
         readings = [flips for flips in product((False, True), repeat=len(undecided)) if not _mirror(flips, cameras)]
         results = [r for flips in readings if (r := tries(cameras, set(compress(undecided, flips)))) is not None]
-        if best is None:
-            best = max(results, key=lambda r: r.evidence, default=None)
-        elif leading := [r for r in results if leads(r, best)]:
-            best = max(leading, key=lambda r: r.evidence)
+        top = max(results, key=lambda r: r.evidence, default=None)
+        if best is None or (top is not None and top.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD):
+            best = top
     while not every:
         start = best.cameras if best is not None else cameras
         gains = _held_gains(best, undecided)
         certain = {name for name, gain in gains.items() if gain > FLIP_SCREEN_SLACK}
-        if certain and leads(together := tries(start, certain), best):
-            best = together
-            continue
+        if certain and (together := tries(start, certain)) is not None:
+            if together.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD:
+                best = together
+                continue
         singles = {name: tries(start, {name}) for name in undecided if gains.get(name, 0.0) >= -FLIP_SCREEN_SLACK}
         steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
             best = max(steps, key=lambda r: r.evidence)
             continue
-        better = [r for r in steps if best is not None and leads(r, best)]
+        better = [r for r in steps if best is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
         if not better and best is not None:
             groups = [{name, *_losing(best, r, undecided)} for name, r in singles.items() if r is not None]
             steps = [tries(start, group) for group in groups if len(group) > 1]
             mirrored = tuple(start[name].flipped == cameras[name].flipped for name in undecided)
             if not _mirror(mirrored, cameras):
                 steps.append(tries(start, set(undecided)))
-            better = [r for r in steps if leads(r, best)]
+            better = [r for r in steps if r is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
         if not better:
             break
         best = max(better, key=lambda r: r.evidence)
@@ -849,24 +842,6 @@ def _best_readout(
         if other:
             rivals[name] = max(other, key=lambda r: r.score)
     return best, rivals
-
-
-def _tied_turns(trial: _Attempt, current: _Attempt, cameras: dict[str, CameraDetection]) -> bool:
-    """Every camera that ``trial`` turns from its ``current`` reading and from its detected one
-    (``cameras``) is tied by :data:`FEW_FLASHES` inlier flashes at least, but one whose current
-    reading is :attr:`_Attempt.implausible`: on fewer, a reading that fits one more flash than
-    the other leads by chance (random rig 15 of ``bench_rigs.py``, two cameras sharing four
-    flashes: its 25 fps camera read upside down on three, its time per row 65 % short, 30 ms off)."""
-    matches = trial.matches
-    inlier = trial.solution.inlier[: len(matches)]
-    for name, detection in trial.cameras.items():
-        turned = detection.flipped != current.cameras[name].flipped and detection.flipped != cameras[name].flipped
-        if turned and name not in current.implausible:
-            mine = inlier & (matches.camera == name)
-            others = inlier & (matches.camera != name)
-            if np.count_nonzero(np.isin(np.unique(matches.flash[mine]), matches.flash[others])) < FEW_FLASHES:
-                return False
-    return True
 
 
 #: A single flip whose held estimate (:func:`_flip_gains`) loses more than this log-likelihood
@@ -1373,8 +1348,7 @@ def _readout_doubts(
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
-            f"{DECIDED_LOG_LIKELIHOOD:g}, {UPSIDE_DOWN_PRIOR:g} more per camera read upside down, and "
-            f"{FEW_FLASHES} flashes tying a camera it turns); its times "
+            f"{DECIDED_LOG_LIKELIHOOD:g}, and {UPSIDE_DOWN_PRIOR:g} more per camera read upside down); its times "
             f"may be off by up to {float(spreads[name].max()):.2f} ms "
             "(in its sigma); give its mounting (--flipped) if known"
         )

@@ -62,11 +62,9 @@ def test_anchors_naming_two_events_of_one_camera_are_an_error():
 
 def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
     """A third camera read both ways up whose bottom-up reading has two leading edges fewer:
-    two events fewer unexplained raise that reading's likelihood by more than a choice needs,
-    but no flash ties the camera either way and a turn needs ``FEW_FLASHES`` (before
-    2026-12-04, thirty-fifth, the search read it bottom-up and then left it out, 0 events). It
-    stays as detected, is left out (its two events match no flash) and is not reported as
-    mounted upside down."""
+    the search reads it bottom-up (two events fewer unexplained raise the likelihood by more
+    than a choice needs), but it
+    is left out (too few events) and must not be reported as mounted upside down."""
     detections = detect_videos([tiny_scenario / "cam1.mp4", tiny_scenario / "cam2.mkv"], estimate_readout=False)
 
     def one_edge(count: int) -> Events:
@@ -78,7 +76,7 @@ def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
     lonely = CameraDetection("cam3", tiny_scenario / "cam3.mp4", 160, 120, np.arange(50) * 40.0, one_edge(2),
                              one_edge(0))  # fmt: skip
     model, report = synchronize([*detections, lonely])
-    assert "cam3" not in model.cameras and any("cam3.mp4: shares too few flashes" in w for w in report.warnings)
+    assert "cam3" not in model.cameras and any("cam3.mp4: 0 usable flash events" in w for w in report.warnings)
     assert report.flipped_found == []
 
 
