@@ -251,8 +251,13 @@ def cut_block(cameras: pd.DataFrame) -> list[str]:
     in the --json files of runs before 2026-12-04, thirty-fifth."""
     edges = flash_edges(cameras, [])
     lines = ["lone and split flash edges against the truth by their distance from the frame's cut (ramp rises):"]
-    kinds = {"leading lone": "leading lone", "trailing lone": "trailing lone"}
-    kinds |= {"leading paired": "leading split", "trailing paired": "trailing split"}  # a paired edge cut: split
+    # a paired edge with a distance to the cut is an edge of a band split across two frames
+    kinds = {
+        "leading lone": "leading lone",
+        "trailing lone": "trailing lone",
+        "leading paired": "leading split",
+        "trailing paired": "trailing split",
+    }
     for kind, label in kinds.items():
         mine = edges[edges["kind"] == kind]
         for low, high in CUT_BINS:
