@@ -801,35 +801,40 @@ def _best_readout(
                 tried[key] = None
         return tried[key]
 
+    def leads(trial: _Attempt | None, than: _Attempt) -> bool:
+        return trial is not None and trial.evidence >= than.evidence + DECIDED_LOG_LIKELIHOOD + _chance_lead(
+            trial, than, cameras
+        )
+
     best = tries(cameras, set())
     every = 2 ** len(undecided) <= EVERY_READING
     if every:
         readings = [flips for flips in product((False, True), repeat=len(undecided)) if not _mirror(flips, cameras)]
         results = [r for flips in readings if (r := tries(cameras, set(compress(undecided, flips)))) is not None]
-        top = max(results, key=lambda r: r.evidence, default=None)
-        if best is None or (top is not None and top.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD):
-            best = top
+        if best is None:
+            best = max(results, key=lambda r: r.evidence, default=None)
+        elif leading := [r for r in results if leads(r, best)]:
+            best = max(leading, key=lambda r: r.evidence)
     while not every:
         start = best.cameras if best is not None else cameras
         gains = _held_gains(best, undecided)
         certain = {name for name, gain in gains.items() if gain > FLIP_SCREEN_SLACK}
-        if certain and (together := tries(start, certain)) is not None:
-            if together.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD:
-                best = together
-                continue
+        if certain and leads(together := tries(start, certain), best):
+            best = together
+            continue
         singles = {name: tries(start, {name}) for name in undecided if gains.get(name, 0.0) >= -FLIP_SCREEN_SLACK}
         steps = [r for r in singles.values() if r is not None]
         if best is None and steps:  # the detected reading failed: the best single flip is the start
             best = max(steps, key=lambda r: r.evidence)
             continue
-        better = [r for r in steps if best is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
+        better = [r for r in steps if best is not None and leads(r, best)]
         if not better and best is not None:
             groups = [{name, *_losing(best, r, undecided)} for name, r in singles.items() if r is not None]
             steps = [tries(start, group) for group in groups if len(group) > 1]
             mirrored = tuple(start[name].flipped == cameras[name].flipped for name in undecided)
             if not _mirror(mirrored, cameras):
                 steps.append(tries(start, set(undecided)))
-            better = [r for r in steps if r is not None and r.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD]
+            better = [r for r in steps if leads(r, best)]
         if not better:
             break
         best = max(better, key=lambda r: r.evidence)
@@ -842,6 +847,28 @@ def _best_readout(
         if other:
             rivals[name] = max(other, key=lambda r: r.score)
     return best, rivals
+
+
+def _chance_lead(trial: _Attempt, current: _Attempt, cameras: dict[str, CameraDetection]) -> float:
+    """What ``trial`` must lead its ``current`` reading by beyond :data:`DECIDED_LOG_LIKELIHOOD`:
+    per camera it turns from both ``current`` and the detected reading (``cameras``) that is
+    tied by fewer than :data:`FEW_FLASHES` inlier flashes there, its :meth:`_Attempt.flash_worth`
+    (but where its ``current`` reading is :attr:`_Attempt.implausible`). On so few a reading
+    that fits one flash more than the other leads by chance: random rig 15 of ``bench_rigs.py``
+    (two cameras sharing four flashes) read its 25 fps camera upside down on three, a lead of
+    10.5 (a flash worth 12), its time per row 65 % short, 30 ms off; rig-30's reference, truly
+    upside down on three flashes, leads by 42.8."""
+    matches = trial.matches
+    inlier = trial.solution.inlier[: len(matches)]
+    lead = 0.0
+    for name, detection in trial.cameras.items():
+        turned = detection.flipped != current.cameras[name].flipped and detection.flipped != cameras[name].flipped
+        if turned and name in trial.connected and name not in current.implausible:
+            mine = inlier & (matches.camera == name)
+            others = inlier & (matches.camera != name)
+            if np.count_nonzero(np.isin(np.unique(matches.flash[mine]), matches.flash[others])) < FEW_FLASHES:
+                lead += trial.flash_worth(name)
+    return lead
 
 
 #: A single flip whose held estimate (:func:`_flip_gains`) loses more than this log-likelihood
@@ -1332,7 +1359,8 @@ def _readout_doubts(
 ) -> tuple[dict[str, np.ndarray], list[str]]:
     """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
     flashes about as well as the chosen one (its :attr:`_Attempt.evidence` less than
-    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides):
+    :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides;
+    nor, above it by more, one that :func:`_chance_lead` keeps from turning a camera):
     per camera, how far the two readings' times of each frame are apart (ms, the largest
     over its rows; into its sigma), and a warning line each."""
     spreads, warnings = {}, []
@@ -1342,13 +1370,22 @@ def _readout_doubts(
         if best.evidence >= other.evidence + DECIDED_LOG_LIKELIHOOD:
             continue
         margin = best.score - other.score
+        # a lead that decides, short of what turning a camera few flashes tie needs
+        chance = (
+            _chance_lead(other, best, best.cameras) if other.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD else 0.0
+        )
         chosen = best.model(reference).cameras[name]
         spreads[name] = _frame_gaps_ms(chosen, other.model(reference).cameras[name])
         way = "bottom-up (upside down)" if chosen.flipped else "top-down (upright)"
+        few = (
+            f", and {chance:.1f} more (a flash's worth per camera it turns that fewer than {FEW_FLASHES} flashes tie)"
+            if chance
+            else ""
+        )
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
-            f"{DECIDED_LOG_LIKELIHOOD:g}, and {UPSIDE_DOWN_PRIOR:g} more per camera read upside down); its times "
+            f"{DECIDED_LOG_LIKELIHOOD:g}, {UPSIDE_DOWN_PRIOR:g} more per camera read upside down{few}); its times "
             f"may be off by up to {float(spreads[name].max()):.2f} ms "
             "(in its sigma); give its mounting (--flipped) if known"
         )
@@ -1501,16 +1538,32 @@ class _Attempt:
         cameras' scale fell 30 %). A camera's scale counts as :data:`SCORE_MIN_SIGMA_MS` at
         least: with few flashes a wrong reading can fit its few events almost exactly (a
         scale of a few microseconds) and outscore the right one, which matched more events."""
+        inlier, sigma = self._scored_sigma_ms
+        return edge_log_likelihood(sigma[inlier], self.n_edges, _uniform_ms(self.cameras))
+
+    @cached_property
+    def _scored_sigma_ms(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per observation, whether :attr:`score` counts it Gaussian (an inlier of a camera
+        with a plausible time per row) and the noise it counts it at (ms); shapes (n,)."""
         camera = self.observations.camera
         implausible = [self.connected.index(name) for name in self.implausible]
-        inlier = self.solution.inlier & ~np.isin(camera, implausible)
         noise = np.array([[c.edge_sigma_ms, c.trailing_sigma_ms] for c in self.solution.cameras])
         sigma = np.maximum(
             np.nan_to_num(noise[camera, self.observations.trailing.astype(np.int64)], nan=SCORE_MIN_SIGMA_MS),
             SCORE_MIN_SIGMA_MS,
         )
-        sigma = (sigma * self.solution.sigma_factor)[inlier]
-        return edge_log_likelihood(sigma, self.n_edges, _uniform_ms(self.cameras))
+        return self.solution.inlier & ~np.isin(camera, implausible), sigma * self.solution.sigma_factor
+
+    def flash_worth(self, name: str) -> float:
+        """What one flash more tying camera ``name`` adds to :attr:`score`: a leading and a
+        trailing edge at the mean Gaussian log-density of its inlier edges instead of uniform
+        over a frame period (0 where it has no inlier edge)."""
+        inlier, sigma = self._scored_sigma_ms
+        mine = sigma[inlier & (self.observations.camera == self.connected.index(name))]
+        if not mine.size:
+            return 0.0
+        density = -np.log(mine * np.sqrt(2.0 * np.pi)) - 0.5
+        return 2.0 * float(np.mean(density) + np.log(_uniform_ms(self.cameras)))
 
     @cached_property
     def n_edges(self) -> int:
