@@ -221,6 +221,7 @@ class EventDetector:
         self._whole: list[tuple[BandFit, int]] = []  # bands fitted whole that passed the recurrence
         # filter, with where their two edges start in ``_edges``
         self.exposure_rows: float | None = None
+        self.rival_exposure_rows: float | None = None
         self.pulse_rows = np.empty(0)
         self._recurrence = RecurrenceFilter()
         self.n_degenerate = 0
@@ -309,7 +310,8 @@ class EventDetector:
         Sets :attr:`exposure_rows`: the exposure, readout rows, that the bands fitted whole
         share (:func:`~flashsync.ramp.common_width`; one band alone tells a short exposure
         from the pulse's decay only to a row or two, and a rectangular pulse from the
-        exposure not at all where the pulse is the longer), or None with fewer than three;
+        exposure not at all where the pulse is the longer), or None with fewer than three,
+        and :attr:`rival_exposure_rows`, the exposure of a reading it could not rule out;
         where some of the pulses are longer than it, those bands' edges are the ones fitted
         with that exposure, and every other flash edge is flagged ``long_pulse``. Sets
         :attr:`pulse_rows`: per event, the pulse of its band fitted whole with that exposure
@@ -319,7 +321,9 @@ class EventDetector:
             self._open = None
         self._number(self._recurrence.release())
         common = common_width([fit for fit, _ in self._whole])
-        self.exposure_rows, pulses_longer = common if common is not None else (None, False)
+        self.exposure_rows, pulses_longer, self.rival_exposure_rows = (
+            common if common is not None else (None, False, None)
+        )
         self.pulse_rows = np.full(self._n_events, np.nan)
         settled = set()
         for fit, at in self._whole if self.exposure_rows is not None else ():
@@ -735,6 +739,12 @@ class CameraDetection:
         each reading fitted them (:attr:`EventDetector.exposure_rows`); None where fewer
         than three were fitted or not read that way (:attr:`exposure_rows`: the reading
         in use).
+    top_down_rival_exposure_rows, bottom_up_rival_exposure_rows : float or None
+        The exposure, readout rows, of a reading of the bands with pulses longer than it
+        that explained them better at its best but not by what a choice needs, where each
+        reading took its exposure from the bands' lengths
+        (:attr:`EventDetector.rival_exposure_rows`; :attr:`rival_exposure_rows`: the reading
+        in use); None where there was none.
     top_down_pulse_rows, bottom_up_pulse_rows : float arrays of shape (n_events,) or None
         Per event number, the pulse of its band fitted whole, readout rows, as each reading
         fitted it (:attr:`EventDetector.pulse_rows`; NaN for the other events; None where
@@ -759,6 +769,8 @@ class CameraDetection:
     n_whole_frames: int = 0
     top_down_exposure_rows: float | None = None
     bottom_up_exposure_rows: float | None = None
+    top_down_rival_exposure_rows: float | None = None
+    bottom_up_rival_exposure_rows: float | None = None
     top_down_pulse_rows: np.ndarray | None = None
     bottom_up_pulse_rows: np.ndarray | None = None
     display_rotation_deg: int = 0
@@ -772,6 +784,12 @@ class CameraDetection:
     def exposure_rows(self) -> float | None:
         """The exposure, readout rows, that the bands of the reading in use share."""
         return self.bottom_up_exposure_rows if self.flipped else self.top_down_exposure_rows
+
+    @property
+    def rival_exposure_rows(self) -> float | None:
+        """The exposure, readout rows, of a reading of the bands of the reading in use that
+        they could not rule out (pulses longer than it), or None."""
+        return self.bottom_up_rival_exposure_rows if self.flipped else self.top_down_rival_exposure_rows
 
     @property
     def pulse_rows(self) -> np.ndarray | None:
@@ -817,13 +835,19 @@ class CameraDetection:
     def with_band_exposures(self, rows: np.ndarray, exposure_rows: float) -> CameraDetection:
         """This detection with the band of each event of the reading in use ``rows[event]``
         readout rows longer (shape (n_events,)), as :meth:`with_longer_exposure` makes every
-        band fitted whole, and ``exposure_rows`` (rows) the reading's exposure."""
+        band fitted whole, and ``exposure_rows`` (rows) the reading's exposure (with no rival)."""
         events, pulses = self.events, self.pulse_rows
         later = np.where(events.edge == Edge.TRAILING, 0.5, -0.5) * rows[events.event]
         moved = replace(events, row=events.row + (-later if self.flipped else later))
         side = "bottom_up" if self.flipped else "top_down"
         return replace(
-            self, **{side: moved, f"{side}_exposure_rows": exposure_rows, f"{side}_pulse_rows": pulses - rows}
+            self,
+            **{
+                side: moved,
+                f"{side}_exposure_rows": exposure_rows,
+                f"{side}_rival_exposure_rows": None,
+                f"{side}_pulse_rows": pulses - rows,
+            },
         )
 
     def retimed(self, frame_times_ms: np.ndarray) -> CameraDetection:
@@ -913,6 +937,7 @@ class VideoDetection:
             raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
         readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
         exposures = {direction: detector.exposure_rows for direction, detector in zip(self.directions, self._detectors)}
+        rivals = {d: detector.rival_exposure_rows for d, detector in zip(self.directions, self._detectors)}
         pulses = {direction: detector.pulse_rows for direction, detector in zip(self.directions, self._detectors)}
         return CameraDetection(
             self.info.camera,
@@ -929,6 +954,8 @@ class VideoDetection:
             n_whole_frames=self._detectors[0].n_whole_frames,
             top_down_exposure_rows=exposures.get(False),
             bottom_up_exposure_rows=exposures.get(True),
+            top_down_rival_exposure_rows=rivals.get(False),
+            bottom_up_rival_exposure_rows=rivals.get(True),
             top_down_pulse_rows=pulses.get(False),
             bottom_up_pulse_rows=pulses.get(True),
             display_rotation_deg=self._rotation_deg or 0,

@@ -370,9 +370,10 @@ def fit_split_band(
     return float(fitted[0]), float(fitted[1])
 
 
-def common_width(fits: list[BandFit]) -> tuple[float, bool] | None:
-    """The exposure, rows, that explains a camera's whole bands best, and whether some of
-    their pulses are longer than it (:func:`_read_width`), at most :data:`MAX_WIDTH_BANDS`
+def common_width(fits: list[BandFit]) -> tuple[float, bool, float | None] | None:
+    """The exposure, rows, that explains a camera's whole bands best, whether some of their
+    pulses are longer than it, and the exposure of a reading with longer pulses that it
+    could not rule out (:func:`_read_width`), at most :data:`MAX_WIDTH_BANDS`
     bands evenly over the recording; None with fewer than three. A reading that finds pulses
     longer than an exposure :data:`PINNED_SHARE` shorter than the shortest band or more is
     read again without the band that asks most for it (its cost at the shortest band's length
@@ -412,10 +413,14 @@ def _with_camera_noise(fits: list[BandFit]) -> list[BandFit]:
     return [fit if fit.measures_noise else replace(fit, noise=noise) for fit in fits]
 
 
-def _read_width(fits: list[BandFit]) -> tuple[float, bool] | None:
-    """The exposure, rows, that explains all of a camera's whole bands best, and whether
-    some of their pulses are longer than it (the bands then read the other way round
-    where fitted alone, :func:`_clamp`): the minimum of the sum of their costs refitted
+def _read_width(fits: list[BandFit]) -> tuple[float, bool, float | None] | None:
+    """The exposure, rows, that explains all of a camera's whole bands best, whether some of
+    their pulses are longer than it (the bands then read the other way round where fitted
+    alone, :func:`_clamp`), and the rival: the exposure, rows, of a reading with longer
+    pulses that explained the bands better at its least cost but not by what a choice
+    needs, where the plain one is taken (None otherwise; rig-4's 5.7-row reference under
+    LED pulses all longer than it, four bands, two of them 9.4-9.8 rows: read 10.3 rows,
+    its rival 7.3). The exposure is the minimum of the sum of their costs refitted
     with the exposure fixed (:meth:`BandFit.with_width`; each band's cost above its own
     fit, in units of its own noise and at most :data:`BAND_COST_CAP`, so that a band hit by
     a player does not steer it), over at most :data:`MAX_WIDTH_BANDS` bands evenly over
@@ -478,7 +483,7 @@ def _read_width(fits: list[BandFit]) -> tuple[float, bool] | None:
         return None
     longest = max(SHORTER_SHARE * float(np.median(widths)), plain[0])
     if plain[1] < SWAP_EVIDENCE or not _pulses_differ(widths) or longest <= SHORTEST_ROWS:
-        return plain[0], False
+        return plain[0], False, None
     alike = _plain_width(widths, lambda width: total(width, False, unsettled=True)[0])
     plain = (plain[0], min(plain[1], alike[1]))  # the plain reading's cost scored as the other's
     step = 1 + REFINED_SHARE
@@ -489,7 +494,7 @@ def _read_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     scored = np.array([total(width, True, cut)[0] for width in shorter])
     scored[scored >= cut] = np.inf
     if not _explains_better(scored.min(), plain[1]):
-        return plain[0], False
+        return plain[0], False, None
     start = _longest_minimum(scored, scored.min() + SWAP_EVIDENCE)
     refined = minimize_scalar(
         lambda w: total(w, True)[0],
@@ -506,12 +511,12 @@ def _read_width(fits: list[BandFit]) -> tuple[float, bool] | None:
     exposure_long = _one_exposure_long(widths[~outlasted], width)
     charged = cost + SPARE_HOLD * held.sum()
     if not ((_pulses_differ(widths[outlasted]) or exposure_long) and _explains_better(charged, plain[1])):
-        return plain[0], False
+        return plain[0], False, width
     apart = exposure_long and bool(np.all(widths[outlasted] >= (1 + PINNED_SHARE) * width))
     if width < (1 - PINNED_SHARE) * plain[0] or apart:
-        return width, True
+        return width, True, None
     pinned = all(total(k * width, True)[0] >= cost + SWAP_EVIDENCE for k in (1 - PINNED_SHARE, 1 + PINNED_SHARE))
-    return (width, True) if width >= MIN_SWAPPED_ROWS and pinned else (plain[0], False)
+    return (width, True, None) if width >= MIN_SWAPPED_ROWS and pinned else (plain[0], False, width)
 
 
 def _pulses_differ(widths: np.ndarray) -> bool:
