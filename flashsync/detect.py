@@ -937,7 +937,9 @@ class VideoDetection:
             raise NotEnoughDataError(f"{self.info.path}: only {len(frame_times)} frame decoded; give a longer video")
         readings = {direction: detector.finish() for direction, detector in zip(self.directions, self._detectors)}
         exposures = {direction: detector.exposure_rows for direction, detector in zip(self.directions, self._detectors)}
-        rivals = {d: detector.rival_exposure_rows for d, detector in zip(self.directions, self._detectors)}
+        rivals = {
+            direction: detector.rival_exposure_rows for direction, detector in zip(self.directions, self._detectors)
+        }
         pulses = {direction: detector.pulse_rows for direction, detector in zip(self.directions, self._detectors)}
         return CameraDetection(
             self.info.camera,
