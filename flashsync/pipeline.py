@@ -105,6 +105,9 @@ EXPOSURE_FLOOR_MS = 0.02
 #: 1-2 ms LED pulses) over that widening: median 0.7, 90 % under 1.3, at most 1.7; of six
 #: linear ones at most 0.35. With this share the recipes' exposure error/sigma RMS 1.30 and
 #: 1.68 -> 0.70 and 0.86 (84.6-88.5 -> 100 % within 2 sigma), random rigs 0-11's 1.24 -> 1.00.
+#: Each edge moves out by half the widening, so a camera's times come late by half its
+#: exposure's error; the same share of that half is in their standard deviation
+#: (:meth:`_Attempt.tone_shift_std_ms`).
 TONE_WIDENING_SHARE = 0.75
 #: The exponent of light in a tone-curved pixel value that :func:`_tone_widening_ms` assumes.
 TONE_GAMMA = 2.2
@@ -1596,15 +1599,18 @@ class _Attempt:
         covariance and exposure variance: the scatter of the solve with each flash left out
         (:func:`~flashsync.jackknife.flash_scatter`: the errors a flash brings to all its
         edges) and what an error common to a camera's split bands moves
-        (:func:`~flashsync.jackknife.split_scatter`); and :data:`EXPOSURE_FLOOR_MS`, a share
-        of the widening a tone curve would give its bands (:data:`TONE_WIDENING_SHARE`) and
-        the camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
+        (:func:`~flashsync.jackknife.split_scatter`); what the tone curves may move its
+        times by (:meth:`tone_shift_std_ms`) in its shift's; and :data:`EXPOSURE_FLOOR_MS`, a
+        share of the widening a tone curve would give its bands (:data:`TONE_WIDENING_SHARE`)
+        and the camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
         scatter where a solve left an exposure unread)."""
         solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
         scatter = [
             flashes + split
             for flashes, split in zip(flash_scatter(*solve, self.priors), split_scatter(*solve, self.priors))
         ]
+        for name, extra in zip(self.connected, scatter):
+            extra[1, 1] += self.tone_shift_std_ms(name) ** 2  # beta_ms: a shift of all its times
         cameras = [
             replace(
                 camera,
@@ -1622,6 +1628,22 @@ class _Attempt:
             for name, camera, extra in zip(self.connected, self.solution.cameras, scatter)
         ]
         return replace(self, solution=replace(self.solution, cameras=cameras))
+
+    def tone_shift_std_ms(self, name: str) -> float:
+        """How far the tone curves may shift camera ``name``'s times against the reference's,
+        ms (one standard deviation; 0 for the reference). A tone curve moves each edge of a
+        band out by half the band's widening (:func:`_tone_widening_ms`): a camera's leading
+        edges come early by half of it, every flash alike (and its midpoints less half the
+        exposure its lengths read long), so its times come late by as much; against the
+        reference's, by the difference of the two, unseen by the residuals and the flashes
+        left out. Which camera has a curve is not known; the larger of the two cameras' half
+        :func:`_tone_std_ms` bounds it (one curved, the other linear)."""
+        if name == self.reference:
+            return 0.0
+        return max(
+            _tone_std_ms(self.cameras[camera], self.solution.cameras[self.connected.index(camera)].row_time_ms) / 2.0
+            for camera in (name, self.reference)
+        )
 
     def model(self, reference: str) -> SyncModel:
         clocks = {}

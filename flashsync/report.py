@@ -135,9 +135,10 @@ def sync_table(model: SyncModel, report=None) -> str:
 #: What ``sync ± ms`` means, printed under the table.
 SIGMA_MEANING = (
     "sync ± ms: 1σ of a camera's times against the true global clock: the edges' noise, the scatter of the solve "
-    "with each flash left out, what an error its split bands' lengths share moves, and the reference's own (its "
-    "rows' below its first and its stamps' rate's after its first frame, whose first row is the clock), which "
-    "every camera shares: two cameras against each other are surer than their two σ together"
+    "with each flash left out, what an error its split bands' lengths share moves, what a tone curve may shift its "
+    "times by against the reference's, and the reference's own (its rows' below its first and its stamps' rate's "
+    "after its first frame, whose first row is the clock), which every camera shares: two cameras against each "
+    "other are surer than their two σ together"
 )
 
 

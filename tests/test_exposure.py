@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from test_diagnose import DURATION_MS, flashes
 
-from flashsync import detect_videos, synchronize
+from flashsync import detect_videos, pipeline, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose, format_diagnosis
 from flashsync.diagnose.measure import _length_excess_ms, _pulses
@@ -264,6 +264,48 @@ def test_the_exposure_of_a_tone_curved_camera_is_as_sure_as_the_curve_leaves_it(
     accuracy = camera_accuracy(model, truth).set_index("camera")
     columns = ["exposure_error_ms", "exposure_z"]
     assert (accuracy.exposure_error_ms > 0.0).all() and (accuracy.exposure_z < 2.0).all(), accuracy[columns]
+
+
+def test_a_tone_curved_cameras_times_are_early_by_half_its_widening_which_is_in_their_sigma(tmp_path, monkeypatch):
+    """A linear reference (25 fps) and two sRGB cameras (30 and 50 fps; 270 lines, 3 and 6 ms)
+    under LED pulses of 2 ms. The tone curve moves each edge of a band out by half its
+    widening: the curved cameras' leading edges come early by half what their exposures read
+    long, their times late by as much (0.043 and 0.039 ms RMS off for exposures +0.083 and
+    +0.082 ms), which neither the residuals nor the flashes left out show. Their
+    times' sigma holds the share of that half (``_Attempt.tone_shift_std_ms``), the larger
+    of the camera's and the reference's (which camera is curved the bands do not tell; here
+    the linear reference's, 0.058 ms), added to its shift's variance; the times and the
+    reference's sigma are as without it."""
+    cameras = tuple(
+        CameraSpec(name, 480, 270, fps, r0=6, r1=8, exposure_ms=e, noise_std=1.0, crf=23, tone=tone, start_ms=start)
+        for name, fps, e, start, tone in (
+            ("c1", 25.0, 4.0, 45.0, "linear"),
+            ("c2", 30.0, 3.0, 170.0, "srgb"),
+            ("c3", 50.0, 6.0, 310.0, "srgb"),
+        )
+    )
+    truth = render_scenario(led_rig("tone-against-linear", cameras, [2.0] * 8), tmp_path)
+    detections = {d.camera: d for d in detect_videos([tmp_path / f"{c.name}.mp4" for c in cameras])}
+    model, _ = synchronize(list(detections.values()))
+    accuracy = camera_accuracy(model, truth).set_index("camera")
+    curved = accuracy.loc[["c2", "c3"]]
+    assert (curved.exposure_error_ms > 0.05).all(), accuracy[["rms_ms", "exposure_error_ms"]]
+    assert np.abs(curved.rms_ms - curved.exposure_error_ms / 2.0).max() < 0.01, accuracy[
+        ["rms_ms", "exposure_error_ms"]
+    ]
+
+    monkeypatch.setattr(pipeline._Attempt, "tone_shift_std_ms", lambda self, name: 0.0)
+    without, _ = synchronize(list(detections.values()))
+    for name, clock in model.cameras.items():
+        frames, rows = np.arange(clock.n_frames), np.zeros(clock.n_frames)
+        assert clock.t_global_ms(frames, rows) == pytest.approx(without.cameras[name].t_global_ms(frames, rows))
+        added = clock.t_global_std_ms(frames, rows) ** 2 - without.cameras[name].t_global_std_ms(frames, rows) ** 2
+        shift = max(
+            pipeline._tone_std_ms(detections[camera], model.cameras[camera].row_time_ms) / 2.0
+            for camera in (name, model.reference)
+        )
+        assert added == pytest.approx(0.0 if name == model.reference else shift**2, abs=1e-9), name
+        assert name == model.reference or shift > 0.005, (name, shift)
 
 
 @pytest.fixture(scope="module")
