@@ -266,15 +266,15 @@ def test_the_exposure_of_a_tone_curved_camera_is_as_sure_as_the_curve_leaves_it(
     assert (accuracy.exposure_error_ms > 0.0).all() and (accuracy.exposure_z < 2.0).all(), accuracy[columns]
 
 
-def test_a_tone_curved_cameras_times_are_early_by_half_its_widening_which_is_in_their_sigma(tmp_path, monkeypatch):
+def test_a_tone_curved_cameras_times_are_late_by_half_its_widening_which_is_in_their_sigma(tmp_path, monkeypatch):
     """A linear reference (25 fps) and two sRGB cameras (30 and 50 fps; 270 lines, 3 and 6 ms)
     under LED pulses of 2 ms. The tone curve moves each edge of a band out by half its
     widening: the curved cameras' leading edges come early by half what their exposures read
     long, their times late by as much (0.043 and 0.039 ms RMS off for exposures +0.083 and
-    +0.082 ms), which neither the residuals nor the flashes left out show. Their
-    times' sigma holds the share of that half (``_Attempt.tone_shift_std_ms``), the larger
-    of the camera's and the reference's (which camera is curved the bands do not tell; here
-    the linear reference's, 0.058 ms), added to its shift's variance; the times and the
+    +0.082 ms), which neither the residuals nor the flashes left out show. Their times'
+    sigma holds the share of that half (``_Attempt.tone_shift_std_ms``), the larger of the
+    camera's and the reference's (which camera is curved the bands do not tell; here the
+    linear reference's, 0.058 ms), added to its shift's variance; the times and the
     reference's sigma are as without it."""
     cameras = tuple(
         CameraSpec(name, 480, 270, fps, r0=6, r1=8, exposure_ms=e, noise_std=1.0, crf=23, tone=tone, start_ms=start)
