@@ -10,12 +10,17 @@ frames:
   rows every few frames (every third at 30 fps under 50 Hz mains);
 - a slow player whose edge reads as a band in consecutive frames.
 
+Before a flash, a codec's B-frames shown ahead of the frame it lit are predicted from that
+frame in part and keep part of its band (:meth:`Stripe.foreruns`).
+
 :class:`RecurrenceFilter` holds each candidate band for ``frames`` frames and drops it
 where a band of the same sign came up to ``echo_frames`` frames before it at rows that hold
 its rows, with at least ``ECHO_FRACTION`` of its strength (it is an echo, often only the
-middle of the band), or comes up to ``frames`` frames after it at the same rows with at
-least ``REPEAT_FRACTION`` (it repeats). A flash keeps its weaker echoes from dropping it;
-another flash a few frames later at overlapping rows does not end where it ends.
+middle of the band), unless that band foreruns it, or comes up to ``frames`` frames after
+it at the same rows with at least ``REPEAT_FRACTION`` (it repeats), or up to
+``echo_frames`` after it with as much, and this one foreruns it. A flash keeps its weaker
+echoes and the B-frames before it from dropping it; another flash a few frames later at
+overlapping rows does not end where it ends.
 """
 
 from __future__ import annotations
@@ -62,6 +67,17 @@ class Stripe:
         start = self._start_near(other, slack) or (self.cut_start and other.cut_start)
         stop = self._stop_near(other, slack) or (self.cut_stop and other.cut_stop)
         return self.level * other.level > 0 and start and stop and not (self.cut_start and self.cut_stop)
+
+    def foreruns(self, later: Stripe) -> bool:
+        """A part of ``later``'s band shown before it: its rows mostly among ``later``'s,
+        and fainter, or inside them and not the same rows. A B-frame shown before the frame a
+        flash lit is predicted from it in part and keeps part of its band (up to three such
+        frames, each stronger than the last: rig 47's cam1, x264 veryfast at crf 30); the last
+        may measure stronger than the flash, whose baseline they lifted, but on fewer rows."""
+        slack = tolerance(self, later)
+        inside = self.start >= later.start - slack and self.stop <= later.stop + slack
+        fainter = abs(self.level) < abs(later.level)
+        return self.within(later) and (fainter or (inside and not self.same_rows(later)))
 
     def _start_near(self, other: Stripe, slack: float) -> bool:
         """Both start at the same row, and it is a band's end in both, not the frame's."""
@@ -144,9 +160,12 @@ class RecurrenceFilter:
                 continue
             for band in candidate.bands:
                 if band.frame - self.echo_frames <= other.frame < band.frame:
-                    if abs(other.level) >= ECHO_FRACTION * strength and band.within(other):
+                    if abs(other.level) >= ECHO_FRACTION * strength and band.within(other) and not other.foreruns(band):
                         return True
-                elif band.frame < other.frame <= band.frame + self.frames:
-                    if abs(other.level) >= REPEAT_FRACTION * strength and other.same_rows(band):
+                elif (
+                    band.frame < other.frame <= band.frame + self.frames
+                    and abs(other.level) >= REPEAT_FRACTION * strength
+                ):
+                    if other.same_rows(band) or (other.frame <= band.frame + self.echo_frames and band.foreruns(other)):
                         return True
         return False
