@@ -36,7 +36,7 @@ def test_a_flash_is_kept_from_the_b_frames_before_it_and_they_go():
     fps, crf 30, veryfast; its frames 413-416 and 482-485). The flash stays, though its
     B-frames came first at its rows with more than half its strength; they go, the last one
     too where it measures stronger than the flash, whose baseline they lifted, on fewer of
-    its rows (the third run)."""
+    its rows (the third run, from a clip of the kind the next test renders, at seed 3)."""
     runs = (
         [
             Stripe(413, 183, 261, 0.022),
