@@ -84,6 +84,15 @@ def flash_scatter(
 #: cameras of random rigs 412-427 (robust; about 0.57 without their own noise), where the
 #: other errors already widen sigma (error/sigma median 0.42). The first world's is taken.
 SPLIT_OFFSET_ROWS = 0.3
+#: The error of one split band's length of its own, rows (one sigma), of which a camera's
+#: few split bands leave the mean of their errors: ``SPLIT_BAND_ROWS / sqrt(n)`` for ``n``
+#: bands. The flashes left out show it only where several split bands tie a camera's time
+#: per row (:func:`flash_scatter`: a solve that leaves it to the prior is not counted, and two
+#: bands are one deviation). Against the truth, the lengths of the 458 split bands of eight
+#: kept benches (``bench_rigs.py``: the issue's six recipes at seeds 1-4 and random rigs 0-47)
+#: spread 0.73 rows (MAD; 0.91 half their 16-84 % range); random rig 49's reference had two,
+#: 3.2 and 2.8 rows long, its time per row 0.76 % off at 4.8 sigma.
+SPLIT_BAND_ROWS = 0.75
 
 
 def split_scatter(
@@ -91,10 +100,11 @@ def split_scatter(
 ) -> list[np.ndarray]:
     """Per camera, the covariance that an error common to each camera's split bands' lengths
     brings to its clock's parameters and its exposure (the layout of :func:`flash_scatter`):
-    for every camera with such bands, the joint solve re-run with their trailing edges
-    :data:`SPLIT_OFFSET_ROWS` later, the change of every camera's parameters squared (its
-    outer product), summed over those cameras; each solve made as ``solution`` was
-    (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that many groups
+    for every camera with such bands, ``n`` of them, the joint solve re-run with their
+    trailing edges later by the error their lengths' mean may hold (:data:`SPLIT_OFFSET_ROWS`
+    and :data:`SPLIT_BAND_ROWS` over the root of ``n``, in quadrature), the change of every
+    camera's parameters squared (its outer product), summed over those cameras; each solve
+    made as ``solution`` was (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that many groups
     (the k-th in group k mod GROUPS), one solve each, a camera's change then holding its
     group's others' small share. Zero where no camera has a split band whose both edges the
     solve pairs."""
@@ -103,10 +113,12 @@ def split_scatter(
     if events.split is None or events.leading_of is None:
         return scatter
     lengths = events.split & (events.leading_of >= 0)
-    cameras = np.unique(events.camera[lengths])
+    cameras, counts = np.unique(events.camera[lengths], return_counts=True)
+    offset = np.zeros(n_cameras)
+    offset[cameras] = np.hypot(SPLIT_OFFSET_ROWS, SPLIT_BAND_ROWS / np.sqrt(counts))
     groups = min(len(cameras), GROUPS)
     for moved in (lengths & np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
-        shifted = replace(events, q=np.where(moved, events.q + SPLIT_OFFSET_ROWS, events.q))
+        shifted = replace(events, q=np.where(moved, events.q + offset[events.camera], events.q))
         trial = _solved_as(solution, shifted, n_cameras, reference, priors)
         for c, camera in enumerate(trial.cameras):
             change = np.nan_to_num(_parameters(camera) - solved[c])
