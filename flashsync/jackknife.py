@@ -14,7 +14,9 @@ reference's edges' share too (the reference's shift is 0 by definition).
 An error that all of a camera's bands split across two frames share, the jackknife cannot
 see: every flash brings it alike. Their lengths tie the time per row to the frame period
 (the band runs through the rows hidden between frames), so it moves the time per row;
-:func:`split_scatter` moves them by their typical common error and solves again.
+:func:`split_scatter` moves them by the error their mean may hold (one all share, and the
+bands' own over the root of their number, which the jackknife sees only where several tie a
+camera) and solves again.
 """
 
 from __future__ import annotations

@@ -165,9 +165,12 @@ def test_bands_as_long_as_pulses_that_outlast_the_exposure_do_not_lengthen_it(tm
     taken for the exposure, their lengths made it 0.67 ms long and put the camera's times
     0.37 ms RMS late (a band's midpoint is half an exposure after the pulse's middle). Their
     lengths left out, their midpoints kept: the exposure within 0.01 ms, the times 0.034 ms
-    RMS off, and nothing to warn of."""
+    RMS off, and nothing to warn of in its exposure. (Its time per row, 0.16 % off, is held
+    to ± 0.26 % since the split bands' own errors are in sigma, 2026-12-04: it has none, but
+    the other two cameras' four tie it too; ± 0.10 ms over its 270 rows, that warning's
+    threshold.)"""
     warnings = assert_the_short_camera_right(tmp_path, 0.7, [0.2, 0.4, 1.2, 1.4, 1.6, 1.8, 2.0, 1.5])
-    assert not [w for w in warnings if "short.mp4" in w], warnings
+    assert not [w for w in warnings if "short.mp4" in w and "exposure" in w], warnings
 
 
 @pytest.mark.parametrize("exposure_ms", [0.35, 0.7])
