@@ -100,16 +100,16 @@ SPLIT_BAND_ROWS = 0.75
 def split_scatter(
     events: Observations, n_cameras: int, reference: int, solution: Solution, priors: Priors
 ) -> list[np.ndarray]:
-    """Per camera, the covariance that an error common to each camera's split bands' lengths
-    brings to its clock's parameters and its exposure (the layout of :func:`flash_scatter`):
-    for every camera with such bands, ``n`` of them, the joint solve re-run with their
-    trailing edges later by the error their lengths' mean may hold (:data:`SPLIT_OFFSET_ROWS`
-    and :data:`SPLIT_BAND_ROWS` over the root of ``n``, in quadrature), the change of every
-    camera's parameters squared (its outer product), summed over those cameras; each solve
-    made as ``solution`` was (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that many groups
-    (the k-th in group k mod GROUPS), one solve each, a camera's change then holding its
-    group's others' small share. Zero where no camera has a split band whose both edges the
-    solve pairs."""
+    """Per camera, the covariance that an error of the mean of each camera's split bands'
+    lengths brings to its clock's parameters and its exposure (the layout of
+    :func:`flash_scatter`): for every camera with such bands, ``n`` of them, the joint solve
+    re-run with their trailing edges later by the error their mean may hold
+    (:data:`SPLIT_OFFSET_ROWS` and :data:`SPLIT_BAND_ROWS` over the root of ``n``, in
+    quadrature), the change of every camera's parameters squared (its outer product), summed
+    over those cameras; each solve made as ``solution`` was (:func:`_solved_as`). Past
+    :data:`GROUPS` such cameras they move in that many groups (the k-th in group k mod
+    GROUPS), one solve each, a camera's change then holding its group's others' small share.
+    Zero where no camera has a split band whose both edges the solve pairs."""
     solved = [_parameters(camera) for camera in solution.cameras]
     scatter = [np.zeros((len(parameters),) * 2) for parameters in solved]
     if events.split is None or events.leading_of is None:
