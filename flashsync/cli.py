@@ -263,7 +263,8 @@ def _parser() -> argparse.ArgumentParser:
     sync.add_argument(
         "--reference",
         help="camera whose clock is the global clock (default: the first, or where it shares too few flashes with "
-        "the others, the camera of them with the most matched flashes)",
+        "the others or is tied in a smaller group than others are, the camera of the largest group with the most "
+        "matched flashes)",
     )
     sync.add_argument(
         "--row-time",

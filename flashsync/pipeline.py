@@ -310,8 +310,9 @@ def synchronize(
         where that tells (:meth:`~flashsync.detect.CameraDetection.read_as_rolled`), else the
         way that explains the flashes best.
     reference : camera whose clock is the global clock; default the first, or where the first
-        shares too few flashes with the others to be tied to them, the camera with the most
-        matched events of the largest group tied among themselves (with a warning).
+        shares too few flashes with the others to be tied to them, or the cameras it leaves
+        out are tied among themselves in a larger group, the camera with the most matched
+        events of the largest group tied among themselves (with a warning).
     row_times : known time per row (ms) per camera, e.g. from a datasheet.
     anchors : ``CAMERA:EVENT`` strings naming events that are one flash (optional); EVENT is
         the detector's event number, as in the events table and the model's events.
@@ -329,19 +330,63 @@ def synchronize(
     check_row_times(row_times or {}, names)
     check_anchors(anchors)
     try:
-        return _synchronized(detections, reference or names[0], row_times, anchors)
+        model, report = _synchronized(detections, reference or names[0], row_times, anchors)
     except UntiedReferenceError as untied:
         if reference is not None or untied.instead is None:
             raise
-        instead = untied.instead
-    model, report = _synchronized(detections, instead, row_times, anchors)
-    report.warnings.insert(
-        0,
-        f"{detections[0].video}: the first video, the reference unless one is given, shares too few flashes with "
-        f"the other cameras to be tied to them; {instead}'s clock is the global clock instead (of the cameras "
-        "tied among themselves, the one with the most matched flashes; name the reference to choose another)",
+        model, report = _synchronized(detections, untied.instead, row_times, anchors)
+        report.warnings.insert(
+            0,
+            f"{detections[0].video}: the first video, the reference unless one is given, shares too few flashes "
+            f"with the other cameras to be tied to them; {untied.instead}'s clock is the global clock instead (of "
+            "the cameras tied among themselves, the one with the most matched flashes; name the reference to "
+            "choose another)",
+        )
+        return model, report
+    return (
+        (model, report)
+        if reference is not None
+        else _on_the_largest_group(detections, model, report, row_times, anchors)
     )
-    return model, report
+
+
+def _on_the_largest_group(
+    detections: Sequence[CameraDetection],
+    model: SyncModel,
+    report: SyncReport,
+    row_times: dict[str, float] | None,
+    anchors: Sequence[str],
+) -> tuple[SyncModel, SyncReport]:
+    """``model`` and ``report``, solved on the first video's clock, or where the cameras they
+    leave out are tied among themselves in a larger group (on a reference of their own), the
+    solve on the clock of that group's camera with the most matched events, with a warning
+    first. Random rig 98 of fast readouts had its
+    first video tied to one camera by three flashes and the other eight left out, though
+    they share five to eight among themselves; on one of theirs nine are tied."""
+    best = (model, report)
+    left = [d.camera for d in detections if d.camera not in model.cameras]
+    while len(left) > len(best[0].cameras):  # only there may a larger group lie
+        try:
+            trial = _synchronized(detections, left[0], row_times, anchors)
+        except FlashsyncError:
+            left = left[1:]
+            continue
+        if len(trial[0].cameras) > len(best[0].cameras):
+            best = trial
+        left = [name for name in left if name not in trial[0].cameras]
+    if best[0] is model:
+        return model, report
+    busiest = best[0].events.camera.value_counts().idxmax()  # as the untied first video's stand-in is chosen
+    if busiest != best[0].reference:
+        best = _synchronized(detections, busiest, row_times, anchors)
+    best[1].warnings.insert(
+        0,
+        f"{detections[0].video}: the first video, the reference unless one is given, is tied to "
+        f"{len(model.cameras) - 1} of the {len(detections) - 1} other cameras only; {best[0].reference}'s clock "
+        f"ties {len(best[0].cameras) - 1} and is the global clock instead (of the largest group of cameras tied "
+        "among themselves, the one with the most matched flashes; name the reference to choose another)",
+    )
+    return best
 
 
 def _synchronized(

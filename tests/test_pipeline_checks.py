@@ -442,6 +442,38 @@ def test_a_first_video_tied_to_no_camera_leaves_the_reference_to_the_others():
     assert diagnose(detections).sync_model.reference == model.reference
 
 
+def test_a_first_video_tied_in_a_smaller_group_leaves_the_reference_to_the_larger():
+    """Not given a reference, ``sync`` kept the first video's clock wherever it was tied to
+    any camera, and left out every camera not tied to it: random rig 98 of fast readouts had
+    its first video tied to one camera by three flashes and eight cameras left out that
+    share five to eight flashes among themselves. Here cam0 and cam1 share ten flashes and
+    cam2-cam4 twenty others: the larger group is solved, on the clock of its camera with the
+    most matched flashes, as if it were named, the first line of the report says so, and the
+    others' clocks come out right on it (within 3 sigma). Named, cam0 keeps its own group."""
+    events, truth, frames = synthetic_events(5, 30, seed=2)
+    keep = (events.camera < 2) == (events.flash < 10)
+    columns = {name: getattr(events, name)[keep] for name in ("camera", "flash", "t_frame_ms", "q")}
+    detections = synthetic_detections(replace(events, **columns), truth, frames)
+    model, report = synchronize(detections)
+    assert set(model.cameras) == {"cam2", "cam3", "cam4"}, report.warnings
+    assert report.warnings[0].startswith(
+        f"{detections[0].video}: the first video, the reference unless one is given, is tied to 1 of the 4 other "
+        f"cameras only; {model.reference}'s clock ties 2 and is the global clock instead"
+    ), report.warnings
+    assert any("cam0" in w and "left out" in w for w in report.warnings)
+    r = int(model.reference[3:])
+    for name, clock in model.cameras.items():
+        if (c := int(name[3:])) == r:
+            continue
+        (a_ref, b_ref, _), (a, b, _) = truth[r], truth[c]
+        assert clock.alpha == pytest.approx(a / a_ref, abs=1e-6)
+        beta_error = clock.beta_ms - (a * frames[c][0] + b - a_ref * frames[r][0] - b_ref) / a_ref
+        assert abs(beta_error) < 3.0 * np.sqrt(clock.covariance[1, 1])
+    named = synchronize(detections, reference=model.reference)[0]
+    assert all(named.cameras[name].beta_ms == clock.beta_ms for name, clock in model.cameras.items())
+    assert set(synchronize(detections, reference="cam0")[0].cameras) == {"cam0", "cam1"}
+
+
 def _first_camera_saw_two_flashes():
     """Three synthetic cameras (cam0 first) of thirty flashes of which cam0 saw two: their
     detections, true (alpha, beta_ms, row_time_ms) on cam0's clock (shape (3, 3)) and frame
