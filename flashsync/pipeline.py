@@ -360,9 +360,9 @@ def _on_the_largest_group(
     """``model`` and ``report``, solved on the first video's clock, or where the cameras they
     leave out are tied among themselves in a larger group (on a reference of their own), the
     solve on the clock of that group's camera with the most matched events, with a warning
-    first. Random rig 98 of fast readouts had its
-    first video tied to one camera by three flashes and the other eight left out, though
-    they share five to eight among themselves; on one of theirs nine are tied."""
+    first. Random rig 98 of fast readouts had its first video tied to one camera by three
+    flashes and the other eight left out, though they share five to eight among themselves;
+    on one of theirs nine are tied."""
     best = (model, report)
     left = [d.camera for d in detections if d.camera not in model.cameras]
     while len(left) > len(best[0].cameras):  # only there may a larger group lie
@@ -456,7 +456,7 @@ def _synchronized(
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     for name in best.connected:
-        if name != reference:  # times are midpoints less half the exposure, the reference's too
+        if name != reference:  # its times move by half its exposure's error, and by half the reference's
             frame_std[name] = np.hypot(
                 frame_std[name], np.hypot(readings_ms.get(name, 0.0), readings_ms.get(reference, 0.0)) / 2.0
             )

@@ -255,9 +255,9 @@ def test_an_exposure_its_clean_bands_cannot_show_is_in_every_cameras_sigma(tmp_p
     (1.264 ms, 21.7 rows at 30 fps and 540 rows, sRGB, clipping at white, crf 29) and two
     cameras of short exposures (cam3, cam6). cam1's bands of short pulses are clipped, and its
     clean bands are all of pulses longer than its exposure, as long as the others see those
-    pulses: its exposure came out 0.33 ms long under a sigma of 0.07, and as a camera's times
-    are its midpoints less half its exposure, the others' times 0.16-0.19 ms off under sigmas
-    of 0.08 (error/sigma 2.0-2.3). The exposure's distance above its shortest clipped band of
+    pulses: its exposure came out 0.33 ms long under a sigma of 0.07, and as the flashes'
+    instants are its bands' midpoints less half its exposure, the others' times 0.16-0.19 ms
+    off under sigmas of 0.08 (error/sigma 2.0-2.3). The exposure's distance above its shortest clipped band of
     a shorter pulse is now in its sigma (error/sigma 4.5 -> 1.7), and half of it in the
     others' times' sigma (1.3-1.5)."""
     full = random_rig(65, max_height=540, duration_ms=12000.0)
