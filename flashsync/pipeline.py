@@ -145,7 +145,9 @@ READINGS_AGREE = 0.25
 #: fits' largest blur, :data:`~flashsync.ramp.MAX_BLUR`; the misread exposures were 1.2-1.7
 #: rows). rig-4 of `bench_diagnose.py --seeds 0:12` has a 0.65 ms cam5 read right at 14.8
 #: rows whose 1.0-1.9 ms pulses two long exposures saw 0.06-0.47 ms long (their ramps taken
-#: for blur); without the guards it was read as 1.68 ms.
+#: for blur); without the guards it was read as 1.68 ms. A camera the others' flashes read
+#: the other way round above this many rows keeps its reading, the other one in its sigma
+#: (:func:`_unturned_exposures_ms`).
 MAX_TURNED_ROWS = MAX_BLUR
 
 #: Shares of the nominal time per row at which a camera that matching at the nominal leaves
@@ -450,8 +452,10 @@ def _synchronized(
         best = final(best.cameras, other_shifts=True)
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     bound_ms = _pulse_bound_exposures_ms(best)
+    unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped))
     readings_ms = {
-        name: np.hypot(exposure_spreads.get(name, 0.0), bound_ms.get(name, 0.0)) for name in exposure_spreads | bound_ms
+        name: float(np.sqrt(sum(part.get(name, 0.0) ** 2 for part in (exposure_spreads, bound_ms, unturned_ms))))
+        for name in exposure_spreads | bound_ms | unturned_ms
     }
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
@@ -479,11 +483,12 @@ def _synchronized(
         + readout_warnings
         + backward_warnings
         + pulse_warnings
+        + unturned_warnings
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, told=set(changes_ms))
+        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -661,11 +666,43 @@ def _rival_exposures_ms(best: _Attempt) -> dict[str, float]:
     return spreads
 
 
-def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, int]]:
-    """Per camera whose bands read with some pulses longer than its exposure of at most
-    :data:`MAX_TURNED_ROWS` rows and that the other cameras show was read the other way round
-    (:data:`SHORTER_PULSE_SHARE`, :data:`PULSES_AGREE`, :data:`MIN_EXPOSURE_GAIN`; no other
-    camera sees such a flash about as long): its exposure (ms), the median of its
+def _turnable(detection: CameraDetection) -> bool:
+    """Whether the camera's bands share an exposure of at most :data:`MAX_TURNED_ROWS` rows:
+    short enough for the others' flashes to read it the other way round."""
+    return (detection.exposure_rows or np.inf) <= MAX_TURNED_ROWS
+
+
+def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, float], list[str]]:
+    """Per camera but the ``turned`` that the others' flashes show was read the other way
+    round (:func:`_exposures_the_others_tell`) but whose bands share an exposure of more than
+    :data:`MAX_TURNED_ROWS` rows, not turned: how far the exposure they tell lies from its
+    solved one, ms (into the exposure's sigma, and half into its times'), and a warning for
+    each. Random rig 103 at two flash powers (``bench_rigs.py --seeds 100:108 --flash-powers
+    0.5``) has a 0.666 ms reference of 540 rows whose bands read as a 0.120 ms exposure (3.5
+    rows) under 0.67 ms pulses that another camera saw 0-0.07 ms long: its exposure came out
+    0.55 ms short at 26 sigmas, every other camera's times then 0.27 ms off."""
+    spreads, warnings = {}, []
+    for name, (exposure_ms, _, n_flashes) in _exposures_the_others_tell(best, turnable=False).items():
+        if name in turned:
+            continue
+        detection = best.cameras[name]
+        camera = best.solution.cameras[best.connected.index(name)]
+        spreads[name] = abs(exposure_ms - camera.exposure_ms)
+        warnings.append(
+            f"{detection.video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer pulses, but "
+            f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: its exposure may be "
+            f"{exposure_ms:.2f} ms; read over {detection.exposure_rows:.1f} rows, more than blur makes, it is kept, "
+            "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
+            "give it (restamp --exposure CAMERA=MS)"
+        )
+    return spreads, warnings
+
+
+def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[str, tuple[float, float, int]]:
+    """Per camera whose bands read with some pulses longer than its exposure, :func:`_turnable`
+    (or, ``turnable`` False, not), and that the other cameras show was read the other way
+    round (:data:`SHORTER_PULSE_SHARE`, :data:`PULSES_AGREE`, :data:`MIN_EXPOSURE_GAIN`; no
+    other camera sees such a flash about as long): its exposure (ms), the median of its
     pulses of the flashes that the cameras whose bands of them are one exposure long (the
     pulse measured by the band's ramps) see shorter, that median's standard error (ms) and
     the number of those flashes."""
@@ -674,8 +711,9 @@ def _exposures_the_others_tell(best: _Attempt) -> dict[str, tuple[float, float, 
     told = {}
     for name, camera in zip(best.connected, best.solution.cameras):
         mine = (matches.camera == name) & np.isfinite(pulse_of)
-        short = (best.cameras[name].exposure_rows or np.inf) <= MAX_TURNED_ROWS
-        if not (short and camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)):
+        if _turnable(best.cameras[name]) != turnable or not (
+            camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)
+        ):
             continue
         witnesses = matches.camera != name
         longer = [

@@ -35,6 +35,7 @@ from flashsync.pipeline import (
     _pulse_lengths,
     _readout_doubts,
     _sync_events,
+    _unturned_exposures_ms,
     check_anchors,
     check_row_times,
     row_time_prior_ms,
@@ -491,12 +492,12 @@ class _Matched(SimpleNamespace):
         return len(self.flash)
 
 
-def _told(**changes) -> dict:
-    """:func:`_exposures_the_others_tell` on three flashes of 0.05-0.1 ms and one of 3 ms seen
-    by a camera whose bands read as a 1.2-row exposure (0.12 ms) that every pulse outlasts
-    (0.83-0.85 ms, 3 ms) and by one whose 2 ms exposure outlasts them (pulses read by its
-    ramps); ``changes`` per camera: ``rows`` (its bands' exposure), ``pulses`` (ms), ``solved``
-    (its solve's exposure, ms); a third camera where given."""
+def _pulse_rig(**changes) -> SimpleNamespace:
+    """A solve's matched pulses: three flashes of 0.05-0.1 ms and one of 3 ms seen by a camera
+    whose bands read as a 1.2-row exposure (0.12 ms) that every pulse outlasts (0.83-0.85 ms,
+    3 ms) and by one whose 2 ms exposure outlasts them (pulses read by its ramps); ``changes``
+    per camera: ``rows`` (its bands' exposure), ``pulses`` (ms), ``solved`` (its solve's
+    exposure, ms); a third camera where given."""
     cameras = {
         "short": dict(rows=1.2, pulses=[0.84, 0.83, 0.85, 3.0], solved=0.12),
         "ramps": dict(rows=20.0, pulses=[0.05, 0.1, 0.08, np.nan], solved=2.0),
@@ -510,14 +511,21 @@ def _told(**changes) -> dict:
             flash=np.tile(np.arange(4), len(names)), camera=np.repeat(names, 4), event=np.tile(np.arange(4), len(names))
         ),
         cameras={
-            n: SimpleNamespace(camera=n, exposure_rows=c["rows"], pulse_rows=np.array(c["pulses"]) / 0.1)
+            n: SimpleNamespace(
+                camera=n, video=Path(f"{n}.mp4"), exposure_rows=c["rows"], pulse_rows=np.array(c["pulses"]) / 0.1
+            )
             for n, c in cameras.items()
         },
         solution=SimpleNamespace(
             cameras=[SimpleNamespace(row_time_ms=0.1, exposure_ms=c["solved"]) for c in cameras.values()]
         ),
     )
-    return _exposures_the_others_tell(best)
+    return best
+
+
+def _told(turnable: bool = True, **changes) -> dict:
+    """:func:`_exposures_the_others_tell` on :func:`_pulse_rig` with ``changes``."""
+    return _exposures_the_others_tell(_pulse_rig(**changes), turnable)
 
 
 def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
@@ -532,6 +540,21 @@ def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
     assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5)) == {}
     assert _told(short=dict(rows=3.5, solved=0.35)) == {}
     assert _told(ramps=dict(rows=40.0)) == {}
+
+
+def test_a_camera_read_too_long_to_turn_keeps_its_reading_with_the_other_in_its_sigma():
+    """The same camera with its exposure read at 3.5 rows (0.35 ms), more than the fits'
+    largest blur: the others' flashes tell 0.84 ms, but a reading that long is not turned on
+    their ramps alone; the 0.49 ms between the two is its exposure's doubt, with a warning
+    naming both. Read at 1.2 rows (turned), or once turned, none."""
+    long_read = _pulse_rig(short=dict(rows=3.5, solved=0.35))
+    assert _told(turnable=False) == {} and "short" in _told(turnable=False, short=dict(rows=3.5, solved=0.35))
+    spreads, warnings = _unturned_exposures_ms(long_read, turned=set())
+    assert spreads == {"short": pytest.approx(0.49)}, spreads
+    assert len(warnings) == 1 and warnings[0].startswith("short.mp4: its bands read as a 0.35 ms exposure"), warnings
+    assert "may be 0.84 ms" in warnings[0] and "3.5 rows" in warnings[0]
+    assert _unturned_exposures_ms(long_read, turned={"short"}) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(), turned=set()) == ({}, [])
 
 
 def test_a_cameras_reference_share_is_the_references_rows_and_rate_then():
