@@ -420,7 +420,11 @@ def _read_width(fits: list[BandFit]) -> tuple[float, bool, float | None] | None:
     pulses that explained the bands better at its least cost but not by what a choice
     needs, where the plain one is taken (None otherwise; rig-4's 5.7-row reference under
     LED pulses all longer than it, four bands, two of them 9.4-9.8 rows: read 10.3 rows,
-    its rival 7.3). The exposure is the minimum of the sum of their costs refitted
+    its rival 7.3); where that reading costs :data:`SWAP_EVIDENCE` less but more than
+    :data:`SWAP_SHARE` of the plain one, the longest of its grid's minima (auto-exposure
+    rig-89's 15.2-row camera under 0.9-2 ms LED pulses, its bands 302 read plainly, as
+    56-row exposures, and 157 at 14.4 rows, had no rival, its exposure 1.14 ms long at 2.5
+    sigmas). The exposure is the minimum of the sum of their costs refitted
     with the exposure fixed (:meth:`BandFit.with_width`; each band's cost above its own
     fit, in units of its own noise and at most :data:`BAND_COST_CAP`, so that a band hit by
     a player does not steer it), over at most :data:`MAX_WIDTH_BANDS` bands evenly over
@@ -493,9 +497,9 @@ def _read_width(fits: list[BandFit]) -> tuple[float, bool, float | None] | None:
     cut = plain[1] - SWAP_EVIDENCE  # a cost cut short there is no better than the plain reading
     scored = np.array([total(width, True, cut)[0] for width in shorter])
     scored[scored >= cut] = np.inf
+    start = _longest_minimum(scored, scored.min() + SWAP_EVIDENCE) if np.isfinite(scored.min()) else None
     if not _explains_better(scored.min(), plain[1]):
-        return plain[0], False, None
-    start = _longest_minimum(scored, scored.min() + SWAP_EVIDENCE)
+        return plain[0], False, None if start is None else float(shorter[start])
     refined = minimize_scalar(
         lambda w: total(w, True)[0],
         bounds=(shorter[start] / step, shorter[start] * step),

@@ -216,6 +216,18 @@ def test_a_reading_with_longer_pulses_that_explains_the_bands_better_but_not_by_
     assert not longer and abs(width - 10.3) < 0.2 and abs(rival - 7.3) < 0.2, (width, rival)
 
 
+def test_a_reading_with_longer_pulses_that_leaves_more_than_half_the_plain_cost_is_the_rival():
+    """The five bands of auto-exposure rig-89's cam8 (``bench_rigs.py --seeds 84:92
+    --exposure-changes 0.5``: linear, crf 19, a 15.2-row exposure under LED pulses of 0.9-2
+    ms) as the detector fitted them whole from its H.264 file: 26.6-56.1 rows, each its
+    pulse. They cost 302 read plainly (56 rows) and 157 with pulses longer than a 14.4-row
+    exposure: better by the lead of 50 a choice needs but not to half, so the plain reading
+    stands, and 14.4 rows is its rival (it had none: its exposure came out 1.14 ms long at
+    2.5 sigmas)."""
+    width, longer, rival = common_width(saved_band_fits("rig89_cam8_bands.npz"))
+    assert not longer and abs(width - 56.0) < 0.5 and abs(rival - 15.2) < 1.5, (width, rival)
+
+
 def test_a_band_that_cannot_measure_its_own_noise_does_not_choose_the_exposure():
     """The nine bands of the second world's rig-641 cam6 (``python benchmarks/bench_rigs.py
     --seeds 640:656 --max-height 360 --duration-s 8 --exposure-changes 0.5``: sRGB, crf 24, a
