@@ -453,10 +453,7 @@ def _synchronized(
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     bound_ms = _pulse_bound_exposures_ms(best)
     unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped))
-    readings_ms = {
-        name: float(np.sqrt(sum(part.get(name, 0.0) ** 2 for part in (exposure_spreads, bound_ms, unturned_ms))))
-        for name in exposure_spreads | bound_ms | unturned_ms
-    }
+    readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     for name in best.connected:
@@ -470,12 +467,7 @@ def _synchronized(
         best, {d.camera: d for d in detections}, stepped
     )
     rivals_ms = _rival_exposures_ms(best)
-    best = best.with_scatter(
-        {
-            name: float(np.sqrt(sum(part.get(name, 0.0) ** 2 for part in (readings_ms, scatters_ms, rivals_ms))))
-            for name in readings_ms | scatters_ms | rivals_ms
-        }
-    )
+    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms))
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -508,6 +500,12 @@ def _synchronized(
     for clock, share in zip(others, _reference_shares_ms(model.cameras[reference], rate_spread, others)):
         clock.frame_std_ms = np.hypot(clock.frame_std_ms, share)
     return model, report
+
+
+def _in_quadrature(*parts: dict[str, float]) -> dict[str, float]:
+    """Per camera named in any of ``parts`` (ms per camera), the root of the sum of their
+    squares, ms: independent doubts added."""
+    return {name: float(np.sqrt(sum(part.get(name, 0.0) ** 2 for part in parts))) for name in set().union(*parts)}
 
 
 #: Rows of the reference at which its sigma is sampled for :func:`_reference_shares_ms`.
