@@ -89,7 +89,10 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as error:
         print(f"flashsync {args.command}: error: {_os_message(error)}{_PLAN.written_note()}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt as interrupt:
+    except (KeyboardInterrupt, RuntimeError) as error:
+        interrupt = _interrupt_in(error)
+        if interrupt is None:
+            raise
         remove_temporaries()
         _PLAN.undo()
         print(f"flashsync {args.command}: {_PLAN.interrupted()}", file=sys.stderr)
@@ -114,6 +117,15 @@ def process_main() -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     exec("pass", {})
     return code
+
+
+def _interrupt_in(error: BaseException | None) -> KeyboardInterrupt | None:
+    """The interrupt ``error`` is or was raised from, or None: Python 3.11 wraps an exception
+    raised in ``__set_name__`` in a RuntimeError, and a SIGTERM landing while pandas builds a
+    dataclass on import came out as that error's traceback, exit 1."""
+    while error is not None and not isinstance(error, KeyboardInterrupt):
+        error = error.__cause__
+    return error
 
 
 def _handle_sigterm():

@@ -214,6 +214,34 @@ def test_an_interrupt_that_leaves_a_string_exec_still_exits_130(synced_scenario,
     assert not output.exists()
 
 
+def test_a_sigterm_while_a_class_is_built_still_exits_143(synced_scenario, tmp_path):
+    """``python -m`` a module that runs flashsync as its script does, with restamp's work
+    terminated while a class is built (a descriptor's ``__set_name__``, as in the dataclasses
+    pandas builds on import, where SIGTERM 0.3 s into restamp once landed): Python 3.11 wraps
+    the interrupt in a RuntimeError, and the run came out as its traceback, exit 1. Now exit
+    143 and the interrupted line."""
+    (tmp_path / "terminated_in_class").mkdir()
+    (tmp_path / "terminated_in_class" / "__main__.py").write_text(
+        "import importlib, os, signal, sys, time\n"
+        "from flashsync.cli import process_main\n"
+        "class Field:\n"
+        "    def __set_name__(self, owner, name):\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        time.sleep(5)\n"
+        "def terminated(*args, **kwargs):\n"
+        "    type('Built', (), {'field': Field()})\n"
+        "importlib.import_module('tracking_adapter.restamp').restamp_file = terminated\n"
+        "sys.exit(process_main())\n"
+    )
+    output = tmp_path / "out.csv"
+    command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
+    process = start(*command, cwd=tmp_path, program=("-m", "terminated_in_class"))
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 143, (process.returncode, err)
+    assert last_line(err) == "flashsync restamp: interrupted; no output written"
+    assert not output.exists()
+
+
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc to see when decoding starts")
 def test_sync_terminated_while_decoding_stops_soon_and_writes_nothing(synced_scenario, tmp_path):
     """SIGTERM while 90 videos decode (in threads, ~30 s of work on a busy 2-core machine): exit 143 within a
