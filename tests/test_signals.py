@@ -192,52 +192,50 @@ def test_interrupt_while_the_interpreter_shuts_down_changes_nothing(synced_scena
     assert len(output.read_text().splitlines()) == rows + 1
 
 
-def test_an_interrupt_that_leaves_a_string_exec_still_exits_130(synced_scenario, tmp_path):
-    """``python -m`` a module that runs flashsync as its script does, with restamp's work
-    interrupted inside a string ``exec`` (as a Ctrl-C landing while a dataclass is built):
-    exit 130 and the interrupted line, not "killed by SIGINT"."""
-    (tmp_path / "interrupted_in_exec").mkdir()
-    (tmp_path / "interrupted_in_exec" / "__main__.py").write_text(
-        "import importlib, sys\n"
+def restamp_as_a_script_with(work: str, synced_scenario: Path, tmp_path: Path) -> tuple[int, str, Path]:
+    """``python -m`` a module that runs flashsync's ``restamp`` as its script does, its work
+    replaced by ``work`` (Python source defining ``work(*args, **kwargs)``): the exit code,
+    stderr and the output path."""
+    (tmp_path / "replaced").mkdir()
+    (tmp_path / "replaced" / "__main__.py").write_text(
+        "import importlib, os, signal, sys, time\n"
         "from flashsync.cli import process_main\n"
-        "def interrupted(*args, **kwargs):\n"
-        "    exec('raise KeyboardInterrupt', {})\n"
-        "importlib.import_module('tracking_adapter.restamp').restamp_file = interrupted\n"
+        f"{work}\n"
+        "importlib.import_module('tracking_adapter.restamp').restamp_file = work\n"
         "sys.exit(process_main())\n"
     )
     output = tmp_path / "out.csv"
     command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
-    process = start(*command, cwd=tmp_path, program=("-m", "interrupted_in_exec"))
+    process = start(*command, cwd=tmp_path, program=("-m", "replaced"))
     _, err = process.communicate(timeout=60)
-    assert process.returncode == 130, (process.returncode, err)
+    return process.returncode, err, output
+
+
+def test_an_interrupt_that_leaves_a_string_exec_still_exits_130(synced_scenario, tmp_path):
+    """restamp's work interrupted inside a string ``exec`` (as a Ctrl-C landing while a
+    dataclass is built): exit 130 and the interrupted line, not "killed by SIGINT"."""
+    work = "def work(*args, **kwargs):\n    exec('raise KeyboardInterrupt', {})"
+    code, err, output = restamp_as_a_script_with(work, synced_scenario, tmp_path)
+    assert code == 130, (code, err)
     assert last_line(err) == "flashsync restamp: interrupted; no output written"
     assert not output.exists()
 
 
 def test_a_sigterm_while_a_class_is_built_still_exits_143(synced_scenario, tmp_path):
-    """``python -m`` a module that runs flashsync as its script does, with restamp's work
-    terminated while a class is built (a descriptor's ``__set_name__``, as in the dataclasses
-    pandas builds on import, where SIGTERM 0.3 s into restamp once landed): Python 3.11 wraps
-    the interrupt in a RuntimeError, and the run came out as its traceback, exit 1. Now exit
-    143 and the interrupted line."""
-    (tmp_path / "terminated_in_class").mkdir()
-    (tmp_path / "terminated_in_class" / "__main__.py").write_text(
-        "import importlib, os, signal, sys, time\n"
-        "from flashsync.cli import process_main\n"
+    """restamp's work terminated while a class is built (a descriptor's ``__set_name__``, as
+    in the dataclasses pandas builds on import, where SIGTERM 0.3 s into restamp once
+    landed): Python 3.11 wraps the interrupt in a RuntimeError, and the run came out as its
+    traceback, exit 1. Now exit 143 and the interrupted line."""
+    work = (
         "class Field:\n"
         "    def __set_name__(self, owner, name):\n"
         "        os.kill(os.getpid(), signal.SIGTERM)\n"
         "        time.sleep(5)\n"
-        "def terminated(*args, **kwargs):\n"
-        "    type('Built', (), {'field': Field()})\n"
-        "importlib.import_module('tracking_adapter.restamp').restamp_file = terminated\n"
-        "sys.exit(process_main())\n"
+        "def work(*args, **kwargs):\n"
+        "    type('Built', (), {'field': Field()})"
     )
-    output = tmp_path / "out.csv"
-    command = ["restamp", synced_scenario / "detections.csv", "--model", synced_scenario / "sync.json", "-o", output]
-    process = start(*command, cwd=tmp_path, program=("-m", "terminated_in_class"))
-    _, err = process.communicate(timeout=60)
-    assert process.returncode == 143, (process.returncode, err)
+    code, err, output = restamp_as_a_script_with(work, synced_scenario, tmp_path)
+    assert code == 143, (code, err)
     assert last_line(err) == "flashsync restamp: interrupted; no output written"
     assert not output.exists()
 
