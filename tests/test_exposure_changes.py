@@ -16,11 +16,12 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy, clock_origin_ms
-from flashsync.events import Band, Edge, Events
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.exposure_changes import all_band_spans, exposure_spans, length_scatter_rows, with_one_exposure
 from flashsync.io import load_model, save_model
 from flashsync.report import sync_summary
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
+from flashsync.simulation.band_events import synthetic_detections, synthetic_events
 from tracking_adapter.restamp import restamp
 
 
@@ -540,3 +541,73 @@ def test_without_an_exposure_read_split_bands_are_held_to_the_longest_band(befor
     one and its 14.5 ms exposure; split ones 312 and 306 rows in sight) would have
     outreached."""
     assert left_out(split_bands([sight], before=before, shared=None)) == dropped
+
+
+def fast_reading(events, truth, frame_times, exposure_ms: np.ndarray) -> CameraDetection:
+    """Synthetic camera 1 (:func:`~flashsync.simulation.band_events.synthetic_events`) read in
+    half its frame period, each flash in exposure order seen through ``exposure_ms[flash]``
+    (ms): a band whole where both its edges lie within the rows read, its leading edge alone
+    where the trailing one does not, and its trailing edge alone in the next frame where the
+    flash fell in the vertical blanking less than one exposure before that frame (top-down,
+    the reading known)."""
+    tau = np.empty(events.flash.max() + 1)
+    for c, (alpha, beta, row_time) in enumerate(truth):
+        mine = events.camera == c
+        tau[events.flash[mine]] = alpha * events.t_frame_ms[mine] + beta + events.q[mine] * row_time
+    alpha, beta, row_time = truth[1]
+    start, row_time, height = alpha * frame_times[1] + beta, row_time / 2.0, 1080
+    stamps = np.round(frame_times[1] - frame_times[1][0])
+    rows = []
+    for number, flash in enumerate(np.argsort(tau)):
+        frame = int(np.searchsorted(start, tau[flash], side="right")) - 1
+        lead = (tau[flash] - start[frame]) / row_time
+        trail = lead + exposure_ms[number] / row_time
+        if lead < height - 1:
+            edges = [(Edge.LEADING, lead, frozenset())]
+            edges += [(Edge.TRAILING, trail, frozenset())] if trail < height - 1 else []
+        else:
+            frame, trail = frame + 1, (tau[flash] + exposure_ms[number] - start[frame + 1]) / row_time
+            edges = [(Edge.TRAILING, trail, frozenset({Flag.LEADING_HIDDEN}))] if trail >= 0 else []
+        for edge, row, flags in edges:
+            rows.append(("cam1", number, frame, stamps[frame], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
+    return CameraDetection("cam1", "cam1.mp4", 1920, height, stamps, Events.from_columns(*zip(*rows)))
+
+
+@pytest.mark.parametrize(
+    "after_ms, found",
+    [
+        pytest.param([16.0], True, id="longer"),
+        pytest.param([20.0], True, id="much-longer"),
+        pytest.param([16.0, 20.0], False, id="scattered"),
+        pytest.param([13.0], False, id="under-a-step"),
+    ],
+)
+def test_trailing_edges_the_solve_left_out_as_late_as_each_other_show_a_change(after_ms, found):
+    """Three synthetic cameras (1080 rows, edges 0.05 ms noisy), 60 flashes; cam1 reads its
+    rows in half its frame period and exposes each for 12 ms, then, from its 41st flash on,
+    for ``after_ms`` (in turn): few bands whole, most flashes its trailing edges alone (random
+    rig 116 of the mixed bench: its reference, one band whole, its exposure 12.42 then 17.99
+    ms, its last trailing edges 5.6 ms late; its exposure frame by frame 3.83 ms off under a
+    sigma of 0.11 ms). The solve leaves the late ones out, and their lateness shows the new
+    exposure: a warning names both exposures, and the model holds each over its frames.
+    Not where they are late by different amounts, nor by less than a step (15 % of the
+    exposure)."""
+    events, truth, frame_times = synthetic_events(3, 60, seed=1)
+    detections = synthetic_detections(events, truth, frame_times, seed=1)
+    exposure_ms = np.concatenate([np.full(40, 12.0), np.resize(after_ms, 20)])
+    detections[1] = fast_reading(events, truth, frame_times, exposure_ms)
+    model, report = synchronize(detections)
+    warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
+    camera = model.cameras["cam1"]
+    assert bool(warned) == found and bool(camera.exposure_spans) == found, (report.warnings, camera.exposure_spans)
+    if not found:
+        return
+    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+) \((\d+) ([a-z ]+)\)", warned[0])
+    assert [float(ms) for ms, *_ in spans] == pytest.approx([12.0, after_ms[0]], abs=0.1), warned
+    assert spans[1][4] == "trailing edges the solve left out", warned
+    frames, true_ms = detections[1].events.frame, exposure_ms[detections[1].events.event]
+    held, std = camera.exposure_at(frames)
+    assert np.all(np.abs(held - true_ms) <= 2.0 * std + 0.1), (held, std, true_ms)
+    before, late = camera.exposure_spans[:2]
+    inside = np.any([(frames >= s.first_frame) & (frames <= s.last_frame) for s in (before, late)], axis=0)
+    assert held[inside] == pytest.approx(true_ms[inside], abs=0.1) and np.all(std[inside] < 0.2), (held, std)
