@@ -16,12 +16,12 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy, clock_origin_ms
-from flashsync.events import Band, Edge, Events, Flag
+from flashsync.events import Band, Edge, Events
 from flashsync.exposure_changes import all_band_spans, exposure_spans, length_scatter_rows, with_one_exposure
 from flashsync.io import load_model, save_model
 from flashsync.report import sync_summary
 from flashsync.simulation import CameraSpec, FlashSpec, Scenario, render_scenario
-from flashsync.simulation.band_events import synthetic_detections, synthetic_events
+from flashsync.simulation.band_events import flash_instants_ms, seen_by, synthetic_detections, synthetic_events
 from tracking_adapter.restamp import restamp
 
 
@@ -543,36 +543,6 @@ def test_without_an_exposure_read_split_bands_are_held_to_the_longest_band(befor
     assert left_out(split_bands([sight], before=before, shared=None)) == dropped
 
 
-def fast_reading(events, truth, frame_times, exposure_ms: np.ndarray) -> CameraDetection:
-    """Synthetic camera 1 (:func:`~flashsync.simulation.band_events.synthetic_events`) read in
-    half its frame period, each flash in exposure order seen through ``exposure_ms[flash]``
-    (ms): a band whole where both its edges lie within the rows read, its leading edge alone
-    where the trailing one does not, and its trailing edge alone in the next frame where the
-    flash fell in the vertical blanking less than one exposure before that frame (top-down,
-    the reading known)."""
-    tau = np.empty(events.flash.max() + 1)
-    for c, (alpha, beta, row_time) in enumerate(truth):
-        mine = events.camera == c
-        tau[events.flash[mine]] = alpha * events.t_frame_ms[mine] + beta + events.q[mine] * row_time
-    alpha, beta, row_time = truth[1]
-    start, row_time, height = alpha * frame_times[1] + beta, row_time / 2.0, 1080
-    stamps = np.round(frame_times[1] - frame_times[1][0])
-    rows = []
-    for number, flash in enumerate(np.argsort(tau)):
-        frame = int(np.searchsorted(start, tau[flash], side="right")) - 1
-        lead = (tau[flash] - start[frame]) / row_time
-        trail = lead + exposure_ms[number] / row_time
-        if lead < height - 1:
-            edges = [(Edge.LEADING, lead, frozenset())]
-            edges += [(Edge.TRAILING, trail, frozenset())] if trail < height - 1 else []
-        else:
-            frame, trail = frame + 1, (tau[flash] + exposure_ms[number] - start[frame + 1]) / row_time
-            edges = [(Edge.TRAILING, trail, frozenset({Flag.LEADING_HIDDEN}))] if trail >= 0 else []
-        for edge, row, flags in edges:
-            rows.append(("cam1", number, frame, stamps[frame], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
-    return CameraDetection("cam1", "cam1.mp4", 1920, height, stamps, Events.from_columns(*zip(*rows)))
-
-
 @pytest.mark.parametrize(
     "after_ms, found",
     [
@@ -595,7 +565,7 @@ def test_trailing_edges_the_solve_left_out_as_late_as_each_other_show_a_change(a
     events, truth, frame_times = synthetic_events(3, 60, seed=1)
     detections = synthetic_detections(events, truth, frame_times, seed=1)
     exposure_ms = np.concatenate([np.full(40, 12.0), np.resize(after_ms, 20)])
-    detections[1] = fast_reading(events, truth, frame_times, exposure_ms)
+    detections[1] = seen_by("cam1", flash_instants_ms(events, truth), truth[1], frame_times[1], exposure_ms, 0.5)
     model, report = synchronize(detections)
     warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
     camera = model.cameras["cam1"]

@@ -89,3 +89,50 @@ def synthetic_detections(
             readings.append(Events.from_columns(*columns))
         detections.append(CameraDetection(f"cam{c}", f"cam{c}.mp4", WIDTH, HEIGHT, stamps, *readings))
     return detections
+
+
+def flash_instants_ms(events: Observations, truth: np.ndarray) -> np.ndarray:
+    """The global instant of each flash of :func:`synthetic_events` (ms, by flash number),
+    as a camera that saw it places it (its rows 0.05 ms noisy)."""
+    instants = np.full(events.flash.max() + 1, np.nan)
+    for c, (alpha, beta, row_time) in enumerate(truth):
+        mine = events.camera == c
+        instants[events.flash[mine]] = alpha * events.t_frame_ms[mine] + beta + events.q[mine] * row_time
+    return instants
+
+
+def seen_by(
+    name: str,
+    instants_ms: np.ndarray,
+    clock: np.ndarray,
+    frame_times: np.ndarray,
+    exposure_ms: np.ndarray | float = EXPOSURE_MS,
+    readout_share: float = 1.0,
+) -> CameraDetection:
+    """What the detector gives ``sync`` of a synthetic camera (its ``clock``: alpha, beta_ms
+    and row_time_ms, one row of :func:`synthetic_events`'s truth; its ``frame_times``, ms)
+    that reads its rows in ``readout_share`` of that time per row and sees flashes at the
+    global ``instants_ms``, in time order each through its ``exposure_ms`` (one for all, or
+    one per instant in time order): a band whole where both its edges lie in the rows read,
+    its leading edge alone where the trailing one does not, and its trailing edge alone at
+    the top of the next frame where the flash fell in the vertical blanking less than one
+    exposure before that frame. Events numbered in time order, no noise, top-down (the
+    reading known)."""
+    alpha, beta, row_time = clock
+    start, row_time = alpha * frame_times + beta, row_time * readout_share
+    stamps = np.round(frame_times - frame_times[0])
+    exposures = np.broadcast_to(exposure_ms, len(instants_ms))
+    rows = []
+    for number, (instant, exposure) in enumerate(zip(np.sort(instants_ms), exposures)):
+        frame = int(np.searchsorted(start, instant, side="right")) - 1
+        lead = (instant - start[frame]) / row_time
+        trail = lead + exposure / row_time
+        if lead < HEIGHT - 1:
+            edges = [(Edge.LEADING, lead, frozenset())]
+            edges += [(Edge.TRAILING, trail, frozenset())] if trail < HEIGHT - 1 else []
+        else:
+            frame, trail = frame + 1, (instant + exposure - start[frame + 1]) / row_time
+            edges = [(Edge.TRAILING, trail, frozenset({Flag.LEADING_HIDDEN}))] if trail >= 0 else []
+        for edge, row, flags in edges:
+            rows.append((name, number, frame, stamps[frame], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
+    return CameraDetection(name, f"{name}.mp4", WIDTH, HEIGHT, stamps, Events.from_columns(*zip(*rows)))
