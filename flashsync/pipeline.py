@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from itertools import combinations, compress, pairwise, product
+from itertools import combinations, compress, pairwise, permutations, product
 from pathlib import Path
 from typing import NamedTuple
 
@@ -492,8 +492,10 @@ def _synchronized(
     report.distrusted_flicker = list(best.distrusted_flicker)
     report.sigma_ms = best.solution.sigma_ms
     model = best.model(reference)
+    burst_gaps_ms, burst_warnings = _burst_doubts(best, model)
+    report.warnings += burst_warnings
     for name, clock in model.cameras.items():
-        clock.frame_std_ms = frame_std[name]
+        clock.frame_std_ms = np.hypot(frame_std[name], burst_gaps_ms.get(name, 0.0))
         if name in changes_ms:
             clock.exposure_spans = _held_exposures(clock, shown[name]) if shown.get(name) else ()
             clock.exposure_std_ms = float(np.hypot(clock.exposure_std_ms, changes_ms[name]))
@@ -2135,6 +2137,94 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
         for name, named in doubted.items()
     ]
     return replace(chosen, warnings=chosen.warnings + warnings, shift_spreads=spreads)
+
+
+#: Two sync events of one camera this far apart (ms, least and most) are a burst: a TTL
+#: flash's metering pre-flash and its flash (:func:`_burst_doubts`) ...
+BURST_GAP_MS = (10.0, 150.0)
+#: ... and a pair of cameras is in doubt where it matches the first of this many bursts at
+#: least, their gaps within this share of their median of each other (a false event next to
+#: a flash makes one).
+MIN_BURSTS = 2
+BURST_AGREE = 0.2
+
+
+def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], list[str]]:
+    """Per camera whose flashes match another camera's only at the first of that camera's
+    bursts (its events :data:`BURST_GAP_MS` apart: a TTL pre-flash and its flash), at
+    :data:`MIN_BURSTS` or more whose gaps agree, each followed by one it does not see and
+    none at the second, and whose tie to the rig rests on such pairs alone: how far (ms, the
+    bursts' median gap; into its sigma) and a warning line each. A camera that sees one
+    event a burst sees the flash, not its faint pre-flash, unless the flash falls where it
+    does not look (a fast readout's blanking): there the flashes may match one burst later.
+    Where the flashes are missed as often as that, the wrong shift matches more events than
+    the right one, too many for the right one to be its rival (:func:`_shift_doubts`), and
+    the events it leaves unmatched, pre-flashes and flashes alike, are not so much brighter
+    than those it matches that the matcher refuses it (:data:`~flashsync.match.BRIGHTER_LEFT`):
+    random rig 125 of a mixed bench (``--preflash 40 --readout 0.4:0.8 --exposure-changes
+    0.5``), its cam2 matched to five of cam1's pre-flashes against two of its flashes (those
+    left 1.5 times as bright), 40 ms off at error/sigma 29 with no word. The doubt falls on
+    the camera of the pair that is not the reference, but for one whose pair's other shift
+    is its doubt already."""
+    followed, following = _bursts(best, model)
+    flashes = _matched_flashes(best.matches)
+    gaps: dict[tuple[str, str], list[float]] = {}
+    pinned = set()
+    for seen in flashes.values():
+        for (bursts, b_event), (single, s_event) in permutations(seen.items(), 2):
+            if (bursts, b_event) in following or (single, s_event) in followed or (single, s_event) in following:
+                pinned.add((bursts, single))
+            elif (bursts, b_event) in followed:
+                gaps.setdefault((bursts, single), []).append(followed[(bursts, b_event)])
+    doubtful = {
+        pair: float(np.median(gap))
+        for pair, gap in gaps.items()
+        if pair not in pinned and len(gap) >= MIN_BURSTS and np.ptp(gap) <= BURST_AGREE * np.median(gap)
+    }
+    partners: dict[str, set[str]] = {}
+    for seen in flashes.values():
+        for name in seen:
+            partners.setdefault(name, set()).update(set(seen) - {name})
+    doubts, warnings = {}, []
+    for (bursts, single), gap_ms in doubtful.items():
+        name = bursts if single == best.reference else single
+        if name in best.shift_spreads:
+            continue  # its pair's other shift is its doubt already (:func:`_shift_doubts`)
+        if any((other, name) not in doubtful and (name, other) not in doubtful for other in partners[name]):
+            continue  # tied by a camera whose flashes it matches at no burst's first
+        doubts[name] = max(doubts.get(name, 0.0), gap_ms)
+        warnings.append(
+            f"{best.cameras[name].video}: the flashes {single} and {bursts} share match only the first of "
+            f"{bursts}'s pairs of events {gap_ms:.0f} ms apart, each followed by one {single} does not see (a TTL "
+            f"flash's pre-flash and its flash?); its times may be off by {gap_ms:.0f} ms (in its sigma); name one "
+            "flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+        )
+    return doubts, warnings
+
+
+def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], float], set[tuple[str, int]]]:
+    """The cameras' sync events (camera, event number) that another of the same camera's
+    follows within :data:`BURST_GAP_MS` (its gap, ms, by the solved clocks), and those that
+    follow one."""
+    followed, following = {}, set()
+    for name in best.connected:
+        clock, events = model.cameras[name], _sync_events(best.cameras[name])
+        exposure = np.where(events.edge == Edge.TRAILING, clock.exposure_ms or 0.0, 0.0)
+        times = clock.t_global_ms(events.frame, events.row) - exposure
+        order = np.argsort(times)
+        for first, second in pairwise(order):
+            if BURST_GAP_MS[0] <= times[second] - times[first] <= BURST_GAP_MS[1]:
+                followed[(name, int(events.event[first]))] = float(times[second] - times[first])
+                following.add((name, int(events.event[second])))
+    return followed, following
+
+
+def _matched_flashes(matches: Matches) -> dict[int, dict[str, int]]:
+    """Per flash matched, each camera's event number matched into it."""
+    flashes: dict[int, dict[str, int]] = {}
+    for flash, name, event in zip(matches.flash, matches.camera, matches.event):
+        flashes.setdefault(int(flash), {})[str(name)] = int(event)
+    return flashes
 
 
 def _decided(trials: list[_Attempt | None]) -> int | None:
