@@ -1416,12 +1416,14 @@ def _change_by_left_out_edges(
     left_out = ~best.solution.inlier[mine]
     floor_ms = max(MIN_STEP_ROWS * solution.row_time_ms, MIN_STEP_SHARE * solution.exposure_ms)
     run = _agreeing_run(late_ms, left_out, floor_ms)
+    if run is None:
+        return None
     events, bands = detection.events, detection.events.bands()
     bands, lengths = _within_one_frame(events, bands.take(bands.complete))
     solved_rows = solution.exposure_ms / solution.row_time_ms
     solved = np.abs(lengths - solved_rows) <= MIN_STEP_SHARE * solved_rows
     held = np.sort(np.concatenate([frames[~left_out], events.frame[bands.leading[solved]]]))
-    if run is None or not len(held):
+    if not len(held):
         return None
     first, last = int(frames[run.start]), int(frames[run.stop - 1])
     if np.any((held >= first) & (held <= last)):

@@ -4,7 +4,8 @@ rig too large to render (64 cameras x 500 flashes), with the true clocks to chec
 Every camera (random frame rate 25/30/50 fps, drift within ±50 ppm, shift within ±60 s,
 time per row for ~1000 rows, 1080 rows high) sees each flash with probability 0.8; event
 rows carry 0.05 ms of noise. Used by ``benchmarks/bench_solve.py`` and the tests of the
-readout search at scale.
+readout search at scale. :func:`seen_by` makes one camera of such a rig see flashes at
+instants of one's choosing (pre-flashes, a fast readout, an exposure that changes).
 """
 
 from __future__ import annotations
@@ -111,7 +112,7 @@ def seen_by(
 ) -> CameraDetection:
     """What the detector gives ``sync`` of a synthetic camera (its ``clock``: alpha, beta_ms
     and row_time_ms, one row of :func:`synthetic_events`'s truth; its ``frame_times``, ms)
-    that reads its rows in ``readout_share`` of that time per row and sees flashes at the
+    that reads its rows at ``readout_share`` times that time per row and sees flashes at the
     global ``instants_ms``, in time order each through its ``exposure_ms`` (one for all, or
     one per instant in time order): a band whole where both its edges lie in the rows read,
     its leading edge alone where the trailing one does not, and its trailing edge alone at
