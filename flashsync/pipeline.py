@@ -2171,9 +2171,10 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     followed, following = _bursts(best, model)
     flashes = _matched_flashes(best.matches)
     gaps: dict[tuple[str, str], list[float]] = {}
-    pinned = set()
+    pinned, partners = set(), {}
     for seen in flashes.values():
         for (bursts, b_event), (single, s_event) in permutations(seen.items(), 2):
+            partners.setdefault(single, set()).add(bursts)
             if (bursts, b_event) in following or (single, s_event) in followed or (single, s_event) in following:
                 pinned.add((bursts, single))
             elif (bursts, b_event) in followed:
@@ -2183,10 +2184,6 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
         for pair, gap in gaps.items()
         if pair not in pinned and len(gap) >= MIN_BURSTS and np.ptp(gap) <= BURST_AGREE * np.median(gap)
     }
-    partners: dict[str, set[str]] = {}
-    for seen in flashes.values():
-        for name in seen:
-            partners.setdefault(name, set()).update(set(seen) - {name})
     doubts, warnings = {}, []
     for (bursts, single), gap_ms in doubtful.items():
         name = bursts if single == best.reference else single
