@@ -2033,8 +2033,16 @@ def _shifts_by_fit(
     (:func:`_shift_evidence`) where it leads the others by :data:`SHIFT_DECIDED_LOG_LIKELIHOOD`.
     An undecided pair (:attr:`Matching.undecided`) is left out where its cameras are tied
     through other pairs (those that count, and undecided ones the fit decided, in any
-    order); else it counts at the shift so decided, or where none is at the shift with most
-    events, the others its doubts (:func:`_shift_doubts`; random rig 415 with pre-flashes:
+    order), unless the solve puts the events it lines up at its shift with most events more
+    than :data:`~flashsync.match.MIN_TOLERANCE_MS` apart: then that shift, with its camera
+    of fewer matched events tied by it alone, replaces the solve where the fit so decides
+    (random rig 143 of TTL flashes and fast readouts: cam6, tied by cam5's flashes to its
+    own pre-flashes, 41.5 ms off at error/sigma 21, left out its pair with cam4, which lined
+    up eight events at the true shift); where the fit does not, the solve stands (taken as
+    a doubt, such shifts put 40 ms into the sigma of three cameras read right, the shift of
+    most events the pre-flash's, on three benches). Else it counts at
+    the shift so decided, or where none is at the shift with most events, the others its
+    doubts (:func:`_shift_doubts`; random rig 415 with pre-flashes:
     its first undecided pair taken so put five cameras' sigma at 60 ms, though a pair
     decided after it tied them, and every pair after it was solved twice for nothing). A pair's
     other shift (:attr:`~flashsync.match.PairAlignment.others`) that matches at least
@@ -2053,8 +2061,10 @@ def _shifts_by_fit(
     edges); a constant delay leaves little to tell them apart by but an anchor."""
     alignments = dict(matching.alignments)
 
-    def trial(pair: tuple[str, str], shift: PairAlignment) -> _Attempt | None:
-        return _solved_or_none(solved, matching.with_alignments({**alignments, pair: shift}, n_events))
+    def trial(pair: tuple[str, str], shift: PairAlignment, untied: str = "") -> _Attempt | None:
+        """``pair`` at ``shift``, and the other pairs of camera ``untied`` (if given) left out."""
+        kept = {p: a for p, a in alignments.items() if untied not in p}
+        return _solved_or_none(solved, matching.with_alignments({**kept, pair: shift}, n_events))
 
     chosen, group = None, {}  # group: each camera's group of cameras tied through the pairs that count
     if matching.undecided:
@@ -2067,10 +2077,11 @@ def _shifts_by_fit(
         joined = group[b]
         group.update({name: group[a] for name, g in group.items() if g == joined})
 
-    undecided = []
+    undecided, left_out = [], []
     for pair, alignment in matching.undecided.items():
         if group[pair[0]] == group[pair[1]]:
-            continue  # tied through other pairs: left out
+            left_out.append((pair, alignment))  # tied through other pairs
+            continue
         shifts = (alignment, *alignment.rivals)
         decided = _decided([trial(pair, s) for s in shifts])
         if decided is None:
@@ -2089,6 +2100,12 @@ def _shifts_by_fit(
     if needed:
         return _shift_doubts(chosen, [(pair, [trial(pair, s) for s in shifts[1:]]) for pair, shifts in needed])
     doubts = []
+    for pair, alignment in left_out:
+        if _apart_in_chosen_ms(chosen, pair, alignment) > MIN_TOLERANCE_MS:
+            weaker = min(pair, key=lambda name: np.count_nonzero(chosen.matches.camera == name))
+            swapped = trial(pair, alignment, untied=weaker)
+            if _decided([chosen, swapped]) == 1:
+                return _shift_doubts(swapped, doubts)
     for pair, alignment in alignments.items() if other_shifts else ():
         for other in alignment.others:
             if _unmatched_in_chosen(alignment, other) >= MIN_SHARED_FLASHES:
@@ -2099,6 +2116,20 @@ def _shifts_by_fit(
                 if decided is None:
                     doubts.append((pair, [swapped]))
     return _shift_doubts(chosen, doubts)
+
+
+def _apart_in_chosen_ms(chosen: _Attempt, pair: tuple[str, str], alignment: PairAlignment) -> float:
+    """How far apart ``chosen`` puts the starts of the bands a pair's alignment matches, ms
+    (median); 0 where it leaves either camera out (nothing to compare)."""
+    if not set(pair) <= set(chosen.connected):
+        return 0.0
+    model = chosen.model(chosen.reference)
+    starts = []
+    for name, column in zip(pair, (0, 1)):
+        clock, events = model.cameras[name], _sync_events(chosen.cameras[name]).take(alignment.matches[:, column])
+        later = np.where(events.edge == Edge.TRAILING, clock.exposure_ms or 0.0, 0.0)
+        starts.append(clock.t_global_ms(events.frame, events.row) - later)
+    return float(np.median(np.abs(starts[0] - starts[1])))
 
 
 def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:

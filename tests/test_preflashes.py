@@ -178,6 +178,71 @@ def test_an_undecided_pair_tied_by_a_pair_decided_after_it_is_left_out(monkeypat
     assert result.alignments[asked[1]].beta == pytest.approx(offset["cam1"] - offset[asked[1][1]], abs=1.0)
 
 
+@pytest.mark.parametrize("fit_decides", [True, False])
+def test_a_left_out_pair_whose_events_the_solve_puts_apart_is_tried_alone(monkeypatch, fit_decides):
+    """cam1 blind to the pre-flashes, cam2 not, cam3 seeing eight pre-flashes and three
+    flashes (times only, 13 irregular flashes 60 ms after their pre-flashes): cam1 and cam3
+    line up at the pre-flash's delay (eight events against three: it counts), cam2 and cam3
+    at two shifts, eleven events at the true one. The fit decides cam1-cam2, which ties cam2
+    to cam3 and leaves the pair out, though the solve puts the events it lines up 60 ms
+    apart (random rig 143 of TTL flashes and fast readouts: cam6, tied to cam5's flashes by
+    its own pre-flashes, 41.5 ms off at error/sigma 21). The pair at that shift, cam3 (fewer
+    matched events) tied by it alone, replaces the solve where the fit decides so; where it
+    cannot decide, the solve stands (no doubt: the shift of most events may be the
+    pre-flash's). The solves, where they put a pair's events and the fit's decisions are
+    stand-ins here."""
+    from flashsync import pipeline
+    from flashsync.match import match_events
+
+    rng = np.random.default_rng(5)
+    flashes = np.cumsum(rng.uniform(400.0, 900.0, 13))
+    offset = {"cam1": 1000.0, "cam2": 3000.0, "cam3": 7000.0}
+    seen = {
+        "cam1": flashes,
+        "cam2": np.sort(np.concatenate([flashes, flashes - 60.0])),
+        "cam3": np.sort(np.concatenate([flashes[:8] - 60.0, flashes[10:]])),
+    }
+    times = {name: seen[name] + offset[name] for name in seen}
+    matching = match_events(times, tolerance_ms=10.0)
+    assert list(matching.alignments) == [("cam1", "cam3")]
+    assert set(matching.undecided) == {("cam1", "cam2"), ("cam2", "cam3")}
+
+    def beta(alignments, a, b, via=True):
+        """The shift ``alignments`` put between cameras a and b (through the third where not a pair)."""
+        if (a, b) in alignments:
+            return alignments[(a, b)].beta
+        if (b, a) in alignments:
+            return -alignments[(b, a)].beta
+        (c,) = set(offset) - {a, b}
+        return beta(alignments, a, c, False) + beta(alignments, c, b, False) if via else np.nan
+
+    def right(trial, name):
+        return abs(beta(trial.alignments, "cam1", name) - (offset["cam1"] - offset[name])) < 1.0
+
+    def solved(m):
+        matched = np.concatenate([np.repeat(pair, len(a.matches)) for pair, a in m.alignments.items()])
+        tied = sorted(m.tied_to("cam1"))
+        return SimpleNamespace(connected=tied, alignments=m.alignments, matches=SimpleNamespace(camera=matched))
+
+    def decided(trials):
+        """The trial that puts the camera tried right (cam2, then cam3), where one does; the
+        left-out pair's only where the fit decides."""
+        tried = "cam3" if ("cam2", "cam3") in trials[-1].alignments else "cam2"
+        fits = [right(trial, tried) for trial in trials]
+        return fits.index(True) if fits.count(True) == 1 and (tried == "cam2" or fit_decides) else None
+
+    doubts = []
+    monkeypatch.setattr(pipeline, "_decided", decided)
+    monkeypatch.setattr(pipeline, "_shift_doubts", lambda chosen, pairs: doubts.extend(pairs) or chosen)
+    monkeypatch.setattr(
+        pipeline, "_apart_in_chosen_ms", lambda chosen, pair, a: abs(beta(chosen.alignments, *pair) - a.beta)
+    )
+    result = pipeline._shifts_by_fit(matching, {n: len(t) for n, t in times.items()}, solved, other_shifts=False)
+    assert right(result, "cam2") and right(result, "cam3") == fit_decides, result.alignments
+    assert (("cam1", "cam3") in result.alignments) != fit_decides
+    assert not doubts, doubts
+
+
 def test_a_shift_that_leaves_the_bright_events_unmatched_is_not_taken():
     """A camera that saw seven pre-flashes (faint: 0.3 of their flash) and four flashes, and
     one that saw all eight flashes only (random rig 455's reference and cam6): at the

@@ -126,6 +126,8 @@ def seen_by(
     rows = []
     for number, (instant, exposure) in enumerate(zip(np.sort(instants_ms), exposures)):
         frame = int(np.searchsorted(start, instant, side="right")) - 1
+        if frame < 0 or frame + 1 >= len(start):
+            continue  # before the first frame, or after the last frame's start: not in sight
         lead = (instant - start[frame]) / row_time
         trail = lead + exposure / row_time
         if lead < HEIGHT - 1:
