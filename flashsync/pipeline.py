@@ -2040,11 +2040,11 @@ def _shifts_by_fit(
     own pre-flashes, 41.5 ms off at error/sigma 21, left out its pair with cam4, which lined
     up eight events at the true shift); where the fit does not, the solve stands (taken as
     a doubt, such shifts put 40 ms into the sigma of three cameras read right, the shift of
-    most events the pre-flash's, on three benches). Else it counts at
-    the shift so decided, or where none is at the shift with most events, the others its
-    doubts (:func:`_shift_doubts`; random rig 415 with pre-flashes:
-    its first undecided pair taken so put five cameras' sigma at 60 ms, though a pair
-    decided after it tied them, and every pair after it was solved twice for nothing). A pair's
+    most events the pre-flash's, on three benches). Else it counts at the shift so decided,
+    or where none is at the shift with most events, the others its doubts
+    (:func:`_shift_doubts`; random rig 415 with pre-flashes: its first undecided pair taken
+    so put five cameras' sigma at 60 ms, though a pair decided after it tied them, and every
+    pair after it was solved twice for nothing). A pair's
     other shift (:attr:`~flashsync.match.PairAlignment.others`) that matches at least
     :data:`MIN_SHARED_FLASHES` events the chosen one leaves unmatched replaces it where it
     is so decided and is its doubt where neither is (random rig 416 with pre-flashes: the
