@@ -2124,12 +2124,18 @@ def _apart_in_chosen_ms(chosen: _Attempt, pair: tuple[str, str], alignment: Pair
     if not set(pair) <= set(chosen.connected):
         return 0.0
     model = chosen.model(chosen.reference)
-    starts = []
-    for name, column in zip(pair, (0, 1)):
-        clock, events = model.cameras[name], _sync_events(chosen.cameras[name]).take(alignment.matches[:, column])
-        later = np.where(events.edge == Edge.TRAILING, clock.exposure_ms or 0.0, 0.0)
-        starts.append(clock.t_global_ms(events.frame, events.row) - later)
+    starts = [
+        _band_starts_ms(model.cameras[name], _sync_events(chosen.cameras[name]).take(alignment.matches[:, column]))
+        for name, column in zip(pair, (0, 1))
+    ]
     return float(np.median(np.abs(starts[0] - starts[1])))
+
+
+def _band_starts_ms(clock: CameraClock, events: Events) -> np.ndarray:
+    """Global times (ms, shape (n_events,)) of the starts of the bands of a camera's sync
+    ``events`` by its solved ``clock``: a trailing edge's one exposure earlier."""
+    later = np.where(events.edge == Edge.TRAILING, clock.exposure_ms or 0.0, 0.0)
+    return clock.t_global_ms(events.frame, events.row) - later
 
 
 def _frame_gaps_ms(mine: CameraClock, theirs: CameraClock) -> np.ndarray:
@@ -2244,9 +2250,8 @@ def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], flo
     follow one."""
     followed, following = {}, set()
     for name in best.connected:
-        clock, events = model.cameras[name], _sync_events(best.cameras[name])
-        exposure = np.where(events.edge == Edge.TRAILING, clock.exposure_ms or 0.0, 0.0)
-        times = clock.t_global_ms(events.frame, events.row) - exposure
+        events = _sync_events(best.cameras[name])
+        times = _band_starts_ms(model.cameras[name], events)
         order = np.argsort(times)
         for first, second in pairwise(order):
             if BURST_GAP_MS[0] <= times[second] - times[first] <= BURST_GAP_MS[1]:
