@@ -428,14 +428,15 @@ def _synchronized(
     best, frame_std, clock_warnings = _best_frame_times(best, report, attempt)
     if any(choice != STAMPS_OWN_RATES for choice in report.frame_times.values()):
         best, rivals = _best_readout(best.cameras, undecided, attempt)  # the readouts again, on the chosen times
-    spreads, readout_warnings = _readout_doubts(best, rivals, search_reference)
+    spreads, readout_exposures_ms, readout_warnings = _readout_doubts(best, rivals, search_reference)
     if choices:
         best = attempt_on(reference)({name: best.cameras[name] for name in cameras})
     if search_reference != reference:
-        more_spreads, more_warnings = _doubts_on_reference(
+        more_spreads, more_exposures_ms, more_warnings = _doubts_on_reference(
             best, cameras, undecided, set(spreads), reference, attempt_on(reference)
         )
         spreads.update(more_spreads)
+        readout_exposures_ms.update(more_exposures_ms)
         readout_warnings += more_warnings
 
     def final(trial: dict[str, CameraDetection], other_shifts: bool = False) -> _Attempt:
@@ -468,7 +469,7 @@ def _synchronized(
         best, {d.camera: d for d in detections}, stepped
     )
     rivals_ms = _rival_exposures_ms(best)
-    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms))
+    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms))
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -481,7 +482,7 @@ def _synchronized(
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms))
+        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms) | set(readout_exposures_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
     )
@@ -1596,14 +1597,19 @@ def _free_drifts(best: _Attempt, reference: str) -> list[str]:
 
 def _readout_doubts(
     best: _Attempt, rivals: dict[str, _Attempt], reference: str
-) -> tuple[dict[str, np.ndarray], list[str]]:
+) -> tuple[dict[str, np.ndarray], dict[str, float], list[str]]:
     """Cameras whose other reading (``rivals``, from :func:`_best_readout`) explains the
     flashes about as well as the chosen one (its :attr:`_Attempt.evidence` less than
     :data:`DECIDED_LOG_LIKELIHOOD` below it, or above it by less: not a lead that decides;
     nor, above it by more, one that :func:`_chance_lead` keeps from turning a camera):
     per camera, how far the two readings' times of each frame are apart (ms, the largest
-    over its rows; into its sigma), and a warning line each."""
-    spreads, warnings = {}, []
+    over its rows; into its sigma), how far their exposures are (ms, where both read one;
+    into the exposure's sigma), and a warning line each. A band's length is the same rows
+    either way, but each reading times its rows and parts its length into exposure and
+    pulse in its own way: random rig 135 of a bench of TTL flashes at two powers with auto
+    exposure (two 25 fps cameras, both read the wrong way round, warned) had its cam2's
+    4.1 ms exposure at 0.42 ± 0.15 ms, 24 sigmas off; the other reading's was 2.31 ms."""
+    spreads, exposures_ms, warnings = {}, {}, []
     for name, other in rivals.items():
         if name not in best.connected or name not in other.connected or name in other.implausible:
             continue
@@ -1614,8 +1620,11 @@ def _readout_doubts(
         chance = (
             _chance_lead(other, best, best.cameras) if other.evidence >= best.evidence + DECIDED_LOG_LIKELIHOOD else 0.0
         )
-        chosen = best.model(reference).cameras[name]
-        spreads[name] = _frame_gaps_ms(chosen, other.model(reference).cameras[name])
+        chosen, rival = best.model(reference).cameras[name], other.model(reference).cameras[name]
+        spreads[name] = _frame_gaps_ms(chosen, rival)
+        if chosen.exposure_ms is not None and rival.exposure_ms is not None:
+            exposures_ms[name] = abs(chosen.exposure_ms - rival.exposure_ms)
+        exposure = f" and its exposure by {exposures_ms[name]:.2f} ms" if name in exposures_ms else ""
         way = "bottom-up (upside down)" if chosen.flipped else "top-down (upright)"
         few = (
             f", and {chance:.1f} more (a flash's worth per camera it turns that fewer than {FEW_FLASHES} flashes tie)"
@@ -1626,10 +1635,10 @@ def _readout_doubts(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
             f"{DECIDED_LOG_LIKELIHOOD:g}, {UPSIDE_DOWN_PRIOR:g} more per camera read upside down{few}); its times "
-            f"may be off by up to {float(spreads[name].max()):.2f} ms "
+            f"may be off by up to {float(spreads[name].max()):.2f} ms{exposure} "
             "(in its sigma); give its mounting (--flipped) if known"
         )
-    return spreads, warnings
+    return spreads, exposures_ms, warnings
 
 
 def _doubts_on_reference(
@@ -1639,7 +1648,7 @@ def _doubts_on_reference(
     warned: set[str],
     reference: str,
     attempt: Callable[[dict[str, CameraDetection]], _Attempt],
-) -> tuple[dict[str, np.ndarray], list[str]]:
+) -> tuple[dict[str, np.ndarray], dict[str, float], list[str]]:
     """:func:`_readout_doubts` of the readings chosen on the search reference, checked on the
     ``reference`` given (``final`` and ``attempt`` solve on it) against the detected reading of
     the cameras it flipped (not already ``warned`` about). The score depends a little on the
@@ -1648,12 +1657,12 @@ def _doubts_on_reference(
     trailed by 5.3 on cam1, 15 ms off, with a σ of 0.7 ms and no warning."""
     flipped = [n for n in undecided if n not in warned and final.cameras[n].flipped != cameras[n].flipped]
     if not flipped:
-        return {}, []
+        return {}, {}, []
     detected = {n: d.read_flipped(cameras[n].flipped) if n in flipped else d for n, d in final.cameras.items()}
     try:
         rival = attempt(detected)
     except FlashsyncError:
-        return {}, []
+        return {}, {}, []
     return _readout_doubts(final, dict.fromkeys(flipped, rival), reference)
 
 

@@ -84,10 +84,14 @@ def test_a_camera_left_out_is_not_announced_upside_down(tiny_scenario):
 def _reading(score: float, upside_down: bool) -> SimpleNamespace:
     """What :func:`~flashsync.pipeline._readout_doubts` reads of an attempt: cam2 read one way
     or the other (cam1 upright in both), its score, and a model whose cam2 is 1 ms later
-    upside down."""
+    and its exposure 2.5 ms shorter upside down."""
     flipped = {"cam1": False, "cam2": upside_down}
     clock = SimpleNamespace(
-        n_frames=3, height=10, flipped=upside_down, t_global_ms=lambda frame, row: frame * 40.0 + row + upside_down
+        n_frames=3,
+        height=10,
+        flipped=upside_down,
+        exposure_ms=4.0 - 2.5 * upside_down,
+        t_global_ms=lambda frame, row: frame * 40.0 + row + upside_down,
     )
     reading = SimpleNamespace(
         score=score,
@@ -104,11 +108,13 @@ def _reading(score: float, upside_down: bool) -> SimpleNamespace:
 def test_a_flip_needs_the_upside_down_prior_in_its_lead_on_the_reference_given(lead, warned):
     """A camera read upside down leads its upright reading by ``lead``: the search takes a flip
     at DECIDED_LOG_LIKELIHOOD (5) plus UPSIDE_DOWN_PRIOR (2), so a lead of 6 is a near tie,
-    warned with the two readings' spread in sigma (it went unwarned when the check asked 5)."""
-    spreads, warnings = _readout_doubts(_reading(lead, True), {"cam2": _reading(0.0, False)}, "cam1")
-    assert (list(spreads), len(warnings)) == ((["cam2"], 1) if warned else ([], 0))
+    warned with the two readings' spreads of its times and exposure in sigma (it went unwarned
+    when the check asked 5)."""
+    spreads, exposures_ms, warnings = _readout_doubts(_reading(lead, True), {"cam2": _reading(0.0, False)}, "cam1")
+    assert (list(spreads), list(exposures_ms), len(warnings)) == ((["cam2"], ["cam2"], 1) if warned else ([], [], 0))
     if warned:
-        assert spreads["cam2"] == pytest.approx([1.0, 1.0, 1.0]) and "cam2.mp4: read bottom-up" in warnings[0]
+        assert spreads["cam2"] == pytest.approx([1.0, 1.0, 1.0]) and exposures_ms["cam2"] == pytest.approx(2.5)
+        assert "cam2.mp4: read bottom-up" in warnings[0] and "its exposure by 2.50 ms (in its sigma)" in warnings[0]
 
 
 @pytest.mark.parametrize("flipped", [False, True])

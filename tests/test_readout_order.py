@@ -8,6 +8,7 @@ ended with all three read the wrong way up, 20-40 ms off with no warning."""
 
 from __future__ import annotations
 
+import re
 import tempfile
 from dataclasses import replace
 from pathlib import Path
@@ -136,7 +137,8 @@ def test_a_camera_few_flashes_tie_is_turned_on_a_lead_beyond_a_flash(tmp_path, s
     renders it, by 43: a rule of four flashes tying a turned camera kept it upright, every
     camera 6.5-14.5 ms off). A turn of a camera so few tie needs a lead beyond what one flash
     more is worth to it (about 12): rig-15 stays upright, warned, the other reading in its
-    sigma; rig-30's reference is turned."""
+    sigma, its times' and its exposure's (cam2's: 4.36 ms read upright, 2.53 ms the other
+    way, 0.03 ms apart in sigma before); rig-30's reference is turned."""
     scenario = random_rig(seed, max_height=height, duration_ms=12000.0)
     truth = render_scenario(scenario, tmp_path)
     model, report = synchronize(detect_videos([tmp_path / truth.cameras[c.name].file for c in scenario.cameras]))
@@ -148,6 +150,10 @@ def test_a_camera_few_flashes_tie_is_turned_on_a_lead_beyond_a_flash(tmp_path, s
     if seed == 15:
         (warning,) = [w for w in report.warnings if "cam1." in w and "fit the other way about as well" in w]
         assert "read top-down (upright)" in warning and "a flash's worth per camera it turns" in warning
+        for name in ("cam1", "cam2"):
+            (warning,) = [w for w in report.warnings if f"{name}." in w and "fit the other way about as well" in w]
+            gap_ms = float(re.search(r"its exposure by ([0-9.]+) ms", warning).group(1))
+            assert gap_ms > 0.5 and model.cameras[name].exposure_std_ms >= gap_ms, warning
 
 
 def test_a_flickers_roll_tells_the_readout_the_flashes_leave_mirrored(tmp_path, monkeypatch):
