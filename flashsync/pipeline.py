@@ -15,11 +15,11 @@ from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from itertools import combinations, compress, pairwise, permutations, product
+from itertools import combinations, compress, pairwise, product
 from pathlib import Path
 from typing import NamedTuple
 
@@ -2204,53 +2204,80 @@ BURST_AGREE = 0.2
 
 
 def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], list[str]]:
-    """Per camera whose flashes match another camera's only at the first of that camera's
-    bursts (its events :data:`BURST_GAP_MS` apart: a TTL pre-flash and its flash), at
-    :data:`MIN_BURSTS` or more whose gaps agree, each followed by one it does not see and
-    none at the second, and whose tie to the rig rests on such pairs alone: how far (ms, the
-    bursts' median gap; into its sigma) and a warning line each. A camera that sees one
-    event a burst sees the flash, not its faint pre-flash, unless the flash falls where it
-    does not look (a fast readout's blanking): there the flashes may match one burst later.
-    Where the flashes are missed as often as that, the wrong shift matches more events than
-    the right one, too many for the right one to be its rival (:func:`_shift_doubts`), and
-    the events it leaves unmatched, pre-flashes and flashes alike, are not so much brighter
-    than those it matches that the matcher refuses it (:data:`~flashsync.match.BRIGHTER_LEFT`):
-    random rig 125 of a mixed bench (``--preflash 40 --readout 0.4:0.8 --exposure-changes
-    0.5``), its cam2 matched to five of cam1's pre-flashes against two of its flashes (those
-    left 1.5 times as bright), 40 ms off at error/sigma 29 with no word. The doubt falls on
-    the camera of the pair that is not the reference, but for one whose pair's other shift
-    is its doubt already."""
+    """Per camera of a group tied to the reference's only by flashes that match the first of
+    one camera's bursts (its events :data:`BURST_GAP_MS` apart: a TTL pre-flash and its
+    flash), each followed by one the other camera does not see, at :data:`MIN_BURSTS` or more
+    whose gaps agree: how far (ms, the bursts' median gap; into its sigma) and a warning line
+    each. A camera that sees one event a burst sees the flash, not its faint pre-flash,
+    unless the flash falls where it does not look (a fast readout's blanking): there the
+    flashes may match one burst later. Where the flashes are missed as often as that, the
+    wrong shift matches more events than the right one, too many for the right one to be its
+    rival (:func:`_shift_doubts`), and the events it leaves unmatched, pre-flashes and flashes
+    alike, are not so much brighter than those it matches that the matcher refuses it
+    (:data:`~flashsync.match.BRIGHTER_LEFT`): random rig 125 of a mixed bench (``--preflash
+    40 --readout 0.4:0.8 --exposure-changes 0.5``), its cam2 matched to five of cam1's
+    pre-flashes against two of its flashes, 40 ms off at error/sigma 29 with no word.
+
+    The groups: cameras that a flash both see ties where one's event in a burst matches the
+    other's (the second of a burst, or an event in a burst of each camera), and the groups
+    these make where the flashes they share seen by cameras without bursts, alone in each
+    (the same flash at one shift: no pre-flash to mistake it for), outnumber the bursts whose
+    first matches the other's lone event. A camera without a burst of its own may still see
+    pre-flashes whose flash it missed, and those match another camera's flashes as well as
+    flashes do: random rig 152 of a bench of all four departures at once (``--preflash 40
+    --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``), four cameras that saw
+    bursts (one of them none of its own, but tied to the others by the seconds of theirs)
+    matched by their pre-flashes to the flash-only cameras, the reference's group, at eight
+    bursts and by that camera's two lone events, 40 ms off at error/sigma 43-57 with no word.
+    Bursts are counted once each, however many cameras match their first. A camera whose
+    pair's other shift is its doubt already keeps that one."""
     followed, following = _bursts(best, model)
-    flashes = _matched_flashes(best.matches)
-    gaps: dict[tuple[str, str], list[float]] = {}
-    pinned, partners = set(), {}
-    for seen in flashes.values():
-        for (bursts, b_event), (single, s_event) in permutations(seen.items(), 2):
-            partners.setdefault(single, set()).add(bursts)
-            if (bursts, b_event) in following or (single, s_event) in followed or (single, s_event) in following:
-                pinned.add((bursts, single))
-            elif (bursts, b_event) in followed:
-                gaps.setdefault((bursts, single), []).append(followed[(bursts, b_event)])
-    doubtful = {
-        pair: float(np.median(gap))
-        for pair, gap in gaps.items()
-        if pair not in pinned and len(gap) >= MIN_BURSTS and np.ptp(gap) <= BURST_AGREE * np.median(gap)
-    }
+    bursty = {name for name, _ in followed}
+    pinned, lone, firsts = set(), {}, {}
+    for flash, seen in _matched_flashes(best.matches).items():
+        for a, b in combinations(seen.items(), 2):
+            pair, in_burst = frozenset((a[0], b[0])), [event in followed or event in following for event in (a, b)]
+            if all(in_burst) or a in following or b in following:
+                pinned.add(pair)
+            elif any(in_burst):  # the first of one camera's burst, and the other's event alone
+                first = a if in_burst[0] else b
+                firsts.setdefault(pair, {})[first] = followed[first]
+            elif not pair & bursty:
+                lone.setdefault(pair, set()).add(flash)
+    groups = {name: {name} for name in best.connected}
+    for a, b in pinned:
+        _tie(groups, a, b)
+    for g, h in combinations({frozenset(group) for group in groups.values()}, 2):
+        if len(_between(lone, g, h)) > len(_between(firsts, g, h)):
+            _tie(groups, next(iter(g)), next(iter(h)))
     doubts, warnings = {}, []
-    for (bursts, single), gap_ms in doubtful.items():
-        name = bursts if single == best.reference else single
-        if name in best.shift_spreads:
-            continue  # its pair's other shift is its doubt already (:func:`_shift_doubts`)
-        if any((other, name) not in doubtful and (name, other) not in doubtful for other in partners[name]):
-            continue  # tied by a camera whose flashes it matches at no burst's first
-        doubts[name] = max(doubts.get(name, 0.0), gap_ms)
-        warnings.append(
-            f"{best.cameras[name].video}: the flashes {single} and {bursts} share match only the first of "
-            f"{bursts}'s pairs of events {gap_ms:.0f} ms apart, each followed by one {single} does not see (a TTL "
-            f"flash's pre-flash and its flash?); its times may be off by {gap_ms:.0f} ms (in its sigma); name one "
-            "flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
-        )
+    for group in {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}:
+        gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
+        if len(gaps) < MIN_BURSTS or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
+            continue
+        gap_ms, names = float(np.median(gaps)), ", ".join(sorted(group, key=best.connected.index))
+        for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
+            doubts[name] = gap_ms
+            warnings.append(
+                f"{best.cameras[name].video}: the flashes that tie {names} to the rest of the rig match only the "
+                f"first of one camera's pairs of events {gap_ms:.0f} ms apart, each followed by one the other camera "
+                f"does not see (a TTL flash's pre-flash and its flash?); its times may be off by {gap_ms:.0f} ms (in "
+                "its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+            )
     return doubts, warnings
+
+
+def _between(table: dict[frozenset, Iterable], g: frozenset, h: frozenset) -> set:
+    """The keys that ``table``'s pairs of cameras with one in group ``g`` and one in ``h`` hold."""
+    return {key for pair, keys in table.items() if pair & g and pair & h for key in keys}
+
+
+def _tie(groups: dict[str, set[str]], a: str, b: str) -> None:
+    """Merge the groups of cameras ``a`` and ``b`` (each camera's entry is its group's set)."""
+    if groups[a] is not groups[b]:
+        merged = groups[a] | groups[b]
+        for name in merged:
+            groups[name] = merged
 
 
 def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], float], set[tuple[str, int]]]:
