@@ -2218,14 +2218,21 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     40 --readout 0.4:0.8 --exposure-changes 0.5``), its cam2 matched to five of cam1's
     pre-flashes against two of its flashes, 40 ms off at error/sigma 29 with no word.
 
-    The groups: cameras that a flash both see ties where one's event in a burst matches the
-    other's (the second of a burst, or an event in a burst of each camera), and the groups
-    these make where the flashes they share seen by cameras without bursts, alone in each
-    (the same flash at one shift: no pre-flash to mistake it for), outnumber the bursts whose
-    first matches the other's lone event. A camera without a burst of its own may still see
-    pre-flashes whose flash it missed, and those match another camera's flashes as well as
-    flashes do: random rig 152 of a bench of all four departures at once (``--preflash 40
-    --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``), four cameras that saw
+    The groups: cameras that a flash both see ties where each sees it as the same of a burst,
+    or one as a burst's second and the other alone where that camera sees no bursts (its lone
+    events are flashes), in bursts of the rig's delay (the firsts' median gap: a false event
+    next to a flash makes a burst of another); and the groups these make where the flashes
+    they share seen by cameras without bursts, alone in each (the same flash at one shift: no
+    pre-flash to mistake it for), outnumber the bursts whose first matches the other's lone
+    event or a burst's second. A lone event of a camera that sees bursts, matched to another
+    camera's burst, may be its pre-flash or its flash and counts for neither: random rig 147
+    of a bench of all four departures at once (``--preflash 40 --readout 0.4:0.8
+    --flash-powers 0.5 --exposure-changes 0.5``), whose cam8 saw bursts and was matched by
+    its pre-flashes to the flash-only cameras, 40 ms off at error/sigma 30 with no word, tied
+    to the rest by a pre-flash whose flash it missed at another camera's second and by a
+    false event 20 ms before one of its pre-flashes. A camera without a burst of its own may
+    still see pre-flashes whose flash it missed, and those match another camera's flashes as
+    well as flashes do: random rig 152 of another such bench, four cameras that saw
     bursts (one of them none of its own, but tied to the others by the seconds of theirs)
     matched by their pre-flashes to the flash-only cameras, the reference's group, at eight
     bursts and by that camera's two lone events, 40 ms off at error/sigma 43-57 with no word.
@@ -2233,20 +2240,33 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     pair's other shift is its doubt already keeps that one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
-    pinned, lone, firsts = set(), {}, {}
+    pins, lone, firsts = {}, {}, {}
     for flash, seen in _matched_flashes(best.matches).items():
         for a, b in combinations(seen.items(), 2):
-            pair, in_burst = frozenset((a[0], b[0])), [event in followed or event in following for event in (a, b)]
-            if all(in_burst) or a in following or b in following:
-                pinned.add(pair)
-            elif any(in_burst):  # the first of one camera's burst, and the other's event alone
-                first = a if in_burst[0] else b
-                firsts.setdefault(pair, {})[first] = followed[first]
+            pair, (role_a, role_b) = frozenset((a[0], b[0])), (_burst_role(e, followed, following) for e in (a, b))
+            if role_a and role_b:  # an event in a burst of each: the same of each, or a first at a second
+                if role_a == role_b:
+                    pins.setdefault(pair, []).append((following if role_a == "second" else followed)[a])
+                else:
+                    first = a if role_a == "first" else b
+                    firsts.setdefault(pair, {})[first] = followed[first]
+            elif role_a or role_b:  # one camera's event in a burst, the other's alone
+                burst, alone = (a, b) if role_a else (b, a)
+                if alone[0] in bursty:
+                    continue  # it may be a pre-flash whose flash that camera missed, or a flash
+                if burst in following:
+                    pins.setdefault(pair, []).append(following[burst])
+                else:
+                    firsts.setdefault(pair, {})[burst] = followed[burst]
             elif not pair & bursty:
                 lone.setdefault(pair, set()).add(flash)
+    if not firsts:
+        return {}, []
+    delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
     groups = {name: {name} for name in best.connected}
-    for a, b in pinned:
-        _tie(groups, a, b)
+    for (a, b), gaps in pins.items():
+        if np.any(np.abs(np.array(gaps) - delay) <= BURST_AGREE * delay):  # a burst of the rig's delay
+            _tie(groups, a, b)
     for g, h in combinations({frozenset(group) for group in groups.values()}, 2):
         if len(_between(lone, g, h)) > len(_between(firsts, g, h)):
             _tie(groups, next(iter(g)), next(iter(h)))
@@ -2267,6 +2287,12 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     return doubts, warnings
 
 
+def _burst_role(event: tuple[str, int], followed: dict, following: dict) -> str | None:
+    """``"second"`` for a camera's event (camera, event number) that follows another of its
+    own within a burst, ``"first"`` for one that another follows, else None."""
+    return "second" if event in following else "first" if event in followed else None
+
+
 def _between(table: dict[frozenset, Iterable], g: frozenset, h: frozenset) -> set:
     """The keys that ``table``'s pairs of cameras with one in group ``g`` and one in ``h`` hold."""
     return {key for pair, keys in table.items() if pair & g and pair & h for key in keys}
@@ -2280,11 +2306,11 @@ def _tie(groups: dict[str, set[str]], a: str, b: str) -> None:
             groups[name] = merged
 
 
-def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], float], set[tuple[str, int]]]:
+def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], float], dict[tuple[str, int], float]]:
     """The cameras' sync events (camera, event number) that another of the same camera's
-    follows within :data:`BURST_GAP_MS` (its gap, ms, by the solved clocks), and those that
-    follow one."""
-    followed, following = {}, set()
+    follows within :data:`BURST_GAP_MS`, and those that follow one, each with that gap (ms,
+    by the solved clocks)."""
+    followed, following = {}, {}
     for name in best.connected:
         events = _sync_events(best.cameras[name])
         times = _band_starts_ms(model.cameras[name], events)
@@ -2292,7 +2318,7 @@ def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], flo
         for first, second in pairwise(order):
             if BURST_GAP_MS[0] <= times[second] - times[first] <= BURST_GAP_MS[1]:
                 followed[(name, int(events.event[first]))] = float(times[second] - times[first])
-                following.add((name, int(events.event[second])))
+                following[(name, int(events.event[second]))] = float(times[second] - times[first])
     return followed, following
 
 
