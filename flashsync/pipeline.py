@@ -2196,9 +2196,10 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
 #: Two sync events of one camera this far apart (ms, least and most) are a burst: a TTL
 #: flash's metering pre-flash and its flash (:func:`_burst_doubts`) ...
 BURST_GAP_MS = (10.0, 150.0)
-#: ... and a pair of cameras is in doubt where it matches the first of this many bursts at
-#: least, their gaps within this share of their median of each other (a false event next to
-#: a flash makes one).
+#: ... and a group of cameras is in doubt where its ties to the rest match the first of this
+#: many bursts at least, their gaps within this share of their median of each other (a
+#: false event next to a flash makes one); a burst ties cameras where its gap lies within
+#: that share of the rig's delay.
 MIN_BURSTS = 2
 BURST_AGREE = 0.2
 
@@ -2271,7 +2272,8 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
         if len(_between(lone, g, h)) > len(_between(firsts, g, h)):
             _tie(groups, next(iter(g)), next(iter(h)))
     doubts, warnings = {}, []
-    for group in {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}:
+    others = {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}
+    for group in sorted(others, key=lambda group: min(map(best.connected.index, group))):
         gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
         if len(gaps) < MIN_BURSTS or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
             continue
