@@ -137,8 +137,8 @@ def test_a_camera_few_flashes_tie_is_turned_on_a_lead_beyond_a_flash(tmp_path, s
     renders it, by 43: a rule of four flashes tying a turned camera kept it upright, every
     camera 6.5-14.5 ms off). A turn of a camera so few tie needs a lead beyond what one flash
     more is worth to it (about 12): rig-15 stays upright, warned, the other reading in its
-    sigma, its times' and its exposure's (cam2's: 4.36 ms read upright, 2.53 ms the other
-    way, 0.03 ms apart in sigma before); rig-30's reference is turned."""
+    sigma, its times' and its exposure's (cam2's exposure 4.36 ms read upright, 2.53 ms the
+    other way; its sigma was 0.03 ms); rig-30's reference is turned."""
     scenario = random_rig(seed, max_height=height, duration_ms=12000.0)
     truth = render_scenario(scenario, tmp_path)
     model, report = synchronize(detect_videos([tmp_path / truth.cameras[c.name].file for c in scenario.cameras]))
