@@ -1877,27 +1877,29 @@ class _Attempt:
         )
 
     def model(self, reference: str) -> SyncModel:
-        clocks = {}
-        for index, name in enumerate(self.connected):
-            d, s = self.cameras[name], self.solution.cameras[index]
-            clocks[name] = CameraClock(
-                name,
-                d.frame_times_ms,
-                d.height,
-                d.width,
-                s.alpha,
-                s.beta_ms,
-                s.row_time_ms,
-                d.flipped,
-                s.covariance,
-                float(s.exposure_ms) if s.exposure_ms > 0 else None,
-                str(d.video),
-                s.knots_ms,
-                s.warp_ms,
-                display_rotation_deg=d.display_rotation_deg,
-                exposure_std_ms=float(s.exposure_std_ms) if s.exposure_ms > 0 else None,
-            )
+        clocks = {name: self.clock(name) for name in self.connected}
         return SyncModel(reference, clocks, self.matches.table(self.solution))
+
+    def clock(self, name: str) -> CameraClock:
+        """The solved clock of connected camera ``name``."""
+        d, s = self.cameras[name], self.solution.cameras[self.connected.index(name)]
+        return CameraClock(
+            name,
+            d.frame_times_ms,
+            d.height,
+            d.width,
+            s.alpha,
+            s.beta_ms,
+            s.row_time_ms,
+            d.flipped,
+            s.covariance,
+            float(s.exposure_ms) if s.exposure_ms > 0 else None,
+            str(d.video),
+            s.knots_ms,
+            s.warp_ms,
+            display_rotation_deg=d.display_rotation_deg,
+            exposure_std_ms=float(s.exposure_std_ms) if s.exposure_ms > 0 else None,
+        )
 
 
 def _tone_std_ms(detection: CameraDetection, row_time_ms: float) -> float:
