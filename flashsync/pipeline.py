@@ -1403,13 +1403,13 @@ def _change_by_left_out_edges(
     best: _Attempt, name: str, detection: CameraDetection, solution: CameraSolution
 ) -> _Change | None:
     """The change of exposure shown by a camera's trailing edges whose leading edges are
-    hidden (one exposure after their flash) where the solve left out
-    :data:`LEFT_OUT_STEP_EDGES` or more of them one after the other, each as late (or as
-    early) as their median within :data:`LEFT_OUT_AGREE` of it, and that median is a step
-    (:data:`~flashsync.exposure_changes.MIN_STEP_SHARE` of the exposure and a row at least):
-    those frames held the solved exposure plus that median. Its other trailing edges and
-    its bands within one frame as long as the solved exposure hold that; none may lie among
-    them.
+    hidden (one exposure after their flash) where the solve left out, or did not match
+    (:func:`_unmatched_lateness`), :data:`LEFT_OUT_STEP_EDGES` or more of them one after the
+    other, each as late (or as early) as their median within :data:`LEFT_OUT_AGREE` of it,
+    and that median is a step (:data:`~flashsync.exposure_changes.MIN_STEP_SHARE` of the
+    exposure and a row at least): those frames held the solved exposure plus that median.
+    Its other trailing edges and its bands within one frame as long as the solved exposure
+    hold that; none may lie among them.
 
     A camera read fast (a readout much shorter than its frame period) shows few bands
     whole: random rig 116 of the mixed bench (``--readout 0.4:0.8 --flash-powers 0.5
@@ -1418,9 +1418,12 @@ def _change_by_left_out_edges(
     frame by frame was 3.83 ms RMS off under a sigma of 0.11 ms. None where they show none."""
     matches = best.matches
     mine = np.flatnonzero((matches.camera == name) & matches.trailing)
-    mine = mine[np.argsort(matches.frame[mine], kind="stable")]
-    frames, late_ms = matches.frame[mine], best.solution.residual_ms[mine]
-    left_out = ~best.solution.inlier[mine]
+    unmatched_frames, unmatched_ms = _unmatched_lateness(best, name, detection, solution)
+    frames = np.concatenate([matches.frame[mine], unmatched_frames])
+    late_ms = np.concatenate([best.solution.residual_ms[mine], unmatched_ms])
+    left_out = np.concatenate([~best.solution.inlier[mine], np.ones(len(unmatched_frames), bool)])
+    order = np.argsort(frames, kind="stable")
+    frames, late_ms, left_out = frames[order], late_ms[order], left_out[order]
     floor_ms = max(MIN_STEP_ROWS * solution.row_time_ms, MIN_STEP_SHARE * solution.exposure_ms)
     run = _agreeing_run(late_ms, left_out, floor_ms)
     if run is None:
@@ -1446,11 +1449,37 @@ def _change_by_left_out_edges(
     shown.sort()
     parts = [
         f"{s.exposure_ms:.2f} ms over frames {s.first_frame}-{s.last_frame} ({s.n_bands} "
-        + ("trailing edges the solve left out" if not s.solved else "bands or trailing edges")
+        + ("trailing edges the solve left out or did not match" if not s.solved else "bands or trailing edges")
         + ")"
         for s in shown
     ]
     return _Change(parts, f"its times take none of those {n_late} trailing edges", abs(step_ms), shown)
+
+
+def _unmatched_lateness(
+    best: _Attempt, name: str, detection: CameraDetection, solution: CameraSolution
+) -> tuple[np.ndarray, np.ndarray]:
+    """The frame and lateness (ms, shapes (n,)) of each trailing edge of the camera whose
+    leading edge is hidden that no flash matched, against the one flash of the rig it can
+    be of: matched by no other edge of the camera, at most a frame period before the edge's
+    row ended its exposure. Lateness as a matched edge's residual: how much longer than the
+    solved exposure its row's was. An exposure that changed puts such edges as far from
+    their flashes as it changed, too far to match (random rig 154 with all four departures,
+    ``--preflash 40 --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``: cam3 13.66
+    ms, then 8.80 from frame 243, its lone trailing edges before the change 4.7-4.9 ms late,
+    none matched)."""
+    events, bands, mine = detection.events, detection.events.bands(), best.matches.camera == name
+    matched = np.isin(bands.event, best.matches.event[mine])
+    edge = bands.trailing[(bands.leading < 0) & (bands.trailing >= 0) & ~matched]
+    free = np.setdiff1d(np.flatnonzero(np.isfinite(best.solution.flash_ms)), best.matches.flash[mine])
+    flash_ms = best.solution.flash_ms[free]
+    clock = best.clock(name)
+    ended_ms = clock.t_global_ms(events.frame[edge], events.row[edge])
+    period_ms = median_step_ms(clock.frame_times_ms) * clock.alpha
+    candidates = (flash_ms[None, :] <= ended_ms[:, None]) & (flash_ms[None, :] >= ended_ms[:, None] - period_ms)
+    one = candidates.sum(axis=1) == 1
+    started_ms = flash_ms[np.nonzero(candidates[one])[1]]
+    return events.frame[edge[one]], ended_ms[one] - solution.exposure_ms - started_ms
 
 
 def _agreeing_run(late_ms: np.ndarray, left_out: np.ndarray, floor_ms: float) -> slice | None:
