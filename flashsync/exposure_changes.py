@@ -126,9 +126,14 @@ def with_pulses_as_exposures(detection: CameraDetection) -> CameraDetection:
     rows = np.zeros(len(detection.pulse_rows))
     rows[events] = pulses - detection.exposure_rows
     main = max(spans, key=lambda span: span.n_bands)
-    turned = detection.with_band_exposures(rows, main.length_rows)
+    return outside_left_out(detection.with_band_exposures(rows, main.length_rows), spans, main)
+
+
+def outside_left_out(detection: CameraDetection, spans: list[ExposureSpan], main: ExposureSpan) -> CameraDetection:
+    """The detection with the flash bands' trailing edges of its reading in use outside span
+    ``main`` of ``spans`` left out (:func:`_outside`)."""
     side = "bottom_up" if detection.flipped else "top_down"
-    return replace(turned, **{side: turned.events.take(~_outside(turned.events, spans))})
+    return replace(detection, **{side: detection.events.take(~_outside(detection.events, spans, main))})
 
 
 def length_scatter_rows(detection: CameraDetection, exposure_rows: float) -> float:
@@ -307,7 +312,7 @@ def with_one_exposure(detection: CameraDetection) -> CameraDetection:
             spans = exposure_spans(reading)
             other = np.isin(np.arange(len(reading.events)), outreaching_splits(reading).trailing)
             if len(spans) > 1:
-                other |= _outside(reading.events, spans)
+                other |= _outside(reading.events, spans, max(spans, key=lambda span: span.n_bands))
             if other.any():
                 readings[side] = reading.events.take(~other)
     return replace(detection, **readings) if readings else detection
@@ -420,11 +425,10 @@ def _rows_between(detection: CameraDetection, bands: Bands) -> np.ndarray:
     return rows[bands.trailing] - rows[bands.leading]
 
 
-def _outside(events: Events, spans: list[ExposureSpan]) -> np.ndarray:
-    """Boolean mask of the events: the flash bands' trailing edges outside the span of the
-    most bands (beyond its bands only where no other span lies that way: the frames between
+def _outside(events: Events, spans: list[ExposureSpan], main: ExposureSpan) -> np.ndarray:
+    """Boolean mask of the events: the flash bands' trailing edges outside span ``main`` of
+    ``spans`` (beyond its bands only where no other span lies that way: the frames between
     two spans' bands may have either exposure)."""
-    main = max(spans, key=lambda span: span.n_bands)
     first = main.first_frame if main is not spans[0] else -np.inf
     last = main.last_frame if main is not spans[-1] else np.inf
     inside = (events.frame >= first) & (events.frame <= last)

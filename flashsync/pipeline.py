@@ -43,6 +43,7 @@ from flashsync.exposure_changes import (
     exposure_spans,
     length_scatter_rows,
     outreaching_splits,
+    outside_left_out,
     pulse_spans,
     split_lengths_ms,
     with_one_exposure,
@@ -450,6 +451,7 @@ def _synchronized(
     best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, final)
     report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
     report.stepped_exposures = stepped
+    best, solved_again = _solved_on_one_exposure(best, final, {d.camera: d for d in detections}, stepped)
     if any(alignment.others for alignment in best.alignments.values()):
         best = final(best.cameras, other_shifts=True)
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
@@ -466,7 +468,7 @@ def _synchronized(
     rate_spread = _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)
     frame_std[reference] = np.hypot(frame_std[reference], rate_spread)
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
-        best, {d.camera: d for d in detections}, stepped
+        best, {d.camera: d for d in detections}, stepped, solved_again
     )
     rivals_ms = _rival_exposures_ms(best)
     best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms))
@@ -1265,7 +1267,7 @@ EXPOSURE_DOUBT_MS = 0.1
 
 
 def _exposure_changes(
-    best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str]
+    best: _Attempt, detections: dict[str, CameraDetection], stepped: Sequence[str], solved_again: Sequence[str]
 ) -> tuple[list[str], dict[str, float], dict[str, list[_ShownExposure]], dict[str, float]]:
     """Per camera whose exposure changes while it records (:func:`_change_by_spans`, else
     :func:`_change_by_all_bands`, else :func:`_change_by_left_out_edges`): a warning naming
@@ -1278,11 +1280,10 @@ def _exposure_changes(
     for name, solution in zip(best.connected, best.solution.cameras):
         if not solution.exposure_ms > 0:
             continue
-        detection = detections[name].retimed(best.cameras[name].frame_times_ms)
-        detection = detection.read_flipped(best.cameras[name].flipped)
+        detection = _in_use(best, detections, name)
         change = _change_by_spans(detection, solution, name in stepped)
         if not (change and change.shown) and name not in stepped:
-            change = _change_by_all_bands(detection, solution, change)
+            change = _change_by_all_bands(detection, solution, change, name in solved_again)
         if change is None and name not in stepped:
             change = _change_by_left_out_edges(best, name, detection, solution)
         if change is None:
@@ -1358,7 +1359,7 @@ def _shown_part(exposure_ms: float, first_frame: int, last_frame: int, n_bands: 
 
 
 def _change_by_all_bands(
-    detection: CameraDetection, solution: CameraSolution, change: _Change | None
+    detection: CameraDetection, solution: CameraSolution, change: _Change | None, solved_again: bool
 ) -> _Change | None:
     """``change`` (:func:`_change_by_spans`; None where it found none) with what all of a
     camera's bands that tell their exposure show of it frame by frame (as
@@ -1369,27 +1370,78 @@ def _change_by_all_bands(
     same ``change`` where they show one span, or spans whose lengths scatter (not one
     exposure and then another: a steady camera under flashes at two powers), or none near
     the solved exposure. After the solve: where ``change`` is None, every band's edges were
-    solved on. On six auto-exposure benches, of the 105 cameras whose change the bands
-    fitted whole did not show, it found 10 (their exposure frame by frame 4.54 ms RMS off
-    the truth, error/sigma up to 160; now 1.93 ms, up to 1.9), and it took a steady
-    camera's one split band 0.68 ms too long for a change."""
-    spans = all_band_spans(detection, solution.row_time_ms)
-    if len(spans) < 2 or not all(span.one_length for span in spans):
+    solved on, unless the camera was ``solved_again`` without the trailing edges outside the
+    span nearest its first solved exposure (:func:`_solved_on_one_exposure`). On six
+    auto-exposure benches, of the 105 cameras whose change the bands fitted whole did not
+    show, it found 10 (their exposure frame by frame 4.54 ms RMS off the truth, error/sigma
+    up to 160; now 1.93 ms, up to 1.9), and it took a steady camera's one split band 0.68 ms
+    too long for a change."""
+    found = _spans_by_all_bands(detection, solution)
+    if found is None:
         return change
-    solved_rows = solution.exposure_ms / solution.row_time_ms
-    near = min(spans, key=lambda span: abs(span.length_rows - solved_rows))
-    if abs(near.length_rows - solved_rows) > MIN_STEP_SHARE * max(near.length_rows, solved_rows):
-        return change
-    spans_ms = [solution.exposure_ms + (s.length_rows - near.length_rows) * solution.row_time_ms for s in spans]
-    shown = _shown_exposures(spans, spans_ms, near, np.empty(0, np.int64), np.empty(0))
-    if not shown:
-        return change
+    shown = found[2]
     farthest_ms = max(abs(s.exposure_ms - solution.exposure_ms) for s in shown)
     if change is None:
         parts = [_shown_part(s.exposure_ms, s.first_frame, s.last_frame, s.n_bands) for s in shown]
         parts[-1] += " (bands split across frames among them, timed by its solved clock)"
-        return _Change(parts, "its times take every band's edges", farthest_ms, shown)
+        solved_on = (
+            f"its times take only the leading edges of the bands outside the {solution.exposure_ms:.2f} ms span "
+            "(solved again without the others' trailing edges)"
+            if solved_again
+            else "its times take every band's edges"
+        )
+        return _Change(parts, solved_on, farthest_ms, shown)
     return change._replace(farthest_ms=max(change.farthest_ms, farthest_ms), shown=shown)
+
+
+def _spans_by_all_bands(
+    detection: CameraDetection, solution: CameraSolution
+) -> tuple[list[ExposureSpan], ExposureSpan, list[_ShownExposure]] | None:
+    """The spans of all of a camera's bands that tell their exposure
+    (:func:`~flashsync.exposure_changes.all_band_spans`, timed by its solved clock
+    ``solution``), the one nearest the solved exposure, and what they show frame by frame
+    (:func:`_shown_exposures`): None where they show one span, spans whose lengths scatter,
+    none within :data:`~flashsync.exposure_changes.MIN_STEP_SHARE` of the solved exposure, or
+    nothing frame by frame."""
+    spans = all_band_spans(detection, solution.row_time_ms)
+    if len(spans) < 2 or not all(span.one_length for span in spans):
+        return None
+    solved_rows = solution.exposure_ms / solution.row_time_ms
+    near = min(spans, key=lambda span: abs(span.length_rows - solved_rows))
+    if abs(near.length_rows - solved_rows) > MIN_STEP_SHARE * max(near.length_rows, solved_rows):
+        return None
+    spans_ms = [solution.exposure_ms + (s.length_rows - near.length_rows) * solution.row_time_ms for s in spans]
+    shown = _shown_exposures(spans, spans_ms, near, np.empty(0, np.int64), np.empty(0))
+    return (spans, near, shown) if shown else None
+
+
+def _solved_on_one_exposure(
+    best: _Attempt,
+    final: Callable[[dict[str, CameraDetection]], _Attempt],
+    detections: dict[str, CameraDetection],
+    stepped: Sequence[str],
+) -> tuple[_Attempt, list[str]]:
+    """``best`` solved again (``final``) without the trailing edges outside the span nearest
+    its solved exposure of each camera whose change of exposure only all its bands show
+    (:func:`_spans_by_all_bands`: bands split across frames, timed by its solved clock), as
+    :func:`~flashsync.exposure_changes.with_one_exposure` leaves out those the bands fitted
+    whole show before the solve; and those cameras."""
+    trial, changed = dict(best.cameras), []
+    for name, solution in zip(best.connected, best.solution.cameras):
+        if name in stepped or not solution.exposure_ms > 0:
+            continue
+        detection = _in_use(best, detections, name)
+        found = None if _change_by_spans(detection, solution, False) else _spans_by_all_bands(detection, solution)
+        if found is not None:
+            trial[name] = outside_left_out(best.cameras[name], found[0], found[1])
+            changed.append(name)
+    return (final(trial), changed) if changed else (best, changed)
+
+
+def _in_use(best: _Attempt, detections: dict[str, CameraDetection], name: str) -> CameraDetection:
+    """Camera ``name``'s detection of ``detections`` (every band) on its frame clock and in the
+    reading ``best`` chose."""
+    return detections[name].retimed(best.cameras[name].frame_times_ms).read_flipped(best.cameras[name].flipped)
 
 
 #: Fewest trailing edges the solve left out, one after the other, whose lateness shows a

@@ -109,6 +109,7 @@ def seen_by(
     frame_times: np.ndarray,
     exposure_ms: np.ndarray | float = EXPOSURE_MS,
     readout_share: float = 1.0,
+    split: bool = False,
 ) -> CameraDetection:
     """What the detector gives ``sync`` of a synthetic camera (its ``clock``: alpha, beta_ms
     and row_time_ms, one row of :func:`synthetic_events`'s truth; its ``frame_times``, ms)
@@ -117,8 +118,9 @@ def seen_by(
     one per instant in time order): a band whole where both its edges lie in the rows read,
     its leading edge alone where the trailing one does not, and its trailing edge alone at
     the top of the next frame where the flash fell in the vertical blanking less than one
-    exposure before that frame. Events numbered in time order, no noise, top-down (the
-    reading known)."""
+    exposure before that frame; with ``split``, a band whose trailing edge lies past the rows
+    read goes on at the top of the next frame (a readout with no blanking: ``readout_share``
+    near 1). Events numbered in time order, no noise, top-down (the reading known)."""
     alpha, beta, row_time = clock
     start, row_time = alpha * frame_times + beta, row_time * readout_share
     stamps = np.round(frame_times - frame_times[0])
@@ -130,12 +132,18 @@ def seen_by(
             continue  # before the first frame, or after the last frame's start: not in sight
         lead = (instant - start[frame]) / row_time
         trail = lead + exposure / row_time
-        if lead < HEIGHT - 1:
-            edges = [(Edge.LEADING, lead, frozenset())]
-            edges += [(Edge.TRAILING, trail, frozenset())] if trail < HEIGHT - 1 else []
+        next_trail = (instant + exposure - start[frame + 1]) / row_time
+        if lead < HEIGHT - 1 and trail < HEIGHT - 1:
+            edges = [(frame, Edge.LEADING, lead, frozenset()), (frame, Edge.TRAILING, trail, frozenset())]
+        elif lead < HEIGHT - 1 and split and next_trail >= 0:
+            cut = frozenset({Flag.SPLIT})
+            edges = [(frame, Edge.LEADING, lead, cut), (frame + 1, Edge.TRAILING, next_trail, cut)]
+        elif lead < HEIGHT - 1:
+            edges = [(frame, Edge.LEADING, lead, frozenset())]
         else:
-            frame, trail = frame + 1, (instant + exposure - start[frame + 1]) / row_time
-            edges = [(Edge.TRAILING, trail, frozenset({Flag.LEADING_HIDDEN}))] if trail >= 0 else []
-        for edge, row, flags in edges:
-            rows.append((name, number, frame, stamps[frame], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
+            edges = (
+                [(frame + 1, Edge.TRAILING, next_trail, frozenset({Flag.LEADING_HIDDEN}))] if next_trail >= 0 else []
+            )
+        for at, edge, row, flags in edges:
+            rows.append((name, number, at, stamps[at], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
     return CameraDetection(name, f"{name}.mp4", WIDTH, HEIGHT, stamps, Events.from_columns(*zip(*rows)))
