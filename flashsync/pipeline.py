@@ -1518,8 +1518,8 @@ def _unmatched_lateness(
     solved exposure its row's was. An exposure that changed puts such edges as far from
     their flashes as it changed, too far to match (random rig 154 with all four departures,
     ``--preflash 40 --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``: cam3 13.66
-    ms, then 8.80 from frame 243, its lone trailing edges before the change 4.7-4.9 ms late,
-    none matched)."""
+    ms, then 8.80 from frame 243; none of its three lone trailing edges before the change
+    matched, two of them 4.7 and 4.9 ms late)."""
     events, bands, mine = detection.events, detection.events.bands(), best.matches.camera == name
     matched = np.isin(bands.event, best.matches.event[mine])
     edge = bands.trailing[(bands.leading < 0) & (bands.trailing >= 0) & ~matched]
