@@ -157,16 +157,17 @@ def test_one_wrong_event_does_not_move_a_camera():
     assert robust.cameras[1].beta_ms == pytest.approx(clean.cameras[1].beta_ms, abs=1e-6)
 
 
-@pytest.mark.parametrize("seed", [0, 3, 4, 5, 18])
-def test_an_edge_matched_to_the_neighbouring_flash_neither_fails_nor_moves_the_solve(seed):
+@pytest.mark.parametrize("n_flashes, seed", [(12, 0), (12, 3), (12, 4), (12, 5), (12, 18), (8, 8), (8, 11)])
+def test_an_edge_matched_to_the_neighbouring_flash_neither_fails_nor_moves_the_solve(n_flashes, seed):
     """Twelve flashes, three cameras, the pipeline's priors (times per row within 47 %, the
     drift prior): one of camera 1's edges matched to the next flash, seconds off. The first
     fit's residuals are then seconds, not rows' noise; taken for it, they left the times per
     row nothing but their priors, and the solve failed ("cannot separate") in 13 of 20 draws
-    (seeds 0, 3, 4, 5 here) and put camera 1 27 and 136 ms off in two (18 here). The edge is
-    rejected and camera 1 stays where the clean edges put it."""
+    (seeds 0, 3, 4, 5 here) and put camera 1 27 and 136 ms off in two (18 here); of eight
+    flashes, two ended 0.74 and 5.1 s off after their scale had risen and fallen again (8
+    and 11 here). The edge is rejected and camera 1 stays where the clean edges put it."""
     rng = np.random.default_rng(seed)
-    (camera, flash, t_frame, q), _ = observations(rng, n_flashes=12)
+    (camera, flash, t_frame, q), _ = observations(rng, n_flashes=n_flashes)
     row_time = np.array([c[2] for c in CAMERAS])
     q = q + rng.normal(0.0, 0.02, len(q)) / row_time[camera]
     priors = Priors({c: (row_time[c], 0.47 * row_time[c]) for c in range(3)})
