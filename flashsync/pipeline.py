@@ -2320,8 +2320,14 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     bursts (one of them none of its own, but tied to the others by the seconds of theirs)
     matched by their pre-flashes to the flash-only cameras, the reference's group, at eight
     bursts and by that camera's two lone events, 40 ms off at error/sigma 43-57 with no word.
-    Bursts are counted once each, however many cameras match their first. A camera whose
-    pair's other shift is its doubt already keeps that one."""
+    So a camera without bursts matched to the firsts of several (:func:`_pre_flash_seers`)
+    ties no group by its lone events, and a group that only such ties joined to the rest is
+    in doubt at one burst's first: random rig 185 of a fresh such bench, whose reference saw
+    mostly pre-flashes whose flash it missed, matched by them to a flash-only camera, which
+    tied the other five to it; those six were 37-39 ms off at error/sigma 15-21 with no word,
+    and the one camera warned was right. Bursts are counted once each, however many cameras
+    match their first. A camera whose pair's other shift is its doubt already keeps that
+    one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
     pins, lone, firsts = {}, {}, {}
@@ -2346,19 +2352,23 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                 lone.setdefault(pair, set()).add(flash)
     if not firsts:
         return {}, []
+    seers = _pre_flash_seers(firsts, bursty)
+    trusted = {pair: flashes for pair, flashes in lone.items() if not pair & seers}
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
         if np.any(np.abs(np.array(gaps) - delay) <= BURST_AGREE * delay):  # a burst of the rig's delay
             _tie(groups, a, b)
     for g, h in combinations({frozenset(group) for group in groups.values()}, 2):
-        if len(_between(lone, g, h)) > len(_between(firsts, g, h)):
+        if len(_between(trusted, g, h)) > len(_between(firsts, g, h)):
             _tie(groups, next(iter(g)), next(iter(h)))
     doubts, warnings = {}, []
     others = {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}
     for group in sorted(others, key=lambda group: min(map(best.connected.index, group))):
-        gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
-        if len(gaps) < MIN_BURSTS or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
+        rest = frozenset(best.connected) - group
+        gaps = [followed[first] for first in _between(firsts, group, rest)]
+        through_seers = gaps and _between(lone, group, rest) and not _between(trusted, group, rest)
+        if (len(gaps) < MIN_BURSTS and not through_seers) or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
             continue
         gap_ms, names = float(np.median(gaps)), ", ".join(sorted(group, key=best.connected.index))
         for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
@@ -2370,6 +2380,20 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                 "its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
             )
     return doubts, warnings
+
+
+def _pre_flash_seers(firsts: dict[frozenset, dict], bursty: set[str]) -> set[str]:
+    """The cameras without bursts of their own whose events are matched to the first of
+    :data:`MIN_BURSTS` or more of another camera's bursts (``firsts``: per pair of cameras,
+    the bursts' firsts matched to the other's lone event): they see pre-flashes whose flash
+    they miss, or are matched one pre-flash's delay off, and their lone events may be
+    either."""
+    seen: dict[str, set] = {}
+    for pair, bursts in firsts.items():
+        for first in bursts:
+            for name in pair - {first[0]} - bursty:
+                seen.setdefault(name, set()).add(first)
+    return {name for name, bursts in seen.items() if len(bursts) >= MIN_BURSTS}
 
 
 def _burst_role(event: tuple[str, int], followed: dict, following: dict) -> str | None:
