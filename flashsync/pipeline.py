@@ -2320,18 +2320,21 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     bursts (one of them none of its own, but tied to the others by the seconds of theirs)
     matched by their pre-flashes to the flash-only cameras, the reference's group, at eight
     bursts and by that camera's two lone events, 40 ms off at error/sigma 43-57 with no word.
-    So a camera without bursts matched to the firsts of several (:func:`_pre_flash_seers`)
-    ties no group by its lone events, and a group that only such ties joined to the rest is
-    in doubt at one burst's first: random rig 185 of a fresh such bench, whose reference saw
-    mostly pre-flashes whose flash it missed, matched by them to a flash-only camera, which
-    tied the other five to it; those six were 37-39 ms off at error/sigma 15-21 with no word,
-    and the one camera warned was right. Bursts are counted once each, however many cameras
-    match their first. A camera whose pair's other shift is its doubt already keeps that
-    one."""
+    A camera without bursts matched to the firsts of several (:func:`_pre_flash_seers`) saw
+    pre-flashes alone or is matched a delay off; where it also has a band one delay after a
+    flash the others were matched at (:func:`_displaced`), it is the one off, and its lone
+    events tie no group: random rig 185 of a fresh such bench, whose reference saw mostly
+    pre-flashes whose flash it missed, matched by them to a flash-only camera, which tied the
+    other five to it; those six were 37-39 ms off at error/sigma 15-21 with no word, and the
+    one camera warned was right. (Random rig 152 is that rig mirrored, its reference on the
+    flashes' side and right: it has no such band.) Bursts are counted once each, however many
+    cameras match their first. A camera whose pair's other shift is its doubt already keeps
+    that one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
     pins, lone, firsts = {}, {}, {}
-    for flash, seen in _matched_flashes(best.matches).items():
+    flashes = _matched_flashes(best.matches)
+    for flash, seen in flashes.items():
         for a, b in combinations(seen.items(), 2):
             pair, (role_a, role_b) = frozenset((a[0], b[0])), (_burst_role(e, followed, following) for e in (a, b))
             if role_a and role_b:  # an event in a burst of each: the same of each, or a first at a second
@@ -2352,9 +2355,9 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                 lone.setdefault(pair, set()).add(flash)
     if not firsts:
         return {}, []
-    seers = _pre_flash_seers(firsts, bursty)
-    trusted = {pair: flashes for pair, flashes in lone.items() if not pair & seers}
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
+    misled = _pre_flash_seers(firsts, bursty) & _displaced(best, model, flashes, delay)
+    trusted = {pair: flashes for pair, flashes in lone.items() if not pair & misled}
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
         if np.any(np.abs(np.array(gaps) - delay) <= BURST_AGREE * delay):  # a burst of the rig's delay
@@ -2365,10 +2368,8 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     doubts, warnings = {}, []
     others = {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}
     for group in sorted(others, key=lambda group: min(map(best.connected.index, group))):
-        rest = frozenset(best.connected) - group
-        gaps = [followed[first] for first in _between(firsts, group, rest)]
-        through_seers = gaps and _between(lone, group, rest) and not _between(trusted, group, rest)
-        if (len(gaps) < MIN_BURSTS and not through_seers) or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
+        gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
+        if len(gaps) < MIN_BURSTS or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
             continue
         gap_ms, names = float(np.median(gaps)), ", ".join(sorted(group, key=best.connected.index))
         for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
@@ -2380,6 +2381,33 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                 "its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
             )
     return doubts, warnings
+
+
+def _displaced(best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]], delay_ms: float) -> set[str]:
+    """The cameras with a band matched to no flash (any band: rig-185's reference's was a
+    lone trailing edge of a long pulse, no sync event) that starts one pre-flash delay
+    (``delay_ms``, within :data:`BURST_AGREE` of it) after a flash other cameras were
+    matched at, by the solved clocks: nothing fires a delay after a flash, so that camera's
+    times are a delay off the others'."""
+    matched = {(name, event) for seen in flashes.values() for name, event in seen.items()}
+    starts = {}
+    for name in best.connected:
+        events = best.cameras[name].events
+        first = (events.edge == Edge.LEADING) | events.has_flag(Flag.LEADING_HIDDEN)
+        events = events.take(first)
+        starts[name] = dict(zip(events.event.tolist(), _band_starts_ms(model.cameras[name], events).tolist()))
+    flash_starts = [
+        (set(seen), float(np.median([starts[name][event] for name, event in seen.items()])))
+        for seen in flashes.values()
+    ]
+    displaced = set()
+    for name, bands in starts.items():
+        for event, start in bands.items():
+            if (name, event) not in matched and any(
+                name not in seen and abs(start - at - delay_ms) <= BURST_AGREE * delay_ms for seen, at in flash_starts
+            ):
+                displaced.add(name)
+    return displaced
 
 
 def _pre_flash_seers(firsts: dict[frozenset, dict], bursty: set[str]) -> set[str]:

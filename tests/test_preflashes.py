@@ -413,10 +413,7 @@ def test_a_group_of_cameras_tied_to_the_rest_only_by_the_first_of_their_bursts_i
     kept the doubt off both; cam4's pairs with cam0 and cam1 are three lone events each.
     cam2-cam4 are one group (the seconds of cam2's bursts are cam4's first two flashes), tied
     to cam0 and to cam1 by the firsts of four bursts against three lone events: each of the
-    three takes the 40 ms in its sigma, with a warning. So does cam1, though right: cam0 and
-    cam1 are matched to the firsts of cam2's bursts as cameras that saw the pre-flashes alone
-    would be, and nothing in the matching tells them apart (random rig 185 is this rig
-    mirrored, its reference on the pre-flashes' side: :func:`flashsync.pipeline._pre_flash_seers`)."""
+    three takes the 40 ms in its sigma, with a warning; cam1 keeps its sigma."""
     events, truth, frame_times = synthetic_events(5, 12, seed=4)
     instants = flash_instants_ms(events, truth)
     seen = [instants, instants, *[np.concatenate([instants - 40.0, instants[:2]])] * 2, instants[[0, 1, 5, 6, 7]]]
@@ -431,35 +428,28 @@ def test_a_group_of_cameras_tied_to_the_rest_only_by_the_first_of_their_bursts_i
         assert "its times may be off by 40 ms" in warning
         assert np.abs(error).mean() == pytest.approx(40.0, abs=1.0), error  # the premise: the pre-flashes' shift
         assert np.sqrt(np.mean((error / sigma) ** 2)) < 1.5, (error, sigma)
-    error, _ = clock_errors_ms(model, truth, frame_times, 1)
-    assert np.abs(error).max() < 0.1, error
-    assert [w for w in report.warnings if w.startswith("cam1.mp4: the flashes that tie cam1 to")]
-    assert not [w for w in report.warnings if w.startswith("cam0.mp4") and "pre-flash" in w]
+    error, sigma = clock_errors_ms(model, truth, frame_times, 1)
+    assert np.abs(error).max() < 0.1 and sigma.max() < 1.0, (error, sigma)
+    assert not [w for w in report.warnings if w.startswith(("cam0.mp4", "cam1.mp4")) and "pre-flash" in w]
 
 
 def test_a_reference_that_sees_pre_flashes_alone_ties_no_group_by_them():
     """Five synthetic cameras (1080 rows) and twelve TTL flashes, each with a pre-flash 40 ms
     before it. cam0 (the reference) sees flash 0 and the pre-flashes of flashes 2-11 alone
     (their flashes fall where it does not look); cam1 the same pre-flashes and, after two of
-    them, their flashes; cam2 every flash, cam3 and cam4 every flash but one of those two
-    (random rig 185 of a bench of all four departures at once: six cameras 37-39 ms off at
-    error/sigma 15-21 with no word, and the one warned was right). cam0 and cam1 are
-    matched by their pre-flashes to cam2's flashes, 40 ms off, and cam2 to cam3 and cam4
-    rightly. cam0's lone events tied cam2 to it, and cam2's tied cam3 and cam4: the doubt
-    fell on cam1 alone. cam0 and cam2 are matched to the firsts of cam1's two bursts, so
-    their lone events may be pre-flashes and tie no group; cam3 and cam4, tied to the rest
-    only by such events and by one burst's first, are in doubt too: cam2-cam4 take the
-    40 ms in their sigma, warned."""
+    them, their flashes; cam2-cam4 every flash (random rig 185 of a bench of all four
+    departures at once: six cameras 37-39 ms off at error/sigma 15-21 with no word, and the
+    one warned was right). cam0 and cam1 are matched by their pre-flashes to the others'
+    flashes, 40 ms off. cam0's lone events tied cam2-cam4 to it: the doubt fell on cam1
+    alone. But cam0 is matched to the firsts of cam1's bursts, and its flash 0 lies 40 ms
+    after the others': it is a delay off them, its lone events tie nothing, and cam2-cam4
+    take the 40 ms in their sigma, warned. (Where the reference's side is right, it has no
+    such band and keeps its ties: the rig-152 test above.)"""
     events, truth, frame_times = synthetic_events(5, 12, seed=4)
     instants = flash_instants_ms(events, truth)
-    pre_flashes, all_but_7 = instants[2:] - 40.0, np.delete(instants, 7)
-    seen = [
-        np.concatenate([instants[:1], pre_flashes]),
-        np.concatenate([pre_flashes, instants[[3, 7]]]),
-        instants,
-        all_but_7,
-        all_but_7,
-    ]
+    pre_flashes = instants[2:] - 40.0
+    seen = [np.concatenate([instants[:1], pre_flashes]), np.concatenate([pre_flashes, instants[[3, 7]]])]
+    seen += [instants] * 3
     model, report = synchronize([seen_by(f"cam{c}", s, truth[c], frame_times[c]) for c, s in enumerate(seen)])
     for c in (2, 3, 4):
         error, sigma = clock_errors_ms(model, truth, frame_times, c)
