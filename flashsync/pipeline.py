@@ -2357,7 +2357,7 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
         return {}, []
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
     misled = _pre_flash_seers(firsts, bursty) & _displaced(best, model, flashes, delay)
-    trusted = {pair: flashes for pair, flashes in lone.items() if not pair & misled}
+    trusted = {pair: shared for pair, shared in lone.items() if not pair & misled}
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
         if np.any(np.abs(np.array(gaps) - delay) <= BURST_AGREE * delay):  # a burst of the rig's delay
