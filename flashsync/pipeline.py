@@ -2356,7 +2356,8 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     if not firsts:
         return {}, []
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
-    misled = _pre_flash_seers(firsts, bursty) & _displaced(best, model, flashes, delay)
+    seers = _pre_flash_seers(firsts, bursty)
+    misled = seers & _displaced(best, model, flashes, delay) if seers else set()
     trusted = {pair: shared for pair, shared in lone.items() if not pair & misled}
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
