@@ -340,10 +340,12 @@ def outreaching_splits(detection: CameraDetection) -> Bands:
         return bands.take(np.zeros(len(bands), dtype=bool))
     sight = _rows_between(detection, bands) + detection.height
     outreach = sight - exposure > np.maximum(MIN_STEP_SHARE * sight, MIN_STEP_ROWS)
-    return bands.take(_split(events, bands) & outreach & ~_amid_one_exposure(detection, events.frame[lead]))
+    return bands.take(
+        split_across_frames(events, bands) & outreach & ~_amid_one_exposure(detection, events.frame[lead])
+    )
 
 
-def _split(events: Events, bands: Bands) -> np.ndarray:
+def split_across_frames(events: Events, bands: Bands) -> np.ndarray:
     """Boolean mask of ``bands`` (of ``events``): the flash bands split across two frames,
     the trailing edge in the frame after the leading edge's."""
     return (events.frame[bands.trailing] == events.frame[bands.leading] + 1) & (
@@ -403,7 +405,7 @@ def all_band_spans(detection: CameraDetection, row_time_ms: float) -> list[Expos
     events = detection.events
     bands = events.bands()
     bands = bands.take(bands.complete)
-    split = bands.take(_split(events, bands))
+    split = bands.take(split_across_frames(events, bands))
     frames = np.concatenate([frames, events.frame[split.leading]])
     lengths = np.concatenate([lengths, split_lengths_ms(detection, split, row_time_ms) / row_time_ms])
     order = np.argsort(frames, kind="stable")
