@@ -116,11 +116,12 @@ def seen_by(
     that reads its rows at ``readout_share`` times that time per row and sees flashes at the
     global ``instants_ms``, in time order each through its ``exposure_ms`` (one for all, or
     one per instant in time order): a band whole where both its edges lie in the rows read,
-    its leading edge alone where the trailing one does not, and its trailing edge alone at
-    the top of the next frame where the flash fell in the vertical blanking less than one
-    exposure before that frame; with ``split``, a band whose trailing edge lies past the rows
-    read goes on at the top of the next frame (a readout with no blanking: ``readout_share``
-    near 1). Events numbered in time order, no noise, top-down (the reading known)."""
+    its leading edge alone where the trailing one does not, and its trailing edge alone in
+    the next frame where the flash fell in the vertical blanking less than one exposure before
+    that frame and it lies in the rows read; with ``split``, a band whose trailing edge lies
+    past the rows read goes on in the next frame where it lies in them (a readout with no
+    blanking: ``readout_share`` near 1). Events numbered in time order, no noise, top-down
+    (the reading known)."""
     alpha, beta, row_time = clock
     start, row_time = alpha * frame_times + beta, row_time * readout_share
     stamps = np.round(frame_times - frame_times[0])
@@ -135,14 +136,16 @@ def seen_by(
         next_trail = (instant + exposure - start[frame + 1]) / row_time
         if lead < HEIGHT - 1 and trail < HEIGHT - 1:
             edges = [(frame, Edge.LEADING, lead, frozenset()), (frame, Edge.TRAILING, trail, frozenset())]
-        elif lead < HEIGHT - 1 and split and next_trail >= 0:
+        elif lead < HEIGHT - 1 and split and 0 <= next_trail < HEIGHT - 1:
             cut = frozenset({Flag.SPLIT})
             edges = [(frame, Edge.LEADING, lead, cut), (frame + 1, Edge.TRAILING, next_trail, cut)]
         elif lead < HEIGHT - 1:
             edges = [(frame, Edge.LEADING, lead, frozenset())]
         else:
             edges = (
-                [(frame + 1, Edge.TRAILING, next_trail, frozenset({Flag.LEADING_HIDDEN}))] if next_trail >= 0 else []
+                [(frame + 1, Edge.TRAILING, next_trail, frozenset({Flag.LEADING_HIDDEN}))]
+                if 0 <= next_trail < HEIGHT - 1
+                else []
             )
         for at, edge, row, flags in edges:
             rows.append((name, number, at, stamps[at], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
