@@ -16,7 +16,7 @@ from flashsync import detect_videos, synchronize
 from flashsync.detect import CameraDetection
 from flashsync.diagnose import diagnose
 from flashsync.evaluate import camera_accuracy, clock_origin_ms
-from flashsync.events import Band, Edge, Events
+from flashsync.events import Band, Edge, Events, Flag
 from flashsync.exposure_changes import all_band_spans, exposure_spans, length_scatter_rows, with_one_exposure
 from flashsync.io import load_model, save_model
 from flashsync.report import sync_summary
@@ -584,6 +584,89 @@ def test_trailing_edges_the_solve_left_out_as_late_as_each_other_show_a_change(a
     before, late = camera.exposure_spans[:2]
     inside = np.any([(frames >= s.first_frame) & (frames <= s.last_frame) for s in (before, late)], axis=0)
     assert held[inside] == pytest.approx(true_ms[inside], abs=0.1) and np.all(std[inside] < 0.2), (held, std)
+
+
+@pytest.mark.parametrize(
+    "telling, unseen_amid, found",
+    [
+        pytest.param(True, False, True, id="borne-out"),
+        pytest.param(False, False, False, id="the-edge-alone"),
+        pytest.param(True, True, False, id="bands-that-end-unseen-amid-the-solved-exposure"),
+    ],
+)
+def test_one_trailing_edge_left_out_that_lone_leading_edges_bear_out_shows_a_change(telling, unseen_amid, found):
+    """Three synthetic cameras, 60 flashes; cam1 reads its rows in half its 40 ms frame
+    period and exposes each for 24 ms over its first 20 flashes, then for 12 ms: before the
+    change no band is whole, and of its lone trailing edges (24 ms after their flash, 12 ms
+    late of the 12 ms the solve finds) the detector saw one. One lone leading edge before the
+    change (row 292) would have had its band, 12 ms long, end in sight: it bears out the
+    edge's 24 ms (MS9's rig-181 cam3: one trailing edge 4.28 ms early, two such leading
+    edges; its exposure frame by frame 3.46 ms RMS off at error/sigma 113, no change found).
+    A warning names both exposures and the model holds each frame's within 2 sigma. Not the
+    edge alone (that leading edge not seen), nor where a band amid the 12 ms ones also ends
+    unseen (one band's trailing edge not seen: bands may end unseen for another reason)."""
+    events, truth, frame_times = synthetic_events(3, 60, seed=1)
+    detections = synthetic_detections(events, truth, frame_times, seed=1)
+    exposure_ms = np.concatenate([np.full(20, 24.0), np.full(40, 12.0)])
+    cam1 = seen_by("cam1", flash_instants_ms(events, truth), truth[1], frame_times[1], exposure_ms, 0.5)
+    e = cam1.events
+    leading, trailing = e.edge == Edge.LEADING, e.edge == Edge.TRAILING
+    whole = np.isin(e.event, e.event[leading]) & np.isin(e.event, e.event[trailing])
+    before = e.event < 20
+    lone_trailing = np.flatnonzero(before & trailing)
+    tells = before & leading & (e.row < 400)
+    assert len(lone_trailing) > 1 and tells.sum() == 1 and not np.any(before & whole)
+    seen = ~np.isin(np.arange(len(e)), lone_trailing[1:])
+    seen &= telling | ~tells
+    if unseen_amid:
+        seen &= ~(trailing & (e.event == e.event[whole & ~before][0]))
+    detections[1] = replace(cam1, top_down=e.take(seen))
+    model, report = synchronize(detections)
+    warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
+    camera = model.cameras["cam1"]
+    assert bool(warned) == found and bool(camera.exposure_spans) == found, (report.warnings, camera.exposure_spans)
+    if not found:
+        return
+    assert re.search(r"24\.0\d ms in frame \d+ \(one trailing edge the solve left out", warned[0]), warned
+    assert re.search(r"12\.0\d ms over frames \d+-\d+ \(\d+ bands or trailing edges\)", warned[0]), warned
+    last_long, first_short = e.frame[before].max(), e.frame[~before].min()
+    frames = np.arange(camera.n_frames)
+    frames = frames[(frames <= last_long) | (frames >= first_short)]  # between them it changed
+    true_ms = np.where(frames <= last_long, 24.0, 12.0)
+    held, std = camera.exposure_at(frames)
+    within = np.abs(held - true_ms) <= 2.0 * std
+    assert within.all(), (held[~within], std[~within], true_ms[~within])
+
+
+def test_bands_split_across_frames_hold_the_solved_exposure_against_trailing_edges_left_out():
+    """Three synthetic cameras, 60 flashes; cam1 reads its rows in half its 40 ms frame
+    period and exposes each for 24 ms over its first 20 flashes, then for 32 ms: no band is
+    whole; the detector saw the lone trailing edges before the change (8 ms early of the 32
+    ms the solve finds) and the bands split across two frames after it (MS9's rig-180 cam4,
+    6.88 ms then 13.18 from frame 479: four trailing edges 6.1-6.8 ms early, then two split
+    bands; its exposure frame by frame 5.17 ms RMS off, no change found). The split bands
+    hold the solved exposure as bands fitted whole do: a warning names both exposures and
+    the model holds each frame's within 2 sigma."""
+    events, truth, frame_times = synthetic_events(3, 60, seed=1)
+    detections = synthetic_detections(events, truth, frame_times, seed=1)
+    exposure_ms = np.concatenate([np.full(20, 24.0), np.full(40, 32.0)])
+    cam1 = seen_by("cam1", flash_instants_ms(events, truth), truth[1], frame_times[1], exposure_ms, 0.5, split=True)
+    e = cam1.events
+    split, before = e.has_flag(Flag.SPLIT), e.event < 20
+    lone_trailing = (e.edge == Edge.TRAILING) & ~split
+    assert (lone_trailing & before).sum() > 2 and (split & ~before).sum() > 2
+    detections[1] = replace(cam1, top_down=e.take(~(split & before) & ~(lone_trailing & ~before)))
+    model, report = synchronize(detections)
+    (warned,) = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
+    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+) \((\d+) ([a-z ]+)\)", warned)
+    assert [float(ms) for ms, *_ in spans] == pytest.approx([24.0, 32.0], abs=0.1), warned
+    camera = model.cameras["cam1"]
+    last_long, first_short = e.frame[before].max(), e.frame[~before].min()
+    frames = np.arange(camera.n_frames)
+    frames = frames[(frames <= last_long) | (frames >= first_short)]  # between them it changed
+    held, std = camera.exposure_at(frames)
+    within = np.abs(held - np.where(frames <= last_long, 24.0, 32.0)) <= 2.0 * std
+    assert within.all(), (held[~within], std[~within])
 
 
 def test_a_change_only_split_bands_show_is_solved_again_on_one_exposure():
