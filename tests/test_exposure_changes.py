@@ -543,6 +543,26 @@ def test_without_an_exposure_read_split_bands_are_held_to_the_longest_band(befor
     assert left_out(split_bands([sight], before=before, shared=None)) == dropped
 
 
+def cam1_change(detections: list[CameraDetection], found: bool):
+    """The rig synchronised: cam1's warning that its exposure changes (None where it has none)
+    and its model camera, each checked to show a change where ``found`` and none elsewhere."""
+    model, report = synchronize(detections)
+    warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
+    camera = model.cameras["cam1"]
+    assert bool(warned) == found and bool(camera.exposure_spans) == found, (report.warnings, camera.exposure_spans)
+    return (warned[0] if warned else None), camera
+
+
+def assert_held_frame_by_frame(camera, first_ms: float, last_frame: int, then_ms: float, first_frame: int):
+    """The camera's exposure frame by frame within 2 sigma of ``first_ms`` up to
+    ``last_frame`` and of ``then_ms`` from ``first_frame`` on (between the two it changed)."""
+    frames = np.arange(camera.n_frames)
+    frames = frames[(frames <= last_frame) | (frames >= first_frame)]
+    held, std = camera.exposure_at(frames)
+    within = np.abs(held - np.where(frames <= last_frame, first_ms, then_ms)) <= 2.0 * std
+    assert within.all(), (held[~within], std[~within])
+
+
 @pytest.mark.parametrize(
     "after_ms, changed, found",
     [
@@ -569,13 +589,10 @@ def test_trailing_edges_the_solve_left_out_as_late_as_each_other_show_a_change(a
     detections = synthetic_detections(events, truth, frame_times, seed=1)
     exposure_ms = np.concatenate([np.full(changed, 12.0), np.resize(after_ms, 60 - changed)])
     detections[1] = seen_by("cam1", flash_instants_ms(events, truth), truth[1], frame_times[1], exposure_ms, 0.5)
-    model, report = synchronize(detections)
-    warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
-    camera = model.cameras["cam1"]
-    assert bool(warned) == found and bool(camera.exposure_spans) == found, (report.warnings, camera.exposure_spans)
+    warned, camera = cam1_change(detections, found)
     if not found:
         return
-    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+) \((\d+) ([a-z ]+)\)", warned[0])
+    spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+) \((\d+) ([a-z ]+)\)", warned)
     assert [float(ms) for ms, *_ in spans] == pytest.approx([12.0, after_ms[0]], abs=0.1), warned
     assert spans[1][4] == "trailing edges the solve left out or did not match", warned
     frames, true_ms = detections[1].events.frame, exposure_ms[detections[1].events.event]
@@ -621,21 +638,12 @@ def test_one_trailing_edge_left_out_that_lone_leading_edges_bear_out_shows_a_cha
     if unseen_amid:
         seen &= ~(trailing & (e.event == e.event[whole & ~before][0]))
     detections[1] = replace(cam1, top_down=e.take(seen))
-    model, report = synchronize(detections)
-    warned = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
-    camera = model.cameras["cam1"]
-    assert bool(warned) == found and bool(camera.exposure_spans) == found, (report.warnings, camera.exposure_spans)
+    warned, camera = cam1_change(detections, found)
     if not found:
         return
-    assert re.search(r"24\.0\d ms in frame \d+ \(one trailing edge the solve left out", warned[0]), warned
-    assert re.search(r"12\.0\d ms over frames \d+-\d+ \(\d+ bands or trailing edges\)", warned[0]), warned
-    last_long, first_short = e.frame[before].max(), e.frame[~before].min()
-    frames = np.arange(camera.n_frames)
-    frames = frames[(frames <= last_long) | (frames >= first_short)]  # between them it changed
-    true_ms = np.where(frames <= last_long, 24.0, 12.0)
-    held, std = camera.exposure_at(frames)
-    within = np.abs(held - true_ms) <= 2.0 * std
-    assert within.all(), (held[~within], std[~within], true_ms[~within])
+    assert re.search(r"24\.0\d ms in frame \d+ \(one trailing edge the solve left out", warned), warned
+    assert re.search(r"12\.0\d ms over frames \d+-\d+ \(\d+ bands or trailing edges\)", warned), warned
+    assert_held_frame_by_frame(camera, 24.0, e.frame[before].max(), 12.0, e.frame[~before].min())
 
 
 def test_bands_split_across_frames_hold_the_solved_exposure_against_trailing_edges_left_out():
@@ -656,17 +664,10 @@ def test_bands_split_across_frames_hold_the_solved_exposure_against_trailing_edg
     lone_trailing = (e.edge == Edge.TRAILING) & ~split
     assert (lone_trailing & before).sum() > 2 and (split & ~before).sum() > 2
     detections[1] = replace(cam1, top_down=e.take(~(split & before) & ~(lone_trailing & ~before)))
-    model, report = synchronize(detections)
-    (warned,) = [w for w in report.warnings if w.startswith("cam1.mp4: its exposure changes while it records")]
+    warned, camera = cam1_change(detections, True)
     spans = re.findall(r"(\d+\.\d\d) ms over frames (\d+)-(\d+) \((\d+) ([a-z ]+)\)", warned)
     assert [float(ms) for ms, *_ in spans] == pytest.approx([24.0, 32.0], abs=0.1), warned
-    camera = model.cameras["cam1"]
-    last_long, first_short = e.frame[before].max(), e.frame[~before].min()
-    frames = np.arange(camera.n_frames)
-    frames = frames[(frames <= last_long) | (frames >= first_short)]  # between them it changed
-    held, std = camera.exposure_at(frames)
-    within = np.abs(held - np.where(frames <= last_long, 24.0, 32.0)) <= 2.0 * std
-    assert within.all(), (held[~within], std[~within])
+    assert_held_frame_by_frame(camera, 24.0, e.frame[before].max(), 32.0, e.frame[~before].min())
 
 
 def test_a_change_only_split_bands_show_is_solved_again_on_one_exposure():
