@@ -101,26 +101,38 @@ def split_scatter(
     events: Observations, n_cameras: int, reference: int, solution: Solution, priors: Priors
 ) -> list[np.ndarray]:
     """Per camera, the covariance that an error of the mean of each camera's split bands'
-    lengths brings to its clock's parameters and its exposure (the layout of
-    :func:`flash_scatter`): for every camera with such bands, ``n`` of them, the joint solve
-    re-run with their trailing edges later by the error their mean may hold
-    (:data:`SPLIT_OFFSET_ROWS` and :data:`SPLIT_BAND_ROWS` over the root of ``n``, in
-    quadrature), the change of every camera's parameters squared (its outer product), summed
-    over those cameras; each solve made as ``solution`` was (:func:`_solved_as`). Past
-    :data:`GROUPS` such cameras they move in that many groups (the k-th in group k mod
-    GROUPS), one solve each, a camera's change then holding its group's others' small share.
-    Zero where no camera has a split band whose both edges the solve pairs."""
-    solved = [_parameters(camera) for camera in solution.cameras]
-    scatter = [np.zeros((len(parameters),) * 2) for parameters in solved]
+    lengths brings to its clock's parameters and its exposure (:func:`moved_scatter`): every
+    camera's such bands, ``n`` of them, with their trailing edges later by the error their
+    mean may hold (:data:`SPLIT_OFFSET_ROWS` and :data:`SPLIT_BAND_ROWS` over the root of
+    ``n``, in quadrature). Zero where no camera has a split band whose both edges the solve
+    pairs."""
     if events.split is None or events.leading_of is None:
-        return scatter
+        return moved_scatter(events, n_cameras, reference, solution, priors, np.zeros(len(events.camera)))
     lengths = events.split & (events.leading_of >= 0)
     cameras, counts = np.unique(events.camera[lengths], return_counts=True)
     offset = np.zeros(n_cameras)
     offset[cameras] = np.hypot(SPLIT_OFFSET_ROWS, SPLIT_BAND_ROWS / np.sqrt(counts))
+    moves = np.where(lengths, offset[events.camera], 0.0)
+    return moved_scatter(events, n_cameras, reference, solution, priors, moves)
+
+
+def moved_scatter(
+    events: Observations, n_cameras: int, reference: int, solution: Solution, priors: Priors, moves_rows: np.ndarray
+) -> list[np.ndarray]:
+    """Per camera, the covariance that an error of ``moves_rows`` (readout rows, shape (n,):
+    each observation's, all of one camera's at once, 0 for none) brings to its clock's
+    parameters and its exposure (the layout of :func:`flash_scatter`): for every camera with
+    a move, the joint solve re-run with its edges so moved, the change of every camera's
+    parameters squared (its outer product), summed over those cameras; each solve made as
+    ``solution`` was (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that
+    many groups (the k-th in group k mod GROUPS), one solve each, a camera's change then
+    holding its group's others' small share. Zero where nothing moves."""
+    solved = [_parameters(camera) for camera in solution.cameras]
+    scatter = [np.zeros((len(parameters),) * 2) for parameters in solved]
+    cameras = np.unique(events.camera[moves_rows != 0])
     groups = min(len(cameras), GROUPS)
-    for moved in (lengths & np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
-        shifted = replace(events, q=np.where(moved, events.q + offset[events.camera], events.q))
+    for moved in (np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
+        shifted = replace(events, q=np.where(moved, events.q + moves_rows, events.q))
         trial = _solved_as(solution, shifted, n_cameras, reference, priors)
         for c, camera in enumerate(trial.cameras):
             change = np.nan_to_num(_parameters(camera) - solved[c])
