@@ -16,7 +16,10 @@ see: every flash brings it alike. Their lengths tie the time per row to the fram
 (the band runs through the rows hidden between frames), so it moves the time per row;
 :func:`split_scatter` moves them by the error their mean may hold (one all share, and the
 bands' own over the root of their number, which the jackknife sees only where several tie a
-camera) and solves again.
+camera) and solves again. So, by :func:`moved_scatter`, does any error of known size and
+direction that a camera's edges may hold: a lone edge whose ramp the frame's cut hides lies
+further from the cut than its flash puts it, and where it alone places a flash that alone
+places a camera, neither the residuals nor the flashes left out can show it.
 """
 
 from __future__ import annotations

@@ -53,7 +53,7 @@ from flashsync.exposure_changes import (
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
-from flashsync.jackknife import flash_scatter, split_scatter
+from flashsync.jackknife import flash_scatter, moved_scatter, split_scatter
 from flashsync.likelihood import (
     SCORE_MIN_SIGMA_MS,
     HeldClock,
@@ -1875,6 +1875,9 @@ class Matches:
         The edge's noise in units of a clean one's (:func:`_edge_sigma`).
     trailing : bool array
         The edge is a trailing edge (one exposure after its flash).
+    toward_cut_rows : float array
+        How far a lone edge may lie from where its flash puts it, readout rows towards the
+        frame's cut that hides its band's other edge (:func:`_toward_cut_rows`; 0 for others).
     """
 
     flash: np.ndarray
@@ -1887,6 +1890,7 @@ class Matches:
     t_frame_ms: np.ndarray
     edge_sigma: np.ndarray
     trailing: np.ndarray
+    toward_cut_rows: np.ndarray
 
     def __len__(self) -> int:
         return len(self.flash)
@@ -1997,16 +2001,24 @@ class _Attempt:
         """This attempt with what the residuals do not show added to every camera's
         covariance and exposure variance: the scatter of the solve with each flash left out
         (:func:`~flashsync.jackknife.flash_scatter`: the errors a flash brings to all its
-        edges) and what an error common to a camera's split bands moves
-        (:func:`~flashsync.jackknife.split_scatter`); what the tone curves may move its
+        edges), what an error common to a camera's split bands moves
+        (:func:`~flashsync.jackknife.split_scatter`) and what its lone edges' lying further
+        from the frame's cut than their flashes put them moves (:func:`_toward_cut_rows`,
+        :func:`~flashsync.jackknife.moved_scatter`); what the tone curves may move its
         times by (:meth:`tone_shift_std_ms`) in its shift's; and :data:`EXPOSURE_FLOOR_MS`, a
         share of the widening a tone curve would give its bands (:data:`TONE_WIDENING_SHARE`)
         and the camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
         scatter where a solve left an exposure unread)."""
         solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
+        toward_cut = np.zeros(len(self.observations.camera))
+        toward_cut[: len(self.matches)] = self.matches.toward_cut_rows  # the matched edges come first
         scatter = [
-            flashes + split
-            for flashes, split in zip(flash_scatter(*solve, self.priors), split_scatter(*solve, self.priors))
+            flashes + split + cut
+            for flashes, split, cut in zip(
+                flash_scatter(*solve, self.priors),
+                split_scatter(*solve, self.priors),
+                moved_scatter(*solve, self.priors, toward_cut),
+            )
         ]
         for name, extra in zip(self.connected, scatter):
             extra[1, 1] += self.tone_shift_std_ms(name) ** 2  # beta_ms: a shift of all its times
@@ -2945,6 +2957,18 @@ LONE_EDGE_SIGMA = 2.0
 #: read out in part of their frame (more lone edges, fewer flashes) it took the median camera
 #: 0.090 -> 0.102 ms off, 3 to 0.095 (README, "Lone edges weighed by their distance from the cut").
 LONE_CUT_SIGMA = 3.0
+#: A lone edge ``r`` rises of its ramp from the frame's cut that hides its band's other edge
+#: lies up to this share of its ramp's rise, times ``min(1, r ** -LONE_RISE_POWER)``, further
+#: from the cut than its flash puts it (the cut hides the ramp's far foot; the decay tail of
+#: a flash that fired before the frame's first row, read as the ramp of a band whose leading
+#: edge the cut hid, puts its trailing edge tens of rows late). Against the truth over the
+#: 1188 lone edges of thirteen benches (2026-12-05, forty-ninth stop) such edges lie further
+#: from the cut by 0.3 of a rise (median) within one and a half rises of it, 0.06-0.16 within
+#: three, 0.04 beyond, and spread 0.36-0.62 of a rise (MAD) within two, 0.13-0.15 within
+#: three, 0.07-0.10 beyond; ``LONE_CUT_SIGMA`` weighs them, this share widens the sigma by
+#: what it may move (:func:`_toward_cut_rows`, README "Lone edges' error the weights miss").
+LONE_RISE_SHARE = 0.6
+LONE_RISE_POWER = 1.25
 
 
 def _edge_sigma(detection: CameraDetection, events: Events) -> np.ndarray:
@@ -2978,6 +3002,18 @@ def _rows_to_cut(detection: CameraDetection, events: Events) -> np.ndarray:
     lone_trailing = (events.edge == Edge.TRAILING) & events.has_flag(Flag.LEADING_HIDDEN)
     lone_leading = (events.edge == Edge.LEADING) & events.has_flag(Flag.TRAILING_HIDDEN)
     return np.where(lone_trailing, q, np.where(lone_leading, detection.height - 1 - q, np.nan))
+
+
+def _toward_cut_rows(detection: CameraDetection, events: Events) -> np.ndarray:
+    """How far each lone edge may lie from where its flash puts it, away from the frame's cut
+    that hides its band's other edge: readout rows towards that cut (a lone trailing edge's
+    negative, a lone leading edge's positive; :data:`LONE_RISE_SHARE`), 0 for the edges of
+    whole bands and of ramps of no known rise. Shape (n,)."""
+    to_cut = _rows_to_cut(detection, events)
+    rise = np.where(events.rise_rows > 0, events.rise_rows, np.nan)
+    rises = np.maximum(to_cut / rise, 1.0)
+    rows = np.nan_to_num(LONE_RISE_SHARE * rises**-LONE_RISE_POWER * rise)
+    return np.where(events.edge == Edge.TRAILING, -rows, rows)
 
 
 #: Noise of a band's length where the detector could not measure the ramp of one of its
@@ -3222,6 +3258,7 @@ def _matches(
     events = Events.concat(chosen)
     q = np.concatenate([_readout_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
     sigma = np.concatenate([_edge_sigma(detection, mine) for detection, mine in zip(cameras, chosen)])
+    toward_cut = np.concatenate([_toward_cut_rows(detection, mine) for detection, mine in zip(cameras, chosen)])
     camera_index = np.asarray(camera_index, dtype=np.int64)
     keep, flash = shared_flashes(camera_index, flash)
     return Matches(
@@ -3235,4 +3272,5 @@ def _matches(
         events.t_frame_ms[keep],
         sigma[keep],
         (events.edge == Edge.TRAILING)[keep],
+        toward_cut[keep],
     )

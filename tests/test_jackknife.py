@@ -168,3 +168,53 @@ def test_the_own_errors_of_a_cameras_few_split_bands_are_in_its_sigma(monkeypatc
         common.append(abs(error) / np.sqrt(variance + shared))
     assert np.sqrt(np.mean(np.square(common))) > 1.8 and np.sum(np.array(common) > 2.0) >= 6, np.sort(common)
     assert np.sqrt(np.mean(np.square(own))) < 1.2 and np.sum(np.array(own) > 2.0) <= 2, np.sort(own)
+
+
+def one_edge_rig(rng, late_rows: float) -> tuple[Observations, float, int]:
+    """Two cameras of 500 rows, 25 and 30 fps, 12 flashes, edges 0.005 ms noisy. Camera 0
+    (2 ms exposure) sees both edges of every band but the ninth flash's, of which it sees a
+    lone trailing edge ``late_rows`` late (its leading edge before the first row: a decay
+    tail read as a cut band's ramp); camera 1 (15 ms) sees lone trailing edges but a leading
+    edge of the ninth flash, which alone places its shift against its exposure. Also camera
+    1's true shift (ms) and the index of camera 0's late edge."""
+    tau = np.sort(rng.uniform(1_000.0, 20_000.0, 12))
+    clocks = [(1.0, 0.0, 0.0740, 40.0, 2.0), (1.0 + 12e-6, -31_234.5, 0.0620, 33.3, 15.0)]
+    rows = []  # camera, flash, t_frame, q, trailing, leading_of
+    for camera, (alpha, beta, row_time, period, exposure) in enumerate(clocks):
+        frame_times = (np.arange(0, 25_000, period) - beta) / alpha
+        start = {f: (k, q) for f, k, q in zip(*observe(tau, alpha, beta, row_time, frame_times, 500))}
+        end = {f: (k, q) for f, k, q in zip(*observe(tau + exposure, alpha, beta, row_time, frame_times, 500))}
+        for flash in range(len(tau)):
+            lone_trailing = (flash != 8) if camera == 1 else (flash == 8)
+            if not lone_trailing and flash in start:
+                rows.append((camera, flash, frame_times[start[flash][0]], start[flash][1], False, -1))
+            if flash in end and (lone_trailing or camera == 0):
+                late = late_rows if camera == 0 and flash == 8 else 0.0
+                paired = -1 if lone_trailing else len(rows) - 1
+                rows.append((camera, flash, frame_times[end[flash][0]], end[flash][1] + late, True, paired))
+    camera, flash, t_frame, q, trailing, leading_of = (np.array(column) for column in zip(*rows))
+    q = q + rng.normal(0.0, 0.005, len(q)) / np.where(camera == 0, 0.0740, 0.0620)
+    late_edge = int(np.flatnonzero((camera == 0) & (flash == 8) & trailing)[0])
+    return Observations(camera, flash, t_frame, q, None, trailing, leading_of), clocks[1][1], late_edge
+
+
+def test_an_error_of_an_edge_that_alone_places_a_camera_is_in_its_sigma_when_moved():
+    """A camera's shift that rests on one flash, whose time rests on one lone edge of
+    another camera, takes that edge's error whole: neither the residuals (all zero) nor the
+    flashes left out (without that flash its shift is not solved) show it, and 12 rows late
+    (0.89 ms) the shift is far outside its sigma. With that edge moved by as much as its ramp
+    may leave it (12 rows towards the cut) and solved again
+    (:func:`~flashsync.jackknife.moved_scatter`) the error is within its sigma; moving no edge
+    adds nothing."""
+    rng = np.random.default_rng(12)
+    observations, true_shift, late_edge = one_edge_rig(rng, 12.0)
+    priors = Priors({0: (0.0740, 0.026), 1: (0.0620, 0.022)}, None)
+    solution = solve_clocks(observations, 2, priors=priors)
+    error = solution.cameras[1].beta_ms - true_shift
+    variance = solution.cameras[1].covariance[1, 1] + flash_scatter(observations, 2, 0, solution, priors)[1][1, 1]
+    moves = np.zeros(len(observations.q))
+    moves[late_edge] = -12.0
+    moved = jackknife.moved_scatter(observations, 2, 0, solution, priors, moves)[1][1, 1]
+    assert abs(error) > 0.7 and abs(error) > 5.0 * np.sqrt(variance), (error, np.sqrt(variance))
+    assert abs(error) < 1.5 * np.sqrt(variance + moved), (error, np.sqrt(variance + moved))
+    assert not jackknife.moved_scatter(observations, 2, 0, solution, priors, 0.0 * moves)[1].any()

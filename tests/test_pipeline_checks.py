@@ -35,6 +35,7 @@ from flashsync.pipeline import (
     _pulse_lengths,
     _readout_doubts,
     _sync_events,
+    _toward_cut_rows,
     _unturned_exposures_ms,
     check_anchors,
     check_row_times,
@@ -221,6 +222,59 @@ def test_a_lone_edge_is_weighed_down_as_its_ramp_nears_the_cut(flipped):
     expected = [*near, *np.maximum(near, LONE_EDGE_SIGMA), 1.0, 1.0, 1.0]
     assert _lone_sigma(detection, events) == pytest.approx(expected)
     assert near[:3] == pytest.approx([LONE_CUT_SIGMA, LONE_CUT_SIGMA, LONE_CUT_SIGMA / 2])
+
+
+@pytest.mark.parametrize("flipped", [False, True])
+def test_a_lone_edge_may_lie_a_share_of_its_ramp_further_from_the_cut(flipped):
+    """A lone edge of a ramp 20 rows long may lie ``LONE_RISE_SHARE`` of the rise (12 rows)
+    further from the frame's cut than its flash puts it within a rise of the cut, less as the
+    cut moves away (``rises ** -LONE_RISE_POWER``: 5 rows two rises away, 2.1 four, 0.9
+    eight): readout rows towards the cut, a lone trailing edge's (its leading edge hidden
+    before the first row) negative, a lone leading edge's positive; 0 for the edges of a
+    whole band and of a ramp of no known rise. (Against the truth such edges lie 0.3 of a
+    rise further from the cut within one and a half rises of it, and spread 0.4-0.6.)"""
+    hidden = {Edge.LEADING: frozenset({Flag.TRAILING_HIDDEN}), Edge.TRAILING: frozenset({Flag.LEADING_HIDDEN})}
+    rises = np.array([0.5, 1.0, 2.0, 4.0, 8.0])  # from the cut, of a 20-row ramp
+    edges = [(Edge.LEADING, 179.0 - 20.0 * r, hidden[Edge.LEADING], 20.0) for r in rises]
+    edges += [(Edge.TRAILING, 20.0 * r, hidden[Edge.TRAILING], 20.0) for r in rises]
+    edges += [(Edge.LEADING, 60.0, frozenset(), 20.0), (Edge.TRAILING, 80.0, frozenset(), 20.0)]
+    edges += [(Edge.LEADING, 178.0, hidden[Edge.LEADING], math.nan)]
+    n = len(edges)
+    rows = [179.0 - q if flipped else q for _, q, _, _ in edges]
+    events = Events.from_columns(
+        ["cam"] * n, range(n), [3] * n, [120.0] * n, rows, [e[0] for e in edges], [Band.PULSE] * n,
+        [e[3] for e in edges], [0.5] * n, [50.0] * n, [e[2] for e in edges],
+    )  # fmt: skip
+    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, flipped=flipped)
+    away = np.array([12.0, 12.0, 5.05, 2.12, 0.89])
+    expected = [*away, *-away, 0.0, 0.0, 0.0]
+    assert _toward_cut_rows(detection, events) == pytest.approx(expected, abs=0.01)
+
+
+@pytest.mark.parametrize("seed, lone", [(1, 3), (0, 0)])
+def test_a_cameras_sigma_holds_what_the_reference_s_lone_edges_may_move(monkeypatch, seed, lone):
+    """Three synthetic cameras, 10 flashes; the reference's bands whose trailing edge falls
+    past its last row (three at seed 1, none at seed 0) have ramps 40 rows long: their
+    leading edges may lie up to 24 rows further from the cut (:func:`_toward_cut_rows`), and
+    what that moves the other cameras' clocks (the solve again with them so moved) is in
+    their sigma: cam1's shift's 0.43 -> 0.49 ms. Where the reference has no lone edge nothing
+    changes."""
+    events, truth, frame_times = synthetic_events(3, 10, seed=seed)
+    detections = synthetic_detections(events, truth, frame_times, seed=seed)
+    bands = detections[0].top_down
+    cut = bands.has_flag(Flag.TRAILING_HIDDEN)
+    assert cut.sum() == lone  # the premise
+    bands = replace(bands, rise_rows=np.where(cut, 40.0, bands.rise_rows))
+    detections[0] = replace(detections[0], top_down=bands, bottom_up=None)
+    shift_std = []
+    for share in (0.0, pipeline.LONE_RISE_SHARE):
+        monkeypatch.setattr(pipeline, "LONE_RISE_SHARE", share)
+        model, _ = synchronize(detections)
+        shift_std.append(np.sqrt(model.cameras["cam1"].covariance[1, 1]))
+    if lone:
+        assert shift_std[1] > 1.1 * shift_std[0], shift_std
+    else:
+        assert shift_std[1] == pytest.approx(shift_std[0], rel=1e-6)
 
 
 def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
