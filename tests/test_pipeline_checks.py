@@ -198,18 +198,15 @@ def test_a_faint_bands_edges_weigh_less_than_a_bright_ones():
     assert sigma[1] > 3.0 and 0.7 < sigma[2] < 0.75
 
 
-@pytest.mark.parametrize("flipped", [False, True])
-def test_a_lone_edge_is_weighed_down_as_its_ramp_nears_the_cut(flipped):
-    """A lone edge (its band's other edge hidden beyond the first or last readout row) is
-    noisier the fewer rises of its ramp lie between it and that row: ``LONE_CUT_SIGMA /
-    sqrt(rises)``, between 1 and ``LONE_CUT_SIGMA`` (within two rises of the cut such edges
-    spread 1.4 rows against the truth, beyond sixteen 0.33-0.47); a lone trailing edge at
-    least ``LONE_EDGE_SIGMA``; an edge of a whole band, or of a ramp of no known rise, 1."""
+def lone_edges(rises: np.ndarray, rise_rows: float, flipped: bool) -> tuple[CameraDetection, Events]:
+    """A camera of 180 rows (read bottom-up where ``flipped``) and its edges: lone leading
+    edges (trailing edge hidden past the last readout row) ``rises`` ramps of ``rise_rows``
+    from that row, lone trailing edges as far from the first, both edges of a whole band, and
+    a lone leading edge of no known rise."""
     hidden = {Edge.LEADING: frozenset({Flag.TRAILING_HIDDEN}), Edge.TRAILING: frozenset({Flag.LEADING_HIDDEN})}
-    rises = np.array([0.5, 1.0, 4.0, 9.0, 25.0])  # from the cut, of a 4-row ramp
-    edges = [(Edge.LEADING, 179.0 - 4.0 * r, hidden[Edge.LEADING], 4.0) for r in rises]
-    edges += [(Edge.TRAILING, 4.0 * r, hidden[Edge.TRAILING], 4.0) for r in rises]
-    edges += [(Edge.LEADING, 60.0, frozenset(), 4.0), (Edge.TRAILING, 80.0, frozenset(), 4.0)]
+    edges = [(Edge.LEADING, 179.0 - rise_rows * r, hidden[Edge.LEADING], rise_rows) for r in rises]
+    edges += [(Edge.TRAILING, rise_rows * r, hidden[Edge.TRAILING], rise_rows) for r in rises]
+    edges += [(Edge.LEADING, 60.0, frozenset(), rise_rows), (Edge.TRAILING, 80.0, frozenset(), rise_rows)]
     edges += [(Edge.LEADING, 178.0, hidden[Edge.LEADING], math.nan)]
     n = len(edges)
     rows = [179.0 - q if flipped else q for _, q, _, _ in edges]
@@ -217,7 +214,18 @@ def test_a_lone_edge_is_weighed_down_as_its_ramp_nears_the_cut(flipped):
         ["cam"] * n, range(n), [3] * n, [120.0] * n, rows, [e[0] for e in edges], [Band.PULSE] * n,
         [e[3] for e in edges], [0.5] * n, [50.0] * n, [e[2] for e in edges],
     )  # fmt: skip
-    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, flipped=flipped)
+    return CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, flipped=flipped), events
+
+
+@pytest.mark.parametrize("flipped", [False, True])
+def test_a_lone_edge_is_weighed_down_as_its_ramp_nears_the_cut(flipped):
+    """A lone edge (its band's other edge hidden beyond the first or last readout row) is
+    noisier the fewer rises of its ramp lie between it and that row: ``LONE_CUT_SIGMA /
+    sqrt(rises)``, between 1 and ``LONE_CUT_SIGMA`` (within two rises of the cut such edges
+    spread 1.4 rows against the truth, beyond sixteen 0.33-0.47); a lone trailing edge at
+    least ``LONE_EDGE_SIGMA``; an edge of a whole band, or of a ramp of no known rise, 1."""
+    rises = np.array([0.5, 1.0, 4.0, 9.0, 25.0])  # from the cut, of a 4-row ramp
+    detection, events = lone_edges(rises, 4.0, flipped)
     near = np.clip(LONE_CUT_SIGMA / np.sqrt(np.maximum(rises, 1.0)), 1.0, LONE_CUT_SIGMA)
     expected = [*near, *np.maximum(near, LONE_EDGE_SIGMA), 1.0, 1.0, 1.0]
     assert _lone_sigma(detection, events) == pytest.approx(expected)
@@ -233,19 +241,7 @@ def test_a_lone_edge_may_lie_a_share_of_its_ramp_further_from_the_cut(flipped):
     before the first row) negative, a lone leading edge's positive; 0 for the edges of a
     whole band and of a ramp of no known rise. (Against the truth such edges lie 0.3 of a
     rise further from the cut within one and a half rises of it, and spread 0.4-0.6.)"""
-    hidden = {Edge.LEADING: frozenset({Flag.TRAILING_HIDDEN}), Edge.TRAILING: frozenset({Flag.LEADING_HIDDEN})}
-    rises = np.array([0.5, 1.0, 2.0, 4.0, 8.0])  # from the cut, of a 20-row ramp
-    edges = [(Edge.LEADING, 179.0 - 20.0 * r, hidden[Edge.LEADING], 20.0) for r in rises]
-    edges += [(Edge.TRAILING, 20.0 * r, hidden[Edge.TRAILING], 20.0) for r in rises]
-    edges += [(Edge.LEADING, 60.0, frozenset(), 20.0), (Edge.TRAILING, 80.0, frozenset(), 20.0)]
-    edges += [(Edge.LEADING, 178.0, hidden[Edge.LEADING], math.nan)]
-    n = len(edges)
-    rows = [179.0 - q if flipped else q for _, q, _, _ in edges]
-    events = Events.from_columns(
-        ["cam"] * n, range(n), [3] * n, [120.0] * n, rows, [e[0] for e in edges], [Band.PULSE] * n,
-        [e[3] for e in edges], [0.5] * n, [50.0] * n, [e[2] for e in edges],
-    )  # fmt: skip
-    detection = CameraDetection("cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, flipped=flipped)
+    detection, events = lone_edges(np.array([0.5, 1.0, 2.0, 4.0, 8.0]), 20.0, flipped)
     away = np.array([12.0, 12.0, 5.05, 2.12, 0.89])
     expected = [*away, *-away, 0.0, 0.0, 0.0]
     assert _toward_cut_rows(detection, events) == pytest.approx(expected, abs=0.01)
