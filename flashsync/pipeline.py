@@ -2963,10 +2963,11 @@ LONE_CUT_SIGMA = 3.0
 #: a flash that fired before the frame's first row, read as the ramp of a band whose leading
 #: edge the cut hid, puts its trailing edge tens of rows late). Against the truth over the
 #: 1188 lone edges of thirteen benches (2026-12-05, forty-ninth stop) such edges lie further
-#: from the cut by 0.3 of a rise (median) within one and a half rises of it, 0.06-0.16 within
-#: three, 0.04 beyond, and spread 0.36-0.62 of a rise (MAD) within two, 0.13-0.15 within
-#: three, 0.07-0.10 beyond; ``LONE_CUT_SIGMA`` weighs them, this share widens the sigma by
-#: what it may move (:func:`_toward_cut_rows`, README "Lone edges' error the weights miss").
+#: from the cut by 0.29-0.32 of a rise (median) within one and a half rises of it, 0.06-0.16
+#: within three, 0.04 within eight, and spread 0.45 of a rise (MAD) within one and a half,
+#: 0.13-0.34 within three, 0.07-0.08 within eight. ``LONE_CUT_SIGMA`` weighs them (weighed by
+#: this share they were lost to the solve's rejection); the sigma holds what this share moves
+#: (:func:`_toward_cut_rows`; README, "Lone edges' error the weights miss, in σ").
 LONE_RISE_SHARE = 0.6
 LONE_RISE_POWER = 1.25
 
