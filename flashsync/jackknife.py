@@ -130,17 +130,21 @@ def moved_scatter(
     ``solution`` was (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that
     many groups (the k-th in group k mod GROUPS), one solve each, a camera's change then
     holding its group's others' small share. Zero where nothing moves."""
-    solved = [_parameters(camera) for camera in solution.cameras]
-    scatter = [np.zeros((len(parameters),) * 2) for parameters in solved]
+    scatter = [np.zeros((len(camera.covariance) + 1,) * 2) for camera in solution.cameras]
     cameras = np.unique(events.camera[moves_rows != 0])
     groups = min(len(cameras), GROUPS)
     for moved in (np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
         shifted = replace(events, q=np.where(moved, events.q + moves_rows, events.q))
         trial = _solved_as(solution, shifted, n_cameras, reference, priors)
-        for c, camera in enumerate(trial.cameras):
-            change = np.nan_to_num(_parameters(camera) - solved[c])
-            scatter[c] += np.outer(change, change)
+        scatter = [total + change for total, change in zip(scatter, _changes(solution, trial))]
     return scatter
+
+
+def _changes(solution: Solution, trial: Solution) -> list[np.ndarray]:
+    """Per camera, the outer product of the change of its parameters (:func:`_parameters`)
+    from ``solution`` to ``trial`` (a change NaN on either side counts 0)."""
+    changes = [np.nan_to_num(_parameters(b) - _parameters(a)) for a, b in zip(solution.cameras, trial.cameras)]
+    return [np.outer(change, change) for change in changes]
 
 
 def _solved_as(solution: Solution, events: Observations, n_cameras: int, reference: int, priors: Priors) -> Solution:
