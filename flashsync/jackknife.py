@@ -140,6 +140,20 @@ def moved_scatter(
     return scatter
 
 
+def rival_scatter(
+    events: Observations, n_cameras: int, reference: int, solution: Solution, priors: Priors
+) -> list[np.ndarray]:
+    """Per camera, the outer product of the change of its clock's parameters and its exposure
+    (the layout of :func:`flash_scatter`) when ``events`` (the edges of ``solution`` matched
+    otherwise: another reading of which flash each saw) are solved as ``solution`` was; zero
+    where they cannot be solved."""
+    try:
+        trial = _solved_as(solution, events, n_cameras, reference, priors)
+    except NotEnoughDataError:
+        return [np.zeros((len(camera.covariance) + 1,) * 2) for camera in solution.cameras]
+    return _changes(solution, trial)
+
+
 def _changes(solution: Solution, trial: Solution) -> list[np.ndarray]:
     """Per camera, the outer product of the change of its parameters (:func:`_parameters`)
     from ``solution`` to ``trial`` (a change NaN on either side counts 0)."""

@@ -53,7 +53,7 @@ from flashsync.exposure_changes import (
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
-from flashsync.jackknife import flash_scatter, moved_scatter, split_scatter
+from flashsync.jackknife import flash_scatter, moved_scatter, rival_scatter, split_scatter
 from flashsync.likelihood import (
     SCORE_MIN_SIGMA_MS,
     HeldClock,
@@ -488,6 +488,7 @@ def _synchronized(
         + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms) | set(readout_exposures_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
+        + _apart_warnings(best)
     )
     report.flipped_found = [
         name for name in names if name in undecided + rolled and name in best.connected and best.cameras[name].flipped
@@ -2012,12 +2013,15 @@ class _Attempt:
         solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
         toward_cut = np.zeros(len(self.observations.camera))
         toward_cut[: len(self.matches)] = self.matches.toward_cut_rows  # the matched edges come first
+        apart = self.flashes_apart()
+        as_one = replace(self.observations, flash=_as_one(self.observations.flash, apart))
         scatter = [
-            flashes + split + cut
-            for flashes, split, cut in zip(
+            flashes + split + cut + one
+            for flashes, split, cut, one in zip(
                 flash_scatter(*solve, self.priors),
                 split_scatter(*solve, self.priors),
                 moved_scatter(*solve, self.priors, toward_cut),
+                rival_scatter(as_one, *solve[1:], self.priors) if apart else [0.0] * len(self.connected),
             )
         ]
         for name, extra in zip(self.connected, scatter):
@@ -2039,6 +2043,27 @@ class _Attempt:
             for name, camera, extra in zip(self.connected, self.solution.cameras, scatter)
         ]
         return replace(self, solution=replace(self.solution, cameras=cameras))
+
+    def flashes_apart(self) -> dict[int, int]:
+        """The solved flashes that may be one flash matched apart, by flash number: the
+        earlier flash each is one with. A flash closer than the matching can tell apart
+        (:func:`~flashsync.match.match_tolerance_ms`, readouts known) to the one before it,
+        which none of the cameras that saw it saw (nor those of the flashes already one with
+        that one), is one with it."""
+        flash_ms, observations = self.solution.flash_ms, self.observations
+        periods = [median_step_ms(self.cameras[name].frame_times_ms) for name in self.connected]
+        tolerance = match_tolerance_ms(periods, readout_known=True)
+        seen = {
+            int(f): set(observations.camera[observations.flash == f].tolist()) for f in np.unique(observations.flash)
+        }
+        order = sorted((f for f in seen if np.isfinite(flash_ms[f])), key=lambda f: flash_ms[f])
+        apart: dict[int, int] = {}
+        for before, after in zip(order, order[1:]):
+            first = apart.get(before, before)
+            if flash_ms[after] - flash_ms[before] < tolerance and not seen[first] & seen[after]:
+                apart[after] = first
+                seen[first] |= seen[after]
+        return apart
 
     def tone_shift_std_ms(self, name: str) -> float:
         """How far the tone curves may shift camera ``name``'s times against the reference's,
@@ -2080,6 +2105,29 @@ class _Attempt:
             display_rotation_deg=d.display_rotation_deg,
             exposure_std_ms=float(s.exposure_std_ms) if s.exposure_ms > 0 else None,
         )
+
+
+def _as_one(flash: np.ndarray, apart: dict[int, int]) -> np.ndarray:
+    """Flash numbers (n,) with those of :meth:`_Attempt.flashes_apart` made the earlier one's."""
+    return np.array([apart.get(f, f) for f in flash.tolist()], dtype=np.int64)
+
+
+def _apart_warnings(best: _Attempt) -> list[str]:
+    """A line for each camera of a flash that may be one with an earlier one
+    (:meth:`_Attempt.flashes_apart`): what the sigma took in, and how to decide."""
+    observations, flash_ms = best.observations, best.solution.flash_ms
+    lines = []
+    for after, before in best.flashes_apart().items():
+        theirs = [best.connected[c] for c in dict.fromkeys(observations.camera[observations.flash == before].tolist())]
+        for c in dict.fromkeys(observations.camera[observations.flash == after].tolist()):
+            lines.append(
+                f"{best.cameras[best.connected[c]].video}: its flash at {flash_ms[after]:.1f} ms lies "
+                f"{flash_ms[after] - flash_ms[before]:.1f} ms from one that {', '.join(theirs)} saw and it did not, "
+                "closer than the matching tells flashes apart: they may be one flash matched apart; what solving "
+                "them as one moves is in every camera's sigma; name one flash both saw (--anchor CAMERA:EVENT, the "
+                "events table) if so"
+            )
+    return lines
 
 
 def _tone_std_ms(detection: CameraDetection, row_time_ms: float) -> float:
