@@ -19,7 +19,9 @@ bands' own over the root of their number, which the jackknife sees only where se
 camera) and solves again. So, by :func:`moved_scatter`, does any error of known size and
 direction that a camera's edges may hold: a lone edge whose ramp the frame's cut hides lies
 further from the cut than its flash puts it, and where it alone places a flash that alone
-places a camera, neither the residuals nor the flashes left out can show it.
+places a camera, neither the residuals nor the flashes left out can show it. And
+:func:`rival_scatter` holds what another reading of which flash each edge saw moves (two
+solved flashes closer than the matching tells apart, solved as one).
 """
 
 from __future__ import annotations
