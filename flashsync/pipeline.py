@@ -2003,9 +2003,11 @@ class _Attempt:
         covariance and exposure variance: the scatter of the solve with each flash left out
         (:func:`~flashsync.jackknife.flash_scatter`: the errors a flash brings to all its
         edges), what an error common to a camera's split bands moves
-        (:func:`~flashsync.jackknife.split_scatter`) and what its lone edges' lying further
+        (:func:`~flashsync.jackknife.split_scatter`), what its lone edges' lying further
         from the frame's cut than their flashes put them moves (:func:`_toward_cut_rows`,
-        :func:`~flashsync.jackknife.moved_scatter`); what the tone curves may move its
+        :func:`~flashsync.jackknife.moved_scatter`) and what solving flashes that may be one
+        matched apart as one moves (:meth:`flashes_apart`,
+        :func:`~flashsync.jackknife.rival_scatter`); what the tone curves may move its
         times by (:meth:`tone_shift_std_ms`) in its shift's; and :data:`EXPOSURE_FLOOR_MS`, a
         share of the widening a tone curve would give its bands (:data:`TONE_WIDENING_SHARE`)
         and the camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
