@@ -43,6 +43,7 @@ from flashsync.pipeline import (
     row_time_prior_ms,
 )
 from flashsync.simulation.band_events import EXPOSURE_MS, synthetic_detections, synthetic_events
+from flashsync.solve import Priors
 
 
 @pytest.mark.parametrize(
@@ -101,9 +102,38 @@ def _reading(score: float, upside_down: bool) -> SimpleNamespace:
         implausible=[],
         cameras={name: SimpleNamespace(flipped=f, video=f"{name}.mp4") for name, f in flipped.items()},
         model=lambda reference: SimpleNamespace(cameras={"cam2": clock}),
+        freed_drift_cost=0.0,
     )
     reading.evidence = _Attempt.evidence.fget(reading)  # the score less the upside-down prior
     return reading
+
+
+@pytest.mark.parametrize(
+    "free, drift_ppm, wider, cost",
+    [
+        ((2,), -1500.0, {}, math.log1p(30.0**2)),  # AP1's rig-893 read as its mirror: cam3 freed at -1500 ppm
+        ((2,), 1000.0, {}, math.log1p(20.0**2)),  # stamps at a nominal rate: about as much in every reading
+        ((2,), -1500.0, {2: 500e-6}, math.log1p(3.0**2)),  # a frame clock whose rate is loose widens the prior
+        ((), -118.0, {}, 0.0),  # held by its prior: the solve's pull already counts
+    ],
+)
+def test_a_reading_whose_events_free_a_drift_pays_what_a_heavy_tailed_prior_says_of_it(free, drift_ppm, wider, cost):
+    """A reading of the rig that fits its edges only with a camera's drift freed from the prior
+    (events that contradict it) loses ``log(1 + (drift / std) ** 2)`` of its evidence, a
+    Cauchy prior's log-density as wide as the drift prior: AP1's rig-893 (three cameras at
+    25-30 fps, auto exposure) read as its mirror led the right reading by 6.6 with its cam3 at
+    -1500 ppm (every camera 18-31 ms off at error/σ 4-9); that costs it 6.8."""
+    attempt = SimpleNamespace(
+        score=50.0,
+        cameras={"cam1": SimpleNamespace(flipped=False)},
+        priors=Priors({}, wider_drift_std=wider),
+        solution=SimpleNamespace(
+            free_drift=free, cameras=[SimpleNamespace(alpha=1.0)] * 2 + [SimpleNamespace(alpha=1.0 + drift_ppm * 1e-6)]
+        ),
+    )
+    attempt.freed_drift_cost = _Attempt.freed_drift_cost.fget(attempt)
+    assert attempt.freed_drift_cost == pytest.approx(cost)
+    assert _Attempt.evidence.fget(attempt) == pytest.approx(50.0 - cost)
 
 
 @pytest.mark.parametrize("lead, warned", [(6.0, True), (8.0, False)])
