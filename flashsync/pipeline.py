@@ -1800,6 +1800,8 @@ def _readout_doubts(
             if chance
             else ""
         )
+        freed = other.freed_drift_cost - best.freed_drift_cost
+        few += f"; the other way pays {freed:.1f} for a clock drift it frees from the prior" if freed > 0 else ""
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
