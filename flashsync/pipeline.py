@@ -1801,12 +1801,12 @@ def _readout_doubts(
             else ""
         )
         freed = other.freed_drift_cost - best.freed_drift_cost
-        few += f"; the other way pays {freed:.1f} for a clock drift it frees from the prior" if freed > 0 else ""
+        drift = f"; the other way pays {freed:.1f} for a clock drift it frees from the prior" if freed > 0 else ""
         warnings.append(
             f"{best.cameras[name].video}: read {way}, but the flashes fit the other way about as well "
             f"(log-likelihood {-margin:+.1f} against this reading's; a choice needs a lead of "
-            f"{DECIDED_LOG_LIKELIHOOD:g}, {UPSIDE_DOWN_PRIOR:g} more per camera read upside down{few}); its times "
-            f"may be off by up to {float(spreads[name].max()):.2f} ms{exposure} "
+            f"{DECIDED_LOG_LIKELIHOOD:g}, {UPSIDE_DOWN_PRIOR:g} more per camera read upside down{few}{drift}); "
+            f"its times may be off by up to {float(spreads[name].max()):.2f} ms{exposure} "
             "(in its sigma); give its mounting (--flipped) if known"
         )
     return spreads, exposures_ms, warnings
