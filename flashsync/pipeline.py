@@ -2035,14 +2035,17 @@ class _Attempt:
         toward_cut = np.zeros(len(self.observations.camera))
         toward_cut[: len(self.matches)] = self.matches.toward_cut_rows  # the matched edges come first
         apart = self.flashes_apart()
-        as_one = replace(self.observations, flash=_as_one(self.observations.flash, apart))
         scatter = [
             flashes + split + cut + one
             for flashes, split, cut, one in zip(
                 flash_scatter(*solve, self.priors),
                 split_scatter(*solve, self.priors),
                 moved_scatter(*solve, self.priors, toward_cut),
-                rival_scatter(as_one, *solve[1:], self.priors) if apart else [0.0] * len(self.connected),
+                rival_scatter(
+                    replace(self.observations, flash=_as_one(self.observations.flash, apart)), *solve[1:], self.priors
+                )
+                if apart
+                else [0.0] * len(self.connected),
             )
         ]
         for name, extra in zip(self.connected, scatter):
