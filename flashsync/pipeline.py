@@ -2451,9 +2451,10 @@ def _shift_doubts(chosen: _Attempt, pairs: list[tuple[tuple[str, str], list[_Att
 #: flash's metering pre-flash and its flash (:func:`_burst_doubts`) ...
 BURST_GAP_MS = (10.0, 150.0)
 #: ... and a group of cameras is in doubt where its ties to the rest match the first of this
-#: many bursts at least, their gaps within this share of their median of each other (a
-#: false event next to a flash makes one); a burst ties cameras where its gap lies within
-#: that share of the rig's delay.
+#: many bursts at least (a false event next to a flash makes one), their gaps within this
+#: share of their median of each other, each band of the group's that lies that gap after a
+#: flash the others saw counting as one more (:func:`_displaced`: nothing fires then); a
+#: burst ties cameras where its gap lies within that share of the rig's delay.
 MIN_BURSTS = 2
 BURST_AGREE = 0.2
 
@@ -2499,7 +2500,13 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     other five to it; those six were 37-39 ms off at error/sigma 15-21 with no word, and the
     one camera warned was right. (Random rig 152 is that rig mirrored, its reference on the
     flashes' side and right: it has no such band.) Bursts are counted once each, however many
-    cameras match their first. A camera whose pair's other shift is its doubt already keeps
+    cameras match their first, and a group's bands a burst's gap after a flash the others saw
+    (not a burst's second) count as bursts: random rig 911 of a bench of TTL flashes, fast
+    readouts and auto exposure (``--preflash 30 --readout 0.5:0.9 --exposure-changes 0.5``)
+    had two cameras that saw one burst each, matched by it and their lone pre-flashes to the
+    others' flashes, 24-30 ms off with no word (error/sigma 28-29 with a codec-drawn edge of
+    the reference left out; 2.1 with it, every sigma 11 ms), each with a flash seen alone 30
+    ms after the others'. A camera whose pair's other shift is its doubt already keeps
     that one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
@@ -2528,7 +2535,7 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
         return {}, []
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
     seers = _pre_flash_seers(firsts, bursty)
-    misled = seers & _displaced(best, model, flashes, delay) if seers else set()
+    misled = seers & {name for name, _ in _displaced(best, model, flashes, delay)} if seers else set()
     trusted = {pair: shared for pair, shared in lone.items() if not pair & misled}
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
@@ -2541,25 +2548,33 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     others = {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}
     for group in sorted(others, key=lambda group: min(map(best.connected.index, group))):
         gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
-        if len(gaps) < MIN_BURSTS or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
+        if not gaps or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
             continue
         gap_ms, names = float(np.median(gaps)), ", ".join(sorted(group, key=best.connected.index))
+        after = {band for band in _displaced(best, model, flashes, gap_ms) if band[0] in group} - set(following)
+        if len(gaps) + len(after) < MIN_BURSTS:
+            continue
+        lie = "a band of its lies" if len(after) == 1 else f"{len(after)} of its bands lie"
+        displaced = f", and {lie} that long after a flash the others saw (nothing fires then)" if after else ""
         for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
             doubts[name] = gap_ms
             warnings.append(
                 f"{best.cameras[name].video}: the flashes that tie {names} to the rest of the rig match only the "
                 f"first of one camera's pairs of events {gap_ms:.0f} ms apart, each followed by one the other camera "
-                f"does not see (a TTL flash's pre-flash and its flash?); its times may be off by {gap_ms:.0f} ms (in "
-                "its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+                f"does not see (a TTL flash's pre-flash and its flash?){displaced}; its times may be off by "
+                f"{gap_ms:.0f} ms (in its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) "
+                "to decide"
             )
     return doubts, warnings
 
 
-def _displaced(best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]], delay_ms: float) -> set[str]:
-    """The cameras with a band matched to no flash (any band: rig-185's reference's was a
-    lone trailing edge of a long pulse, no sync event) that starts one pre-flash delay
+def _displaced(
+    best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]], delay_ms: float
+) -> set[tuple[str, int]]:
+    """The bands (camera, event number) matched to no flash (any band: rig-185's reference's
+    was a lone trailing edge of a long pulse, no sync event) that start one pre-flash delay
     (``delay_ms``, within :data:`BURST_AGREE` of it) after a flash other cameras were
-    matched at, by the solved clocks: nothing fires a delay after a flash, so that camera's
+    matched at, by the solved clocks: nothing fires a delay after a flash, so their camera's
     times are a delay off the others'."""
     matched = {(name, event) for seen in flashes.values() for name, event in seen.items()}
     starts = {}
@@ -2578,7 +2593,7 @@ def _displaced(best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, in
             if (name, event) not in matched and any(
                 name not in seen and abs(start - at - delay_ms) <= BURST_AGREE * delay_ms for seen, at in flash_starts
             ):
-                displaced.add(name)
+                displaced.add((name, event))
     return displaced
 
 
