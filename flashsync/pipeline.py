@@ -458,7 +458,8 @@ def _synchronized(
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     bound_ms = _pulse_bound_exposures_ms(best)
     unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped))
-    readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms)
+    told_ms, told_warnings = _exposures_bands_tell(best, set(longer) | set(stepped) | set(unturned_ms))
+    readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms, told_ms)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     for name in best.connected:
@@ -481,11 +482,12 @@ def _synchronized(
         + backward_warnings
         + pulse_warnings
         + unturned_warnings
+        + told_warnings
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms) | set(readout_exposures_ms))
+        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms) | set(told_ms) | set(readout_exposures_ms))
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
         + _apart_warnings(best)
@@ -701,6 +703,51 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
             "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
             "give it (restamp --exposure CAMERA=MS)"
         )
+    return spreads, warnings
+
+
+def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, float], list[str]]:
+    """Per camera but the ``told`` with a band read at its exposure under a longer pulse whose
+    flash the other cameras show shorter than that (:func:`_seen_shorter`) and shorter than
+    the camera's exposure: such a flash makes a band one exposure long, so that band's pulse is
+    the camera's exposure where it saw it (auto exposure), too few such bands to read the
+    camera the other way round (:func:`_exposures_the_others_tell`) and no band's length to
+    show the change (:mod:`~flashsync.exposure_changes`). How far the longest such pulse lies
+    beyond its solved exposure, ms (into the exposure's sigma, and half into its times'), and
+    a warning each. Random rig 914 of a bench of TTL flashes, fast readouts and auto exposure
+    (``bench_rigs.py --seeds 910:920 --preflash 30 --readout 0.5:0.9 --exposure-changes
+    0.5``): its cam5 (1.46 ms, 2.22 from frame 109) read as 0.56 ms under pulses of 1.5-2.2,
+    a 0.29 ms flash among them, its exposure frame by frame at error/sigma 42 with no word.
+    Where the others see the flash longer than the camera's exposure, the pulse is the
+    flash's, read long (a 24.7 ms pulse of a 2.5 ms flash on random rig 898 of a bench of
+    two flash powers and auto exposure, its exposure 0.51 ms all along)."""
+    matches = best.matches
+    pulse_of, ramp_read = _pulses_seen(best)
+    spreads, warnings = {}, []
+    for name, camera in zip(best.connected, best.solution.cameras):
+        others = matches.camera != name
+        longer = [
+            pulse
+            for flash, pulse in zip(matches.flash[matches.camera == name], pulse_of[matches.camera == name])
+            if name not in told
+            and pulse > camera.exposure_ms > 0
+            and _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
+            and np.median(pulse_of[(matches.flash == flash) & others & ramp_read]) < camera.exposure_ms
+        ]
+        if longer:
+            spreads[name] = max(longer) - camera.exposure_ms
+            lengths = ", ".join(f"{pulse:.2f}" for pulse in sorted(longer))
+            which = (
+                f"one of them ({lengths} ms) is of a flash"
+                if len(longer) == 1
+                else f"{len(longer)} of them ({lengths} ms) are of flashes"
+            )
+            warnings.append(
+                f"{best.cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer "
+                f"pulses, but {which} the other cameras saw shorter than that exposure: its exposure may have been "
+                "that long at those flashes (auto exposure?), in its sigma (half of it in its times'); set the "
+                "camera's shutter to one exposure to record with it, or give it (restamp --exposure CAMERA=MS)"
+            )
     return spreads, warnings
 
 

@@ -31,6 +31,7 @@ from flashsync.pipeline import (
     _Attempt,
     _edge_sigma,
     _exposure_rows,
+    _exposures_bands_tell,
     _exposures_the_others_tell,
     _lone_sigma,
     _pulse_lengths,
@@ -657,6 +658,25 @@ def test_a_camera_read_too_long_to_turn_keeps_its_reading_with_the_other_in_its_
     assert "may be 0.84 ms" in warnings[0] and "3.5 rows" in warnings[0]
     assert _unturned_exposures_ms(long_read, turned={"short"}) == ({}, [])
     assert _unturned_exposures_ms(_pulse_rig(), turned=set()) == ({}, [])
+
+
+def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pulse_in_its_sigma():
+    """A camera on auto exposure whose bands read as 0.3 ms (3 rows) under longer pulses, one
+    of them 1.2 ms of a flash the ramp-reading camera sees 0.05 ms long: a flash shorter than
+    the exposure makes a band one exposure long, so the camera's exposure was 1.2 ms there;
+    one band is too few to read the camera the other way round, so the 0.9 ms between the two
+    is its exposure's doubt, with a warning (random rig 914's cam5: 0.56 ms read, 1.46 and
+    2.22 true, at error/sigma 42 frame by frame). Not where the others see that flash longer
+    than the camera's exposure (0.5 ms: the pulse is the flash's, read long), nor for a
+    camera told already."""
+    auto = dict(rows=3.0, pulses=[1.2, 0.1, 0.2, 3.0], solved=0.3)
+    spreads, warnings = _exposures_bands_tell(_pulse_rig(auto=auto), told={"short"})
+    assert spreads == {"auto": pytest.approx(0.9)}, spreads
+    assert len(warnings) == 1 and warnings[0].startswith("auto.mp4: its bands read as a 0.30 ms exposure"), warnings
+    assert "one of them (1.20 ms) is of a flash the other cameras saw shorter" in warnings[0]
+    slow = dict(pulses=[0.5, 0.1, 0.08, np.nan])
+    assert _exposures_bands_tell(_pulse_rig(auto=auto, ramps=slow), told={"short"}) == ({}, [])
+    assert _exposures_bands_tell(_pulse_rig(auto=auto), told={"short", "auto"}) == ({}, [])
 
 
 def test_a_cameras_reference_share_is_the_references_rows_and_rate_then():
