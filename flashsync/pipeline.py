@@ -458,8 +458,7 @@ def _synchronized(
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     bound_ms = _pulse_bound_exposures_ms(best)
     unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped))
-    told_ms, told_warnings = _exposures_bands_tell(best, set(longer) | set(stepped) | set(unturned_ms))
-    readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms, told_ms)
+    readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
     for name in best.connected:
@@ -472,8 +471,11 @@ def _synchronized(
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
         best, {d.camera: d for d in detections}, stepped, solved_again
     )
+    told_ms, told_warnings = _exposures_bands_tell(best, {*longer, *stepped, *unturned_ms, *changes_ms})
+    for name, spread in told_ms.items():  # its times move by half its exposure's error
+        frame_std[name] = np.hypot(frame_std[name], spread / 2.0)
     rivals_ms = _rival_exposures_ms(best)
-    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms))
+    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms))
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -707,20 +709,22 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
 
 
 def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, float], list[str]]:
-    """Per camera but the ``told`` with a band read at its exposure under a longer pulse whose
-    flash the other cameras show shorter than that (:func:`_seen_shorter`) and shorter than
-    the camera's exposure: such a flash makes a band one exposure long, so that band's pulse is
-    the camera's exposure where it saw it (auto exposure), too few such bands to read the
-    camera the other way round (:func:`_exposures_the_others_tell`) and no band's length to
-    show the change (:mod:`~flashsync.exposure_changes`). How far the longest such pulse lies
-    beyond its solved exposure, ms (into the exposure's sigma, and half into its times'), and
-    a warning each. Random rig 914 of a bench of TTL flashes, fast readouts and auto exposure
-    (``bench_rigs.py --seeds 910:920 --preflash 30 --readout 0.5:0.9 --exposure-changes
-    0.5``): its cam5 (1.46 ms, 2.22 from frame 109) read as 0.56 ms under pulses of 1.5-2.2,
-    a 0.29 ms flash among them, its exposure frame by frame at error/sigma 42 with no word.
-    Where the others see the flash longer than the camera's exposure, the pulse is the
-    flash's, read long (a 24.7 ms pulse of a 2.5 ms flash on random rig 898 of a bench of
-    two flash powers and auto exposure, its exposure 0.51 ms all along)."""
+    """Per camera but the ``told`` with a band read at its exposure under a pulse
+    :data:`MIN_EXPOSURE_GAIN` times longer or more whose flash the other cameras show
+    shorter than that (:func:`_seen_shorter`) and shorter than the camera's exposure: such a
+    flash makes a band one exposure long, so that band's pulse is the camera's exposure
+    where it saw it (auto exposure), too few such bands to read the camera the other way
+    round (:func:`_exposures_the_others_tell`) and no band's length to show the change
+    (:mod:`~flashsync.exposure_changes`; the cameras whose changes were found are among the
+    ``told``). How far the longest such pulse lies beyond its solved exposure, ms (into the
+    exposure's sigma, and half into its own times'), and a warning each. Random rig 914 of a
+    bench of TTL flashes, fast readouts and auto exposure (``bench_rigs.py --seeds 910:920
+    --preflash 30 --readout 0.5:0.9 --exposure-changes 0.5``): its cam5 (1.46 ms, 2.22 from
+    frame 109) read as 0.56 ms under pulses of 1.5-2.2, a 0.29 ms flash among them, its
+    exposure frame by frame at error/sigma 42 with no word. Where the others see the flash
+    longer than the camera's exposure, the pulse is the flash's, read long (a 24.7 ms pulse
+    of a 2.5 ms flash on random rig 898 of a bench of two flash powers and auto exposure,
+    its exposure 0.51 ms all along)."""
     matches = best.matches
     pulse_of, ramp_read = _pulses_seen(best)
     spreads, warnings = {}, []
@@ -730,7 +734,7 @@ def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, flo
             pulse
             for flash, pulse in zip(matches.flash[matches.camera == name], pulse_of[matches.camera == name])
             if name not in told
-            and pulse > camera.exposure_ms > 0
+            and pulse >= MIN_EXPOSURE_GAIN * camera.exposure_ms > 0
             and _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
             and np.median(pulse_of[(matches.flash == flash) & others & ramp_read]) < camera.exposure_ms
         ]

@@ -667,8 +667,9 @@ def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pu
     one band is too few to read the camera the other way round, so the 0.9 ms between the two
     is its exposure's doubt, with a warning (random rig 914's cam5: 0.56 ms read, 1.46 and
     2.22 true, at error/sigma 42 frame by frame). Not where the others see that flash longer
-    than the camera's exposure (0.5 ms: the pulse is the flash's, read long), nor for a
-    camera told already."""
+    than the camera's exposure (0.5 ms: the pulse is the flash's, read long), nor where the
+    pulse is less than 1.5 times the exposure (0.4 ms: bands of a steady exposure come so
+    long), nor for a camera told already (turned, or its changes found)."""
     auto = dict(rows=3.0, pulses=[1.2, 0.1, 0.2, 3.0], solved=0.3)
     spreads, warnings = _exposures_bands_tell(_pulse_rig(auto=auto), told={"short"})
     assert spreads == {"auto": pytest.approx(0.9)}, spreads
@@ -676,6 +677,8 @@ def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pu
     assert "one of them (1.20 ms) is of a flash the other cameras saw shorter" in warnings[0]
     slow = dict(pulses=[0.5, 0.1, 0.08, np.nan])
     assert _exposures_bands_tell(_pulse_rig(auto=auto, ramps=slow), told={"short"}) == ({}, [])
+    steady = dict(auto=dict(auto, pulses=[0.4, 0.1, 0.2, 3.0]), short=dict(pulses=[np.nan, 0.83, 0.85, 3.0]))
+    assert _exposures_bands_tell(_pulse_rig(**steady), told={"short"}) == ({}, [])
     assert _exposures_bands_tell(_pulse_rig(auto=auto), told={"short", "auto"}) == ({}, [])
 
 
