@@ -708,47 +708,48 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
     return spreads, warnings
 
 
-#: Fewest other cameras that read a flash's pulse by their bands' ramps, none seeing it as long
-#: (:data:`PULSES_AGREE`), for one band of it to tell a camera's exposure
-#: (:func:`_exposures_bands_tell`): long exposures may take an LED's 1-2 ms ramps for blur
-#: and see it 0.05 ms long (random rig 4's cam4, whose reading alone named its cam5, 0.65 ms
-#: steady).
+#: Fewest other cameras that read the pulses by their bands' ramps, over all the flashes of a
+#: camera's bands that tell its exposure (:func:`_exposures_bands_tell`): long exposures may
+#: take an LED's 1-2 ms ramps for blur and see it 0.05 ms long (random rig 4's cam4, whose
+#: reading alone named its cam5, 0.65 ms steady).
 BAND_WITNESSES = 2
 
 
 def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, float], list[str]]:
     """Per camera but the ``told`` with a band read at its exposure under a pulse
-    :data:`MIN_EXPOSURE_GAIN` times longer or more whose flash :data:`BAND_WITNESSES` other
-    cameras or more show shorter than that (:func:`_seen_shorter`), none as long, and
-    shorter than the camera's exposure: such a flash makes a band one exposure long, so that
-    band's pulse is the camera's exposure where it saw it (auto exposure), too few such
-    bands to read the camera the other way round (:func:`_exposures_the_others_tell`) and no
-    band's length to show the change (:mod:`~flashsync.exposure_changes`; the cameras whose
-    changes were found are among the ``told``). How far the longest such pulse lies beyond
-    its solved exposure, ms (into the exposure's sigma, and half into its own times'), and a
-    warning each. Random rig 914 of a bench of TTL flashes, fast readouts and auto exposure
-    (``bench_rigs.py --seeds 910:920 --preflash 30 --readout 0.5:0.9 --exposure-changes
-    0.5``): its cam5 (1.46 ms, 2.22 from frame 109) read as 0.56 ms under pulses of 1.5-2.2,
-    a 0.29 ms flash among them, its exposure frame by frame at error/sigma 42 with no word.
-    Where the others see the flash longer than the camera's exposure, the pulse is the
-    flash's, read long (a 24.7 ms pulse of a 2.5 ms flash on random rig 898 of a bench of
-    two flash powers and auto exposure, its exposure 0.51 ms all along)."""
+    :data:`MIN_EXPOSURE_GAIN` times longer or more whose flash the other cameras show
+    shorter than that (:func:`_seen_shorter`), none as long, and shorter than the camera's
+    exposure, :data:`BAND_WITNESSES` of them or more over all such bands: such a flash makes
+    a band one exposure long, so that band's pulse is the camera's exposure where it saw it
+    (auto exposure), too few such bands to read the camera the other way round
+    (:func:`_exposures_the_others_tell`) and no band's length to show the change
+    (:mod:`~flashsync.exposure_changes`; the cameras whose changes were found are among the
+    ``told``). How far the longest such pulse lies beyond its solved exposure, ms (into the
+    exposure's sigma, and half into its own times'), and a warning each. Random rig 914 of a
+    bench of TTL flashes, fast readouts and auto exposure (``bench_rigs.py --seeds 910:920
+    --preflash 30 --readout 0.5:0.9 --exposure-changes 0.5``): its cam5 (1.46 ms, 2.22 from
+    frame 109) read as 0.56 ms under pulses of 1.5-2.2, a 0.29 ms flash among them, its
+    exposure frame by frame at error/sigma 42 with no word. Where the others see the flash
+    longer than the camera's exposure, the pulse is the flash's, read long (a 24.7 ms pulse
+    of a 2.5 ms flash on random rig 898 of a bench of two flash powers and auto exposure,
+    its exposure 0.51 ms all along)."""
     matches = best.matches
     pulse_of, ramp_read = _pulses_seen(best)
     spreads, warnings = {}, []
     for name, camera in zip(best.connected, best.solution.cameras):
         others = matches.camera != name
-        longer = [
-            pulse
+        shown = [
+            (pulse, flash)
             for flash, pulse in zip(matches.flash[matches.camera == name], pulse_of[matches.camera == name])
             if name not in told
             and pulse >= MIN_EXPOSURE_GAIN * camera.exposure_ms > 0
             and _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
             and not np.any((matches.flash == flash) & others & (pulse_of >= (1 - PULSES_AGREE) * pulse))
-            and np.count_nonzero((matches.flash == flash) & others & ramp_read) >= BAND_WITNESSES
             and np.median(pulse_of[(matches.flash == flash) & others & ramp_read]) < camera.exposure_ms
         ]
-        if longer:
+        witnesses = np.isin(matches.flash, [flash for _, flash in shown]) & others & ramp_read
+        longer = [pulse for pulse, _ in shown]
+        if len(np.unique(matches.camera[witnesses])) >= BAND_WITNESSES:
             spreads[name] = max(longer) - camera.exposure_ms
             lengths = ", ".join(f"{pulse:.2f}" for pulse in sorted(longer))
             which = (

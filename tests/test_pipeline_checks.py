@@ -665,7 +665,8 @@ def test_a_camera_read_too_long_to_turn_keeps_its_reading_with_the_other_in_its_
 
 def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pulse_in_its_sigma():
     """A camera on auto exposure whose bands read as 0.3 ms (3 rows) under longer pulses, one
-    of them 1.2 ms of a flash two ramp-reading cameras see 0.05-0.06 ms long: a flash shorter
+    of them 1.2 ms of a flash two ramp-reading cameras see 0.05-0.06 ms long (or two such
+    bands, 1.2 and 1.3 ms, each of a flash one of them sees so): a flash shorter
     than the exposure makes a band one exposure long, so the camera's exposure was 1.2 ms
     there; one band is too few to read the camera the other way round, so the 0.9 ms between
     the two is its exposure's doubt, with a warning (random rig 914's cam5: 0.56 ms read,
@@ -681,6 +682,11 @@ def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pu
     assert spreads == {"auto": pytest.approx(0.9)}, spreads
     assert len(warnings) == 1 and warnings[0].startswith("auto.mp4: its bands read as a 0.30 ms exposure"), warnings
     assert "one of them (1.20 ms) is of a flash the other cameras saw shorter" in warnings[0]
+    apart = dict(ramps=dict(pulses=[0.05, np.nan, 0.08, np.nan]), again=dict(pulses=[np.nan, 0.06, 0.07, np.nan]))
+    spreads, warnings = _exposures_bands_tell(
+        _pulse_rig(auto=dict(auto, pulses=[1.2, 1.3, 0.2, 3.0]), **apart), {"short"}
+    )
+    assert spreads == {"auto": pytest.approx(1.0)} and "2 of them (1.20, 1.30 ms) are of flashes" in warnings[0]
     as_long = dict(rows=3.0, solved=0.3, pulses=[1.1, 0.1, 0.1, np.nan])
     slow = dict(pulses=[0.5, 0.1, 0.08, np.nan])
     steady = dict(auto=dict(auto, pulses=[0.4, 0.1, 0.2, 3.0]), short=dict(pulses=[np.nan, 0.83, 0.85, 3.0]))
