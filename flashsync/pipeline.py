@@ -737,12 +737,13 @@ def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, flo
     pulse_of, ramp_read = _pulses_seen(best)
     spreads, warnings = {}, []
     for name, camera in zip(best.connected, best.solution.cameras):
+        if name in told:
+            continue
         others = matches.camera != name
         shown = [
             (pulse, flash)
             for flash, pulse in zip(matches.flash[matches.camera == name], pulse_of[matches.camera == name])
-            if name not in told
-            and pulse >= MIN_EXPOSURE_GAIN * camera.exposure_ms > 0
+            if pulse >= MIN_EXPOSURE_GAIN * camera.exposure_ms > 0
             and _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
             and not np.any((matches.flash == flash) & others & (pulse_of >= (1 - PULSES_AGREE) * pulse))
             and np.median(pulse_of[(matches.flash == flash) & others & ramp_read]) < camera.exposure_ms
@@ -2617,13 +2618,13 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
         if len(gaps) + len(after) < MIN_BURSTS:
             continue
         lie = "a band of its lies" if len(after) == 1 else f"{len(after)} of its bands lie"
-        displaced = f", and {lie} that long after a flash the others saw (nothing fires then)" if after else ""
+        late = f", and {lie} that long after a flash the others saw (nothing fires then)" if after else ""
         for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
             doubts[name] = gap_ms
             warnings.append(
                 f"{best.cameras[name].video}: the flashes that tie {names} to the rest of the rig match only the "
                 f"first of one camera's pairs of events {gap_ms:.0f} ms apart, each followed by one the other camera "
-                f"does not see (a TTL flash's pre-flash and its flash?){displaced}; its times may be off by "
+                f"does not see (a TTL flash's pre-flash and its flash?){late}; its times may be off by "
                 f"{gap_ms:.0f} ms (in its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) "
                 "to decide"
             )
