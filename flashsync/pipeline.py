@@ -742,9 +742,8 @@ def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, flo
         others = matches.camera != name
         shown = [
             (pulse, flash)
-            for flash, pulse in zip(matches.flash[matches.camera == name], pulse_of[matches.camera == name])
+            for flash, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)
             if pulse >= MIN_EXPOSURE_GAIN * camera.exposure_ms > 0
-            and _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
             and not np.any((matches.flash == flash) & others & (pulse_of >= (1 - PULSES_AGREE) * pulse))
             and np.median(pulse_of[(matches.flash == flash) & others & ramp_read]) < camera.exposure_ms
         ]
@@ -783,12 +782,7 @@ def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[st
             camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)
         ):
             continue
-        witnesses = matches.camera != name
-        longer = [
-            pulse
-            for flash, pulse in zip(matches.flash[mine], pulse_of[mine])
-            if _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, witnesses)
-        ]
+        longer = [pulse for _, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)]
         if len(longer) < MIN_PULSE_FLASHES:
             continue
         exposure_ms = float(np.median(longer))
@@ -796,6 +790,21 @@ def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[st
         if exposure_ms >= MIN_EXPOSURE_GAIN * camera.exposure_ms and spread_ms <= PULSES_AGREE * exposure_ms:
             told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
     return told
+
+
+def _flashes_seen_shorter(
+    matches: Matches, name: str, pulse_of: np.ndarray, ramp_read: np.ndarray
+) -> list[tuple[int, float]]:
+    """The flashes of camera ``name``'s matched sync events with a pulse (``pulse_of``, ms;
+    :func:`_pulses_seen` gives it and ``ramp_read``) that the other cameras show shorter
+    (:func:`_seen_shorter`), each with that pulse."""
+    mine = (matches.camera == name) & np.isfinite(pulse_of)
+    others = matches.camera != name
+    return [
+        (int(flash), float(pulse))
+        for flash, pulse in zip(matches.flash[mine], pulse_of[mine])
+        if _seen_shorter(matches.flash == flash, pulse, pulse_of, ramp_read, others)
+    ]
 
 
 def _seen_shorter(
