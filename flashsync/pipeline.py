@@ -1347,9 +1347,11 @@ def _exposure_changes(
     :func:`_change_by_all_bands`, else :func:`_change_by_left_out_edges`): a warning naming
     what its bands show; how far the farthest exposure lies from the one solved, ms (into its
     exposure's sigma); and what the bands show frame by frame (:func:`_shown_exposures`, for
-    :func:`_held_exposures`; empty where that is not known). Last, per other camera whose
-    bands' lengths scatter, that scatter about the solved exposure, ms, into its exposure's
-    sigma (:func:`~flashsync.exposure_changes.length_scatter_rows`)."""
+    :func:`_held_exposures`; empty where that is not known). Last, per camera whose bands
+    show no change, whose lengths scatter (a change its trailing edges left out show
+    explains none of that: MS9's rig-186 cam8, bands 19-156 rows long), that scatter about
+    the solved exposure, ms, into its exposure's sigma
+    (:func:`~flashsync.exposure_changes.length_scatter_rows`)."""
     warnings, changes_ms, shown, scatters_ms = [], {}, {}, {}
     for name, solution in zip(best.connected, best.solution.cameras):
         if not solution.exposure_ms > 0:
@@ -1360,11 +1362,10 @@ def _exposure_changes(
             change = _change_by_all_bands(detection, solution, change, name in solved_again)
         if change is None and name not in stepped:
             change = _change_by_left_out_edges(best, name, detection, solution)
-        if change is None:
-            solved_rows = solution.exposure_ms / solution.row_time_ms
-            scatter_rows = 0.0 if name in stepped else length_scatter_rows(detection, solved_rows)
+            scatter_rows = length_scatter_rows(detection, solution.exposure_ms / solution.row_time_ms)
             if scatter_rows > 0:
                 scatters_ms[name] = scatter_rows * solution.row_time_ms
+        if change is None:
             continue
         changes_ms[name], shown[name] = change.farthest_ms, change.shown
         warnings.append(
@@ -1536,8 +1537,16 @@ def _change_by_left_out_edges(
     exposure and a row at least): those frames held the solved exposure plus that median.
     Its other trailing edges and its bands as long as the solved exposure
     (:func:`_solved_length_frames`) hold that; none may lie among them. Without such a run,
-    one such edge a step late or early that the camera's lone leading edges bear out
-    (:func:`_borne_out_edge`) shows its own frame's exposure.
+    one such edge a step late or early before the first frame that held the solved exposure
+    or after the last shows its own frame's exposure: beyond them the model holds the middle
+    of the two, its sigma half their difference. An edge alone may not be a change: of the
+    51 such edges on seventeen benches (2026-12-06; the forty-eighth stop took one only
+    where lone leading edges bore it out, their bands ended out of sight where the solved
+    exposure would have ended them in sight), 27 lay where the exposure had changed (MT8's
+    rig-171 cam8, 12.78 ms then 21.27 from frame 167, one trailing edge 8.46 ms late at
+    frame 183: frame by frame 5.6 ms RMS off at error/sigma 60), 24 where it held (edges
+    read late on a pulse's tail, or matched to another flash): their frames' exposure then
+    0.52 -> 0.83 ms RMS off, within their sigma.
 
     A camera read fast (a readout much shorter than its frame period) shows few bands
     whole: random rig 116 of the mixed bench (``--readout 0.4:0.8 --flash-powers 0.5
@@ -1558,9 +1567,14 @@ def _change_by_left_out_edges(
         return None
     run = _agreeing_run(late_ms, left_out, floor_ms)
     if run is None:
-        run = _borne_out_edge(detection, solution, frames, late_ms, left_out & (np.abs(late_ms) >= floor_ms), held)
-    if run is None:
-        return None
+        stepped = np.flatnonzero(left_out & (np.abs(late_ms) >= floor_ms))
+        if (
+            len(stepped) != 1
+            or held[0] <= frames[stepped[0]] <= held[-1]
+            or solution.exposure_ms + late_ms[stepped[0]] <= 0
+        ):
+            return None
+        run = slice(stepped[0], stepped[0] + 1)
     first, last = int(frames[run.start]), int(frames[run.stop - 1])
     if np.any((held >= first) & (held <= last)):
         return None
@@ -1584,7 +1598,7 @@ def _left_out_part(shown: _ShownExposure) -> str:
     if not shown.solved and shown.n_bands == 1:
         return (
             f"{shown.exposure_ms:.2f} ms in frame {shown.first_frame} (one trailing edge the solve left out or did "
-            "not match, and lone leading edges whose bands would have ended in sight at the solved exposure)"
+            "not match: a change, or an edge read late or early)"
         )
     return (
         f"{shown.exposure_ms:.2f} ms over frames {shown.first_frame}-{shown.last_frame} ({shown.n_bands} "
@@ -1606,66 +1620,6 @@ def _solved_length_frames(detection: CameraDetection, solution: CameraSolution) 
     )
     frames = events.frame[np.concatenate([within.leading, split.leading])]
     return frames[np.abs(lengths_ms - solution.exposure_ms) <= MIN_STEP_SHARE * solution.exposure_ms]
-
-
-#: A band ends in sight (:func:`_borne_out_edge`) this share of its frame's rows or more
-#: inside the readout, where the detector would have found its trailing edge: on eleven
-#: benches the lone leading edges that bore out a trailing edge's change at a twentieth did
-#: so on five cameras, each of which had changed; at 15 % of the exposure (125 rows of MS9's
-#: rig-181 cam6, 10.46 ms then 15.45) one of them was missed.
-IN_SIGHT_SHARE = 0.05
-
-
-def _borne_out_edge(
-    detection: CameraDetection,
-    solution: CameraSolution,
-    frames: np.ndarray,
-    late_ms: np.ndarray,
-    stepped: np.ndarray,
-    held: np.ndarray,
-) -> slice | None:
-    """The camera's one trailing edge left out a step late or early (``stepped``, a mask of
-    ``frames`` and ``late_ms``, in frame order), as a slice, where its lone leading edges
-    bear out its exposure (the solved one plus its lateness, ms); None where more than one
-    edge is so or none bears it out. A lone leading edge bears it out where no frame that
-    held the solved exposure (``held``) lies between the two and its band, ended out of
-    sight, would have ended in sight at the solved exposure (:func:`_ends_in_sight`) but not
-    at the edge's; none does where a lone leading edge amid those frames would have too
-    (bands that end unseen for another reason). An edge alone is not taken for a change (of
-    70 such edges on eleven benches, 35 lay on cameras whose exposure held), but two signs of
-    one change are: MS9's rig-181 cam3 (15.76 ms, then 20.00 from frame 398, its bands whole
-    only after it) had one trailing edge 4.28 ms early at frame 79 and two lone leading
-    edges whose bands 20 ms long would have ended in sight; its exposure frame by frame was
-    3.46 ms RMS off at error/sigma 113."""
-    if stepped.sum() != 1:
-        return None
-    edge = int(np.flatnonzero(stepped)[0])
-    if solution.exposure_ms + late_ms[edge] <= 0:
-        return None
-    events, bands = detection.events, detection.events.bands()
-    lone = bands.leading[(bands.leading >= 0) & (bands.trailing < 0)]
-    lone = lone[events.band[lone] == Band.PULSE]
-    lead_frames, lead_rows = events.frame[lone], _readout_rows(detection, events)[lone]
-    period_rows = median_step_ms(detection.frame_times_ms) / solution.row_time_ms
-    solved_rows = solution.exposure_ms / solution.row_time_ms
-    edge_rows = (solution.exposure_ms + late_ms[edge]) / solution.row_time_ms
-    margin = IN_SIGHT_SHARE * detection.height
-    missing = _ends_in_sight(lead_rows + solved_rows, detection.height, period_rows, margin)
-    if np.any(missing & (lead_frames >= held[0]) & (lead_frames <= held[-1])):
-        return None
-    low, high = np.minimum(lead_frames, frames[edge]), np.maximum(lead_frames, frames[edge])
-    apart = np.any((low[:, None] < held[None, :]) & (held[None, :] < high[:, None]), axis=1)
-    bears_out = missing & ~apart & ~_ends_in_sight(lead_rows + edge_rows, detection.height, period_rows, 0.0)
-    return slice(edge, edge + 1) if bears_out.any() else None
-
-
-def _ends_in_sight(end_rows: np.ndarray, height: int, period_rows: float, margin: float) -> np.ndarray:
-    """Whether bands that end ``end_rows`` readout rows after their leading edge's frame began
-    (shape (n,)) end in sight, ``margin`` rows or more inside a frame's readout of ``height``
-    rows: in that frame or the next (``period_rows`` later)."""
-    inside = (end_rows >= margin) & (end_rows <= height - 1 - margin)
-    following = end_rows - period_rows
-    return inside | ((following >= margin) & (following <= height - 1 - margin))
 
 
 def _unmatched_lateness(
