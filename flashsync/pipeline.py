@@ -601,12 +601,21 @@ def _exposures_by_pulses(
     warnings, longer = [], {}
     for name, (exposure_ms, std_ms, n_flashes) in told.items():
         camera = best.solution.cameras[best.connected.index(name)]
-        longer[name] = ((exposure_ms - camera.exposure_ms) / camera.row_time_ms, std_ms)
+        frames, shorter_ms = _bands_shorter_than(cameras[name], exposure_ms, camera.row_time_ms)
+        spread_ms = exposure_ms - float(shorter_ms.min()) if len(frames) else 0.0
+        longer[name] = ((exposure_ms - camera.exposure_ms) / camera.row_time_ms, float(np.hypot(std_ms, spread_ms)))
         cameras[name] = cameras[name].with_longer_exposure(longer[name][0])
         warnings.append(
             f"{cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer pulses, but "
             f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: read the other way "
-            f"round, its exposure is {exposure_ms:.2f} ms; check it against the camera's shutter setting"
+            f"round, its exposure is {exposure_ms:.2f} ms"
+            + (
+                f"; but {len(frames)} of its bands (frames {frames.min()}-{frames.max()}) cannot be that long, the "
+                f"shortest {shorter_ms.min():.2f} ms at most (auto exposure?): in its sigma (half of it in its times')"
+                if len(frames)
+                else ""
+            )
+            + "; check it against the camera's shutter setting"
         )
     for name, n_flashes in stepped.items():
         camera = best.solution.cameras[best.connected.index(name)]
@@ -617,6 +626,31 @@ def _exposures_by_pulses(
             "other way round band by band, its pulses are its exposures, and its exposure changes (below)"
         )
     return attempt(cameras), warnings, longer, list(stepped)
+
+
+def _bands_shorter_than(
+    detection: CameraDetection, exposure_ms: float, row_time_ms: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The frames and the longest exposure (ms; shapes (n,)) of the camera's bands fitted whole
+    that cannot be ``exposure_ms`` long, a step (:data:`~flashsync.exposure_changes.MIN_STEP_SHARE`)
+    short of it: a band is its exposure convolved with its pulse, so its exposure and pulse
+    as read (:attr:`~flashsync.detect.CameraDetection.pulse_rows`) sum to the longest exposure
+    it allows, an exposure read longer takes that much off its pulse. Random rig 898 of a
+    bench of two flash powers and auto exposure (``bench_rigs.py --seeds 890:902
+    --flash-powers 0.5 --exposure-changes 0.5``): its cam2 (0.55 ms, then 0.29 from frame
+    99) read as 0.31 ms under longer pulses, two flashes it saw 0.55 ms long (frames 39 and
+    92) that the others saw shorter: read the other way round at 0.55 ms throughout, while
+    three bands of frames 150-211 (pulses of 0.03-0.22 ms) allow 0.33-0.52 ms at most; its
+    exposure frame by frame at error/sigma 7.2 with no word."""
+    pulses = detection.pulse_rows
+    if pulses is None or detection.exposure_rows is None:
+        return np.empty(0, np.int64), np.empty(0)
+    events = detection.events
+    leading = events.bands().leading
+    leading = leading[leading >= 0]
+    longest_ms = (detection.exposure_rows + pulses[events.event[leading]]) * row_time_ms
+    short = longest_ms < (1 - MIN_STEP_SHARE) * exposure_ms  # NaN pulses (no band fitted whole) compare False
+    return events.frame[leading[short]], longest_ms[short]
 
 
 def _pulse_bound_exposures_ms(best: _Attempt) -> dict[str, float]:
