@@ -637,11 +637,12 @@ def _bands_shorter_than(
     as read (:attr:`~flashsync.detect.CameraDetection.pulse_rows`) sum to the longest exposure
     it allows, an exposure read longer takes that much off its pulse. Random rig 898 of a
     bench of two flash powers and auto exposure (``bench_rigs.py --seeds 890:902
-    --flash-powers 0.5 --exposure-changes 0.5``): its cam2 (0.55 ms, then 0.29 from frame
-    99) read as 0.31 ms under longer pulses, two flashes it saw 0.55 ms long (frames 39 and
-    92) that the others saw shorter: read the other way round at 0.55 ms throughout, while
-    three bands of frames 150-211 (pulses of 0.03-0.22 ms) allow 0.33-0.52 ms at most; its
-    exposure frame by frame at error/sigma 7.2 with no word."""
+    --max-height 360 --duration-s 8 --exposure-changes 0.5 --flash-powers 0.5``): its cam2
+    (0.55 ms, then 0.29 from frame 99) read as 0.31 ms under longer pulses, three flashes it
+    saw 0.55 ms long that the others saw shorter: read the other way round at 0.55 ms
+    throughout, while its bands of frames 194 and 211 (pulses of 0.03 and 0.06 ms as read)
+    allow 0.33 and 0.36 ms at most; its exposure frame by frame at error/sigma 7.2 with no
+    word."""
     pulses = detection.pulse_rows
     if pulses is None or detection.exposure_rows is None:
         return np.empty(0, np.int64), np.empty(0)
