@@ -610,8 +610,8 @@ def _exposures_by_pulses(
             f"{n_flashes} flashes it saw {exposure_ms:.2f} ms long the other cameras saw shorter: read the other way "
             f"round, its exposure is {exposure_ms:.2f} ms"
             + (
-                f"; but {len(frames)} of its bands (frames {frames.min()}-{frames.max()}) cannot be that long, the "
-                f"shortest {shorter_ms.min():.2f} ms at most (auto exposure?): in its sigma (half of it in its times')"
+                f"; but {_bands_at(frames)} cannot be that long, the shortest {shorter_ms.min():.2f} ms at most "
+                "(auto exposure?): in its sigma (half of it in its times')"
                 if len(frames)
                 else ""
             )
@@ -626,6 +626,13 @@ def _exposures_by_pulses(
             "other way round band by band, its pulses are its exposures, and its exposure changes (below)"
         )
     return attempt(cameras), warnings, longer, list(stepped)
+
+
+def _bands_at(frames: np.ndarray) -> str:
+    """Bands at ``frames`` (decoded frames, shape (n,), n >= 1), as a warning names them."""
+    if len(frames) == 1:
+        return f"one of its bands (frame {frames[0]})"
+    return f"{len(frames)} of its bands (frames {frames.min()}-{frames.max()})"
 
 
 def _bands_shorter_than(

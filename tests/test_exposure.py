@@ -455,27 +455,27 @@ def test_a_camera_that_read_its_bands_the_other_way_round_is_read_by_the_flashes
 def test_bands_that_cannot_be_as_long_as_the_exposure_a_camera_is_read_at_the_other_way_round_are_in_its_sigma(
     read_otherwise,
 ):
-    """The same pair, cam1 read the other way round at 1.03 ms; two of its bands given pulses
-    of 0.1 rows as read at its 0.26 ms (auto exposure that shortened it there: a band is its
-    exposure convolved with its pulse, so those allow 0.27-0.28 ms at most, and the reading at
-    1.03 ms would give them pulses below zero). Its warning names them, its exposure's sigma
-    covers the 0.75 ms they may be short and its times' half of it (AP1's rig-898 cam2: 0.55
-    ms, then 0.29, read 0.55 throughout at error/sigma 7.2 frame by frame, no word); cam0's
-    untouched. Without them, the warning names none."""
+    """The same pair, cam1 read the other way round at 1.03 ms; two of its bands (the first
+    and the last) given pulses of 0.1 rows as read at its 0.26 ms (auto exposure that
+    shortened it there: a band is its exposure convolved with its pulse, so those allow
+    0.27-0.28 ms at most, and the reading at 1.03 ms would give them pulses below zero). Its
+    warning names them, its exposure's sigma covers the 0.75 ms they may be short and its
+    times' half of it (AP1's rig-898 cam2: 0.55 ms, then 0.29, read 0.55 throughout at
+    error/sigma 7.2 frame by frame, no word); cam0's untouched (one band in the warning is
+    "one of its bands (frame F)"). Without them, the warning names none. (Two side by side
+    would step, read band by band; three would read cam0 the other way round.)"""
     (detections, report, _, _), _ = read_otherwise
     cam1 = detections[1]
     pulses = cam1.pulse_rows.copy()
-    # the first band and the last: two side by side step (read band by band), three turn cam0
     short = np.flatnonzero(np.isfinite(pulses))[[0, -1]]
     pulses[short] = 0.1
     side = "bottom_up" if cam1.flipped else "top_down"
     model, shortened = synchronize([detections[0], replace(cam1, **{f"{side}_pulse_rows": pulses})])
     (warning,) = turned(shortened)
     frames = cam1.events.frame[np.isin(cam1.events.event, short)]
-    named = (
-        rf"but 2 of its bands \(frames {frames.min()}-{frames.max()}\) cannot be that long, the shortest (0\.2\d) ms"
-    )
-    spread_ms = 1.03 - float(re.search(named, warning).group(1))
+    said = f"but 2 of its bands (frames {frames.min()}-{frames.max()}) cannot be that long, the shortest "
+    assert said in warning, warning
+    spread_ms = 1.03 - float(re.search(re.escape(said) + r"(0\.2\d) ms", warning).group(1))
     assert "cannot be that long" not in turned(report)[0], report.warnings
     plain = synchronize(detections)[0].cameras
     widened = model.cameras
@@ -486,6 +486,7 @@ def test_bands_that_cannot_be_as_long_as_the_exposure_a_camera_is_read_at_the_ot
         np.hypot(np.median(plain["cam1"].frame_std_ms), spread_ms / 2.0), abs=0.03
     )
     assert widened["cam0"].exposure_std_ms == pytest.approx(plain["cam0"].exposure_std_ms)
+    assert pipeline._bands_at(frames[:1]) == f"one of its bands (frame {frames[0]})"
 
 
 def test_diagnose_measures_a_camera_read_the_other_way_round_as_sync_reads_it(read_otherwise):
