@@ -59,23 +59,21 @@ def flash_scatter(
     row to the prior where ``solution`` did not (:data:`PRIOR_BOUND_SHARE`); with fewer than
     two solves a camera's matrix is zero.
     """
-    flashes = np.unique(events.flash)
-    groups = min(len(flashes), GROUPS)
     solved = []
-    for group in range(groups):
-        left_out = np.isin(events.flash, flashes[group::groups])
+    for group in _in_groups(np.unique(events.flash)):
+        left_out = np.isin(events.flash, group)
         try:
             solved.append(_solved_as(solution, events.take(~left_out), n_cameras, reference, priors).cameras)
         except NotEnoughDataError:
             continue
     scatter = []
     for c, camera in enumerate(solution.cameras):
-        bound = PRIOR_BOUND_SHARE * priors.row_time[c][1] if c in priors.row_time else np.inf
+        bound = _prior_bound_ms(priors, c)
         informed = camera.row_time_std_ms <= bound
         kept = [_parameters(trial[c]) for trial in solved if not informed or trial[c].row_time_std_ms <= bound]
         count = len(kept)
         if count < 2:
-            scatter.append(np.zeros((len(camera.covariance) + 1,) * 2))
+            scatter.append(_none(camera))
             continue
         deviation = np.array(kept) - np.mean(kept, axis=0)
         scatter.append((count - 1) / count * deviation.T @ deviation)
@@ -132,10 +130,8 @@ def moved_scatter(
     ``solution`` was (:func:`_solved_as`). Past :data:`GROUPS` such cameras they move in that
     many groups (the k-th in group k mod GROUPS), one solve each, a camera's change then
     holding its group's others' small share. Zero where nothing moves."""
-    scatter = [np.zeros((len(camera.covariance) + 1,) * 2) for camera in solution.cameras]
-    cameras = np.unique(events.camera[moves_rows != 0])
-    groups = min(len(cameras), GROUPS)
-    for moved in (np.isin(events.camera, cameras[group::groups]) for group in range(groups)):
+    scatter = [_none(camera) for camera in solution.cameras]
+    for moved in (np.isin(events.camera, group) for group in _in_groups(np.unique(events.camera[moves_rows != 0]))):
         shifted = replace(events, q=np.where(moved, events.q + moves_rows, events.q))
         trial = _solved_as(solution, shifted, n_cameras, reference, priors)
         scatter = [total + change for total, change in zip(scatter, _changes(solution, trial))]
@@ -152,7 +148,7 @@ def rival_scatter(
     try:
         trial = _solved_as(solution, events, n_cameras, reference, priors)
     except NotEnoughDataError:
-        return [np.zeros((len(camera.covariance) + 1,) * 2) for camera in solution.cameras]
+        return [_none(camera) for camera in solution.cameras]
     return _changes(solution, trial)
 
 
@@ -161,6 +157,24 @@ def _changes(solution: Solution, trial: Solution) -> list[np.ndarray]:
     from ``solution`` to ``trial`` (a change NaN on either side counts 0)."""
     changes = [np.nan_to_num(_parameters(b) - _parameters(a)) for a, b in zip(solution.cameras, trial.cameras)]
     return [np.outer(change, change) for change in changes]
+
+
+def _none(camera: CameraSolution) -> np.ndarray:
+    """A camera's scatter where nothing moves it: zeros in the layout of :func:`flash_scatter`."""
+    return np.zeros((len(camera.covariance) + 1,) * 2)
+
+
+def _in_groups(indices: np.ndarray) -> list[np.ndarray]:
+    """Flash or camera ``indices`` (k,) in :data:`GROUPS` groups at most, the k-th in group
+    k mod GROUPS; one group each where they are fewer."""
+    groups = min(len(indices), GROUPS)
+    return [indices[group::groups] for group in range(groups)]
+
+
+def _prior_bound_ms(priors: Priors, camera: int) -> float:
+    """The standard deviation of a camera's time per row (ms) past which a solve has left it
+    to its prior (:data:`PRIOR_BOUND_SHARE` of the prior's); infinite without a prior."""
+    return PRIOR_BOUND_SHARE * priors.row_time[camera][1] if camera in priors.row_time else np.inf
 
 
 def _solved_as(solution: Solution, events: Observations, n_cameras: int, reference: int, priors: Priors) -> Solution:
