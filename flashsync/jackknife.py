@@ -22,6 +22,14 @@ further from the cut than its flash puts it, and where it alone places a flash t
 places a camera, neither the residuals nor the flashes left out can show it. And
 :func:`rival_scatter` holds what another reading of which flash each edge saw moves (two
 solved flashes closer than the matching tells apart, solved as one).
+
+Where one flash's split bands alone tie the times per row (cameras of one rate in one
+phase, as line-locked ones are), that flash left out leaves them to the prior and is not
+counted, and one camera's band read wrong (a decay tail read as the band) may decide all
+of them, the others' rejected. :func:`split_left_out_scatter` leaves each camera's split
+bands out in turn: where they move its time per row further than the noise and every other
+error allow, they disagree with the rest, which is right the solve cannot tell, and the
+change is in sigma.
 """
 
 from __future__ import annotations
@@ -117,6 +125,64 @@ def split_scatter(
     offset[cameras] = np.hypot(SPLIT_OFFSET_ROWS, SPLIT_BAND_ROWS / np.sqrt(counts))
     moves = np.where(lengths, offset[events.camera], 0.0)
     return moved_scatter(events, n_cameras, reference, solution, priors, moves)
+
+
+#: A camera's split bands left out (:func:`split_left_out_scatter`) disagree with the other
+#: edges where they move its time per row by more than this many of the change's sigmas (the
+#: solve's without them and the camera's own with every other error in it, in quadrature).
+#: On the eighteen cached benches at 3 only `line-locked`'s three cameras (RC11) count it,
+#: whose times per row were 1.2 % off at 4.5-4.7 sigma: one of the three bands its one split
+#: flash left decided them, the two others rejected.
+SPLIT_APART_SIGMAS = 3.0
+
+
+def split_left_out_scatter(
+    events: Observations,
+    n_cameras: int,
+    reference: int,
+    solution: Solution,
+    priors: Priors,
+    row_time_var: np.ndarray,
+) -> list[np.ndarray]:
+    """Per camera, the covariance that split bands which disagree with the other edges bring
+    to its clock's parameters and its exposure (the layout of :func:`flash_scatter`). Each
+    camera's split bands (both edges of those whose
+    both edges the solve pairs) are left out in turn (in :data:`GROUPS` groups of cameras at
+    most) and the joint solve re-run as ``solution`` was; where a left-out camera's time per
+    row moves by more than :data:`SPLIT_APART_SIGMAS` times the root of its variance in that
+    solve plus ``row_time_var`` (ms², shape (n_cameras,): each camera's with every other
+    error in it), the change of every camera's parameters squared is added. A solve that
+    leaves a camera's time per row to its prior (:data:`PRIOR_BOUND_SHARE`) does not count
+    for it. Zero where no camera's split bands disagree."""
+    scatter = [_none(camera) for camera in solution.cameras]
+    if events.split is None or events.leading_of is None:
+        return scatter
+    paired = events.split & (events.leading_of >= 0)
+    bands = paired.copy()
+    bands[events.leading_of[paired]] = True
+    for group in _in_groups(np.unique(events.camera[paired])):
+        try:
+            trial = _solved_as(
+                solution, events.take(~(bands & np.isin(events.camera, group))), n_cameras, reference, priors
+            )
+        except NotEnoughDataError:
+            continue
+        if any(
+            _apart(solution.cameras[c], trial.cameras[c], row_time_var[c], _prior_bound_ms(priors, c)) for c in group
+        ):
+            scatter = [total + change for total, change in zip(scatter, _changes(solution, trial))]
+    return scatter
+
+
+def _apart(camera: CameraSolution, trial: CameraSolution, row_time_var: float, bound_ms: float) -> bool:
+    """Whether a camera's time per row moved from ``camera`` to ``trial`` by more than
+    :data:`SPLIT_APART_SIGMAS` sigmas (the trial's variance plus ``row_time_var``, ms²), the
+    trial not leaving it to its prior where ``camera`` did not (``bound_ms``: the std past
+    which it does)."""
+    if camera.row_time_std_ms <= bound_ms < trial.row_time_std_ms:
+        return False
+    moved = abs(trial.row_time_ms - camera.row_time_ms)
+    return moved > SPLIT_APART_SIGMAS * np.sqrt(trial.covariance[2, 2] + row_time_var)
 
 
 def moved_scatter(

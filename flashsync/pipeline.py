@@ -53,7 +53,7 @@ from flashsync.exposure_changes import (
 from flashsync.flicker import Flicker
 from flashsync.frame_clock import FrameClock, fit_frame_clock
 from flashsync.io.timestamps import load_timestamps
-from flashsync.jackknife import flash_scatter, moved_scatter, rival_scatter, split_scatter
+from flashsync.jackknife import flash_scatter, moved_scatter, rival_scatter, split_left_out_scatter, split_scatter
 from flashsync.likelihood import (
     SCORE_MIN_SIGMA_MS,
     HeldClock,
@@ -2092,9 +2092,11 @@ class _Attempt:
         edges), what an error common to a camera's split bands moves
         (:func:`~flashsync.jackknife.split_scatter`), what its lone edges' lying further
         from the frame's cut than their flashes put them moves (:func:`_toward_cut_rows`,
-        :func:`~flashsync.jackknife.moved_scatter`) and what solving flashes that may be one
+        :func:`~flashsync.jackknife.moved_scatter`), what solving flashes that may be one
         matched apart as one moves (:meth:`flashes_apart`,
-        :func:`~flashsync.jackknife.rival_scatter`); what the tone curves may move its
+        :func:`~flashsync.jackknife.rival_scatter`) and what a camera's split bands left out
+        move where they disagree with the other edges
+        (:func:`~flashsync.jackknife.split_left_out_scatter`); what the tone curves may move its
         times by (:meth:`tone_shift_std_ms`) in its shift's; and :data:`EXPOSURE_FLOOR_MS`, a
         share of the widening a tone curve would give its bands (:data:`TONE_WIDENING_SHARE`)
         and the camera's ``exposure_spreads`` (ms, where given) in the exposure's (without the
@@ -2116,6 +2118,9 @@ class _Attempt:
                 else [0.0] * len(self.connected),
             )
         ]
+        row_time_var = [camera.covariance[2, 2] + extra[2, 2] for camera, extra in zip(self.solution.cameras, scatter)]
+        left_out = split_left_out_scatter(*solve, self.priors, np.array(row_time_var))
+        scatter = [extra + split_out for extra, split_out in zip(scatter, left_out)]
         for name, extra in zip(self.connected, scatter):
             extra[1, 1] += self.tone_shift_std_ms(name) ** 2  # beta_ms: a shift of all its times
         cameras = [

@@ -305,6 +305,29 @@ def test_a_cameras_sigma_holds_what_the_reference_s_lone_edges_may_move(monkeypa
         assert shift_std[1] == pytest.approx(shift_std[0], rel=1e-6)
 
 
+def test_what_split_bands_left_out_move_is_in_every_cameras_covariance(monkeypatch):
+    """The final solve's scatter holds what each camera's split bands left out move where
+    they disagree with the other edges (:func:`~flashsync.jackknife.split_left_out_scatter`),
+    weighed against every camera's time per row's variance with the other errors in it: a
+    change it reports lands in the model's covariance as it is."""
+    events, truth, frame_times = synthetic_events(3, 10, seed=0)
+    detections = synthetic_detections(events, truth, frame_times, seed=0)
+    before, _ = synchronize(detections)
+    seen = []
+
+    def disagreeing(events, n_cameras, reference, solution, priors, row_time_var):
+        seen.append(row_time_var)
+        return [np.diag([0.0, 0.01, 1e-6, *np.zeros(len(camera.warp_ms)), 0.0]) for camera in solution.cameras]
+
+    monkeypatch.setattr(pipeline, "split_left_out_scatter", disagreeing)
+    after, _ = synchronize(detections)
+    variance = sorted(camera.covariance[2, 2] for camera in before.cameras.values())  # with every other error
+    assert seen and sorted(seen[-1]) == pytest.approx(variance, rel=1e-6)
+    for name, camera in after.cameras.items():
+        added = camera.covariance[1:3, 1:3] - before.cameras[name].covariance[1:3, 1:3]
+        assert added == pytest.approx(np.diag([0.01, 1e-6]), abs=1e-9), name
+
+
 def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
     """Three cameras, 20 flashes, every other band faint (quality 400, the rest 4000): the
     solve gets each band's midpoint (its leading edge's row) and length (its trailing edge's)
