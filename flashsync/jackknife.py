@@ -146,14 +146,14 @@ def split_left_out_scatter(
 ) -> list[np.ndarray]:
     """Per camera, the covariance that split bands which disagree with the other edges bring
     to its clock's parameters and its exposure (the layout of :func:`flash_scatter`). Each
-    camera's split bands (both edges of those whose
-    both edges the solve pairs) are left out in turn (in :data:`GROUPS` groups of cameras at
-    most) and the joint solve re-run as ``solution`` was; where a left-out camera's time per
-    row moves by more than :data:`SPLIT_APART_SIGMAS` times the root of its variance in that
-    solve plus ``row_time_var`` (ms², shape (n_cameras,): each camera's with every other
-    error in it), the change of every camera's parameters squared is added. A solve that
-    leaves a camera's time per row to its prior (:data:`PRIOR_BOUND_SHARE`) does not count
-    for it. Zero where no camera's split bands disagree."""
+    camera's split bands (both edges of those whose both edges the solve pairs) are left out
+    in turn (in :data:`GROUPS` groups of cameras at most) and the joint solve re-run as
+    ``solution`` was; where a left-out camera's time per row moves by more than
+    :data:`SPLIT_APART_SIGMAS` times the root of its variance in that solve plus
+    ``row_time_var`` (ms², shape (n_cameras,): each camera's with every other error in it),
+    the change of every camera's parameters squared is added. A solve that leaves a camera's
+    time per row to its prior (:data:`PRIOR_BOUND_SHARE`) does not count for it. Zero where
+    no camera's split bands disagree."""
     scatter = [_none(camera) for camera in solution.cameras]
     if events.split is None or events.leading_of is None:
         return scatter
