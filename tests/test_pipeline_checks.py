@@ -28,12 +28,14 @@ from flashsync.pipeline import (
     EDGE_NOISE_QUALITY,
     LONE_CUT_SIGMA,
     LONE_EDGE_SIGMA,
+    MISREAD_DECAY_SHARE,
     _Attempt,
     _edge_sigma,
     _exposure_rows,
     _exposures_bands_tell,
     _exposures_the_others_tell,
     _lone_sigma,
+    _misread_decay_rows,
     _pulse_lengths,
     _readout_doubts,
     _sync_events,
@@ -43,7 +45,7 @@ from flashsync.pipeline import (
     check_row_times,
     row_time_prior_ms,
 )
-from flashsync.simulation.band_events import EXPOSURE_MS, synthetic_detections, synthetic_events
+from flashsync.simulation.band_events import EXPOSURE_MS, HEIGHT, synthetic_detections, synthetic_events
 from flashsync.solve import Priors
 
 
@@ -326,6 +328,71 @@ def test_what_split_bands_left_out_move_is_in_every_cameras_covariance(monkeypat
     for name, camera in after.cameras.items():
         added = camera.covariance[1:3, 1:3] - before.cameras[name].covariance[1:3, 1:3]
         assert added == pytest.approx(np.diag([0.01, 1e-6]), abs=1e-9), name
+
+
+def test_only_whole_bands_of_the_exposures_length_under_longer_pulses_move_with_a_misread_decay():
+    """A 10-row exposure: the edges of the bands 10 and 11.5 rows long under pulses of 15
+    and 12 rows may move :data:`MISREAD_DECAY_SHARE` of their pulse; not those of a band
+    under a shorter pulse, of one as long as its pulse (13 rows: a rectangle's, or an
+    exposure the camera changed to) nor a lone edge (its band not fitted whole); none
+    without a common exposure or pulses."""
+    lengths, pulses = [10.0, 11.5, 10.0, 13.0], [15.0, 12.0, 4.0, 16.0, np.nan]
+    n = 2 * len(lengths) + 1
+    rows = [*np.ravel([(40.0, 40.0 + length) for length in lengths]), 170.0]
+    events = Events.from_columns(
+        ["cam"] * n, [0, 0, 1, 1, 2, 2, 3, 3, 4], [3] * n, [120.0] * n, rows,
+        [Edge.LEADING, Edge.TRAILING] * len(lengths) + [Edge.LEADING], [Band.PULSE] * n, [1.0] * n, [0.5] * n,
+        [50.0] * n, [frozenset()] * (n - 1) + [frozenset({Flag.TRAILING_HIDDEN})],
+    )  # fmt: skip
+    detection = CameraDetection(
+        "cam", Path("cam.mp4"), 320, 180, np.arange(10) * 40.0, events, top_down_exposure_rows=10.0,
+        top_down_pulse_rows=np.array(pulses),
+    )  # fmt: skip
+    expected = MISREAD_DECAY_SHARE * np.array([15.0, 15.0, 12.0, 12.0, 0, 0, 0, 0, 0])
+    assert _misread_decay_rows(detection, events) == pytest.approx(expected)
+    for unknown in ({"top_down_exposure_rows": None}, {"top_down_pulse_rows": None}):
+        assert not _misread_decay_rows(replace(detection, **unknown), events).any()
+
+
+def test_an_error_common_to_a_cameras_long_pulses_is_in_sigma(monkeypatch):
+    """Two cameras, 24 flashes; camera 1's bands in its lower half saw pulses 1.5 exposures
+    long (the others 0.3), their decays read short so that both edges lie 0.1 of the pulse
+    early (RC12's rolling-flicker reference: 5.7-row exposure, 7-15-row decays read 2-36 %
+    short). Those edges move by :data:`MISREAD_DECAY_SHARE` of their pulse in the scatter
+    (both edges of each band, no other edge), and its time per row, 1.6 % off, is within
+    2 sigma (3.5 without)."""
+    events, truth, frame_times = synthetic_events(2, 24, seed=0)
+    detections = []
+    for c, detection in enumerate(synthetic_detections(events, truth, frame_times, seed=0)):
+        bands, exposure = detection.top_down, EXPOSURE_MS / truth[c][2]
+        pulses = np.full(bands.event.max() + 1, 0.3 * exposure)
+        if c == 1:
+            lower = np.unique(bands.event[(bands.edge == Edge.LEADING) & (bands.row > HEIGHT / 2)])
+            pulses[lower] = 1.5 * exposure
+            early = np.where(np.isin(bands.event, lower), 0.1 * pulses[bands.event], 0.0)
+            bands = replace(bands, row=bands.row - early)
+        detections.append(
+            replace(
+                detection, top_down=bands, bottom_up=None, top_down_exposure_rows=exposure, top_down_pulse_rows=pulses
+            )
+        )
+    seen = []
+    moved_scatter = pipeline.moved_scatter
+    monkeypatch.setattr(pipeline, "moved_scatter", lambda *args: seen.append(args) or moved_scatter(*args))
+    model, _ = synchronize(detections)
+    observations, moves = seen[-1][0], seen[-1][-1]
+    long_pulse = 1.5 * EXPOSURE_MS / truth[1][2]
+    assert sorted(set(np.round(moves, 6))) == pytest.approx([0.0, MISREAD_DECAY_SHARE * long_pulse])
+    moved, trailing = moves != 0, observations.trailing
+    assert set(observations.camera[moved]) == {1}
+    assert np.all(moved[observations.leading_of[moved & trailing]])
+    assert np.count_nonzero(moved & trailing) == np.count_nonzero(moved & ~trailing) >= 4
+    error = model.cameras["cam1"].row_time_ms - truth[1][2]
+    assert abs(error) / truth[1][2] > 0.01
+    assert abs(error) < 2 * np.sqrt(model.cameras["cam1"].covariance[2, 2])
+    monkeypatch.setattr(pipeline, "MISREAD_DECAY_SHARE", 0.0)
+    before, _ = synchronize(detections)
+    assert abs(before.cameras["cam1"].row_time_ms - truth[1][2]) > 3 * np.sqrt(before.cameras["cam1"].covariance[2, 2])
 
 
 def test_both_equations_of_a_faint_band_are_weighed_by_its_quality(monkeypatch):
