@@ -485,7 +485,8 @@ def test_bands_that_cannot_be_as_long_as_the_exposure_a_camera_is_read_at_the_ot
     assert np.median(widened["cam1"].frame_std_ms) == pytest.approx(
         np.hypot(np.median(plain["cam1"].frame_std_ms), spread_ms / 2.0), abs=0.03
     )
-    assert widened["cam0"].exposure_std_ms == pytest.approx(plain["cam0"].exposure_std_ms)
+    # untouched by the spread (cam1's pulses changed move what its long pulses' scatter gives cam0 by 1e-7 ms)
+    assert widened["cam0"].exposure_std_ms == pytest.approx(plain["cam0"].exposure_std_ms, rel=1e-4)
     assert pipeline._bands_at(frames[:1]) == f"one of its bands (frame {frames[0]})"
 
 
