@@ -292,7 +292,7 @@ def _solve(system: _System, n_cameras: int, reject_sigma: float, cauchy_k: float
     sigma = mad_sigma(residual, MIN_SCALE_MS)
     floor = _edge_floor_ms(system, x, n_cameras)[system.camera]
     inlier = np.abs(residual) <= reject_sigma * np.maximum(sigma, floor)
-    idle = IDLE_WEIGHT * (system.trailing & _all_rejected(system.group, inlier))
+    idle = IDLE_WEIGHT * _all_rejected(system.group, inlier)
     weights = inlier + idle
     x = system.solve(weights)
     scale = np.full(system.n_equations, np.nan)
@@ -349,7 +349,9 @@ def _all_rejected(group: np.ndarray, inlier: np.ndarray) -> np.ndarray:
     """The equations of groups (shape (n,) each) none of whose equations is an inlier. A
     camera's trailing edges all rejected would leave its exposure unknown undetermined and
     fail the whole solve (rig-5 read the right way up: one camera's band lengths off by
-    0.2-7 ms); they stay in the fit with :data:`IDLE_WEIGHT`, not as inliers."""
+    0.2-7 ms), its leading edges and band midpoints all rejected its shift (MS11's rig-990:
+    a fast-readout camera's three midpoints 0.08-0.97 ms off, nine cameras unsolved); they
+    stay in the fit with :data:`IDLE_WEIGHT`, not as inliers."""
     kept = np.bincount(group, inlier, minlength=group.max() + 1 if group.size else 0) > 0
     return ~kept[group]
 

@@ -181,6 +181,33 @@ def test_an_edge_matched_to_the_neighbouring_flash_neither_fails_nor_moves_the_s
     assert robust.cameras[1].row_time_ms == pytest.approx(row_time[1], rel=0.02)
 
 
+def test_a_camera_whose_every_band_midpoint_is_rejected_neither_fails_nor_moves_the_solve():
+    """Three cameras, 40 flashes, bands with both edges; camera 2 saw two flashes seconds
+    apart, its time per row known (a datasheet's), their midpoints 1 ms early and 1 ms late
+    (a wrong match, a misread edge). The robust solve puts its shift between them and
+    rejects both: with none of its midpoints left its shift was undetermined and the whole
+    solve failed ("cannot separate"; MS11's rig-990, nine cameras, a fast-readout camera's
+    three midpoints rejected). They stay in the fit at ``IDLE_WEIGHT``: the other cameras
+    are solved as without them, camera 2's shift is left loose."""
+    (camera, flash, t_frame, q), _ = observations(np.random.default_rng(0), n_flashes=40, noise_ms=0.002)
+    keep = (camera != 2) | np.isin(np.arange(len(camera)), np.flatnonzero(camera == 2)[[5, 6]])
+    camera, flash, t_frame, q = camera[keep], flash[keep], t_frame[keep], q[keep]
+    row_time = np.array([c[2] for c in CAMERAS])
+    lone = np.flatnonzero(camera == 2)
+    q = q.copy()
+    q[lone] += np.array([-1.0, 1.0]) / row_time[2]
+    n = len(camera)
+    bands = Observations(
+        np.tile(camera, 2), np.tile(flash, 2), np.tile(t_frame, 2), np.concatenate([q, q + 1.0 / row_time[camera]]),
+        trailing=np.repeat([False, True], n), leading_of=np.concatenate([np.full(n, -1), np.arange(n)]),
+    )  # fmt: skip
+    priors = Priors({c: (row_time[c], 0.001 * row_time[c]) for c in range(3)})
+    solution = solve_clocks(bands, n_cameras=3, priors=priors)
+    assert not solution.inlier[lone].any()
+    assert solution.cameras[1].beta_ms == pytest.approx(CAMERAS[1][1], abs=0.005)
+    assert np.sqrt(solution.cameras[2].covariance[1, 1]) > 10.0
+
+
 def test_an_edge_within_five_edge_floors_of_the_fit_is_never_rejected():
     """A few flashes, every edge exact but three half a row off (edges are located to 0.1-0.16
     rows, the floor 0.15): the residuals' MAD is then a few microseconds and 5 MADs rejected
