@@ -3286,11 +3286,11 @@ def _within_one_frame(events: Events, bands: Bands) -> tuple[Bands, np.ndarray]:
 #: (:func:`_misread_decay_rows`). Where the pulse is the longer, the band rises over the
 #: exposure and only its tail tells the decay, and the edges (the pulse's half-light) move
 #: with it. Against the truth over eighteen kept benches, the 148 cameras with bands of
-#: both kinds (whole, within one frame, shorter than :data:`OUTLASTED_SHARE` exposures) put
-#: their long pulses' leading edges from their short ones' by a robust 0.049 of the pulse
-#: (0.040 where two or more are long; README, "An error common to a camera's long pulses,
-#: in σ"). RC12's rolling-flicker reference, a 5.7-row exposure under 7-15-row decays read
-#: 2-36 % short, had 0.1: its time per row 0.74 % off at 4.6 sigma.
+#: both kinds (whole, within one frame, shorter than :data:`OUTLASTED_SHARE` exposures) have
+#: their long pulses' leading edges a robust 0.049 of the pulse off their short ones' (0.040
+#: where two or more are long; README, "An error common to a camera's long pulses, in σ").
+#: RC12's rolling-flicker reference, a 5.7-row exposure under 7-15-row decays read 2-36 %
+#: short, had 0.1: its time per row 0.74 % off at 4.6 sigma.
 MISREAD_DECAY_SHARE = 0.05
 
 
