@@ -2656,11 +2656,23 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
 def _displaced(
     best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]], delay_ms: float
 ) -> set[tuple[str, int]]:
-    """The bands (camera, event number) matched to no flash (any band: rig-185's reference's
-    was a lone trailing edge of a long pulse, no sync event) that start one pre-flash delay
-    (``delay_ms``, within :data:`BURST_AGREE` of it) after a flash other cameras were
-    matched at, by the solved clocks: nothing fires a delay after a flash, so their camera's
+    """The bands (camera, event number) matched to no flash that start one pre-flash delay
+    (``delay_ms``, within :data:`BURST_AGREE` of it) after a flash the others saw
+    (:func:`_gaps_after_flashes`): nothing fires a delay after a flash, so their camera's
     times are a delay off the others'."""
+    return {
+        (name, event)
+        for name, event, gap in _gaps_after_flashes(best, model, flashes)
+        if abs(gap - delay_ms) <= BURST_AGREE * delay_ms
+    }
+
+
+def _gaps_after_flashes(
+    best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]]
+) -> list[tuple[str, int, float]]:
+    """Per band matched to no flash (any band: rig-185's reference's was a lone trailing edge
+    of a long pulse, no sync event) and per flash other cameras were matched at: (camera,
+    event number, how long after the flash the band starts in ms, by the solved clocks)."""
     matched = {(name, event) for seen in flashes.values() for name, event in seen.items()}
     starts = {}
     for name in best.connected:
@@ -2672,14 +2684,14 @@ def _displaced(
         (set(seen), float(np.median([starts[name][event] for name, event in seen.items()])))
         for seen in flashes.values()
     ]
-    displaced = set()
-    for name, bands in starts.items():
-        for event, start in bands.items():
-            if (name, event) not in matched and any(
-                name not in seen and abs(start - at - delay_ms) <= BURST_AGREE * delay_ms for seen, at in flash_starts
-            ):
-                displaced.add((name, event))
-    return displaced
+    return [
+        (name, event, start - at)
+        for name, bands in starts.items()
+        for event, start in bands.items()
+        if (name, event) not in matched
+        for seen, at in flash_starts
+        if name not in seen
+    ]
 
 
 def _pre_flash_seers(firsts: dict[frozenset, dict], bursty: set[str]) -> set[str]:

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from test_pipeline_checks import clock_errors_ms
 
-from flashsync import detect_videos, synchronize
+from flashsync import detect_videos, pipeline, synchronize
 from flashsync.diagnose import diagnose
 from flashsync.diagnose.measure import measure
 from flashsync.errors import NotEnoughDataError
@@ -144,8 +144,6 @@ def test_an_undecided_pair_tied_by_a_pair_decided_after_it_is_left_out(monkeypat
     (tied through the second and cam2-cam3), not counted at its shift of most events with
     its other shift as a doubt (random rig 415 with pre-flashes: five cameras' sigma 60 ms
     so, 0.3 ms off). The solves and the fit's decisions are stand-ins here."""
-    from flashsync import pipeline
-    from flashsync.match import match_events
 
     rng = np.random.default_rng(5)
     flashes = np.cumsum(rng.uniform(400.0, 900.0, 13))
@@ -191,8 +189,6 @@ def test_a_left_out_pair_whose_events_the_solve_puts_apart_is_tried_alone(monkey
     cannot decide, the solve stands (no doubt: the shift of most events may be the
     pre-flash's). The solves, where they put a pair's events and the fit's decisions are
     stand-ins here."""
-    from flashsync import pipeline
-    from flashsync.match import match_events
 
     rng = np.random.default_rng(5)
     flashes = np.cumsum(rng.uniform(400.0, 900.0, 13))
