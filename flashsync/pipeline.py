@@ -2617,7 +2617,7 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
             elif not pair & bursty:
                 lone.setdefault(pair, set()).add(flash)
     if not firsts:
-        return {}, []
+        return _displaced_doubts(best, model, flashes, {})
     delay = np.median([gap for bursts in firsts.values() for gap in bursts.values()])
     seers = _pre_flash_seers(firsts, bursty)
     misled = seers & {name for name, _ in _displaced(best, model, flashes, delay)} if seers else set()
@@ -2650,7 +2650,74 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                 f"{gap_ms:.0f} ms (in its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) "
                 "to decide"
             )
+    more, also = _displaced_doubts(best, model, flashes, doubts)
+    return doubts | more, warnings + also
+
+
+def _displaced_doubts(
+    best: _Attempt, model: SyncModel, flashes: dict[int, dict[str, int]], doubted: dict[str, float]
+) -> tuple[dict[str, float], list[str]]:
+    """Per camera not ``doubted`` already (by :func:`_burst_doubts`) with :data:`MIN_BURSTS`
+    bands or more matched to no flash that start one gap (:data:`BURST_GAP_MS`, within
+    :data:`BURST_AGREE` of their median) after a flash the others saw and near none (a band
+    next to one may be that flash, unmatched: random rig 154's cam3, two flashes left
+    unmatched 44-47 ms after the pre-flashes the others saw and 3-5 ms from those flashes),
+    and per camera tied to the reference's only through it: how far (ms, the gaps' median;
+    into its sigma) and a warning line each. Nothing fires a pre-flash's delay after a
+    flash: such a camera saw pre-flashes whose flashes it missed and is tied by them alone,
+    one delay late, whether or not any camera's bursts show the delay. Random rig 182 of a
+    bench of TTL flashes, fast readouts, two powers and auto exposure (``--preflash 40
+    --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``): its cam8 saw three
+    pre-flashes and two flashes, shared the pre-flashes with cam11's flashes (at the true
+    shift it shares two flashes with three cameras) and was 38 ms off at error/sigma 4.2,
+    its two flashes placed 38 ms after the others'."""
+    low, high = BURST_GAP_MS
+    bands: dict[tuple[str, int], list[float]] = {}
+    for name, event, gap in _gaps_after_flashes(best, model, flashes):
+        bands.setdefault((name, event), []).append(gap)
+    gaps: dict[str, list[float]] = {}
+    for (name, _), apart in bands.items():
+        after = [gap for gap in apart if low <= gap <= high]
+        if after and min(map(abs, apart)) >= low:  # not a flash the others saw, unmatched
+            gaps.setdefault(name, []).append(min(after))
+    doubts, warnings = {}, []
+    for name, after in gaps.items():
+        delay = float(np.median(after))
+        count = int(np.sum(np.abs(np.array(after) - delay) <= BURST_AGREE * delay))
+        if name == best.reference or name in doubted or count < MIN_BURSTS:
+            continue
+        for other in (c for c in best.connected if c not in _tied_without(flashes, best.reference, name)):
+            if other in doubted or other in doubts or other in best.shift_spreads:
+                continue
+            doubts[other] = delay
+            whose, who = (
+                (f"{count} of its", "it") if other == name else (f"tied through {name}, {count} of whose", name)
+            )
+            warnings.append(
+                f"{best.cameras[other].video}: {whose} bands matched to no flash lie {delay:.0f} ms after a flash the "
+                f"others saw, where nothing fires: {who} may be tied by the pre-flashes of flashes it missed (a TTL "
+                f"flash's pre-flash fires a fixed delay before it); its times may be off by {delay:.0f} ms (in its "
+                "sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) to decide"
+            )
     return doubts, warnings
+
+
+def _tied_without(flashes: dict[int, dict[str, int]], reference: str, left_out: str) -> set[str]:
+    """The cameras tied to ``reference`` through pairs that share :data:`MIN_SHARED_FLASHES`
+    matched flashes or more (``flashes``: :func:`_matched_flashes`), camera ``left_out``'s
+    left out."""
+    shared: dict[frozenset, int] = {}
+    for seen in flashes.values():
+        for pair in combinations(sorted(set(seen) - {left_out}), 2):
+            shared[frozenset(pair)] = shared.get(frozenset(pair), 0) + 1
+    tied, grown = {reference}, True
+    while grown:
+        reached = {
+            name for pair, count in shared.items() if count >= MIN_SHARED_FLASHES and pair & tied for name in pair
+        }
+        grown = not reached <= tied
+        tied |= reached
+    return tied
 
 
 def _displaced(

@@ -507,3 +507,56 @@ def test_a_camera_tied_by_one_burst_whose_band_lies_a_delay_after_a_flash_is_in_
     assert np.sqrt(np.mean((error / sigma) ** 2)) < 1.5, (error, sigma)
     error, sigma = clock_errors_ms(model, truth, frame_times, 2)
     assert np.abs(error).max() < 0.1 and sigma.max() < 1.0, (error, sigma)
+
+
+def tied_by_pre_flashes_alone():
+    """Four synthetic cameras (1080 rows) and twelve TTL flashes, each with a pre-flash 40 ms
+    before it: cam0 (the reference) and cam2 see every flash; cam1 the pre-flashes of flashes
+    2-9, flashes 0 and 11 alone and three more flashes that only cam3 sees too. Returns the
+    events of each camera as :func:`seen_by` takes them, the truth and the frame times."""
+    events, truth, frame_times = synthetic_events(4, 12, seed=4)
+    instants = flash_instants_ms(events, truth)
+    theirs = instants[1] + np.array([5000.0, 12000.0, 21000.0])
+    cam1 = np.concatenate([instants[[0, 11]], instants[2:10] - 40.0, theirs])
+    return [instants, cam1, instants, theirs], truth, frame_times
+
+
+def test_a_camera_tied_by_pre_flashes_alone_whose_flashes_lie_a_delay_after_the_others_is_in_doubt():
+    """The rig of :func:`tied_by_pre_flashes_alone` (random rig 182 of a bench of TTL flashes,
+    fast readouts, two powers and auto exposure: its cam8, three pre-flashes and two flashes,
+    38 ms off at error/sigma 4.2 with no word). No camera sees a burst, so nothing shows the
+    rig's delay, and cam1 is matched by its pre-flashes to the others' flashes, 40 ms off:
+    eight events against two at the true shift. Its flashes 0 and 11 then lie 40 ms after
+    the others', where nothing fires: cam1 takes the 40 ms in its sigma, warned, and so does
+    cam3, tied to the rest through cam1; cam2 keeps its own."""
+    seen, truth, frame_times = tied_by_pre_flashes_alone()
+    model, report = synchronize([seen_by(f"cam{c}", s, truth[c], frame_times[c]) for c, s in enumerate(seen)])
+    (warning,) = [w for w in report.warnings if w.startswith("cam1.mp4: 2 of its bands matched to no flash lie 40 ms")]
+    assert "its times may be off by 40 ms" in warning
+    (warning,) = [w for w in report.warnings if w.startswith("cam3.mp4: tied through cam1, 2 of whose bands")]
+    assert "its times may be off by 40 ms" in warning
+    for c in (1, 3):
+        error, sigma = clock_errors_ms(model, truth, frame_times, c)
+        assert np.abs(error).mean() == pytest.approx(40.0, abs=1.0), error  # the premise: the pre-flashes' shift
+        assert np.sqrt(np.mean((error / sigma) ** 2)) < 1.5, (error, sigma)
+    error, sigma = clock_errors_ms(model, truth, frame_times, 2)
+    assert np.abs(error).max() < 0.1 and sigma.max() < 1.0, (error, sigma)
+    assert not [w for w in report.warnings if w.startswith(("cam0.mp4", "cam2.mp4")) and "nothing fires" in w]
+
+
+def test_bands_next_to_a_flash_the_others_saw_are_no_doubt_though_a_delay_after_another(monkeypatch):
+    """The rig of :func:`tied_by_pre_flashes_alone`, where the others also saw a flash 5 ms
+    before each of cam1's two bands that lie 40 ms after a flash of theirs (random rig 154
+    of a bench of TTL flashes: its cam3's flashes left unmatched 44-47 ms after the
+    pre-flashes the others saw, and 3-5 ms from those flashes): such a band may be that
+    flash, unmatched, so it tells no delay, and no doubt is raised."""
+    gaps_after_flashes = pipeline._gaps_after_flashes
+
+    def next_to_a_flash(best, model, flashes):
+        gaps = gaps_after_flashes(best, model, flashes)
+        return gaps + [(name, event, gap - 35.0) for name, event, gap in gaps if abs(gap - 40.0) < 1.0]
+
+    monkeypatch.setattr(pipeline, "_gaps_after_flashes", next_to_a_flash)
+    seen, truth, frame_times = tied_by_pre_flashes_alone()
+    _, report = synchronize([seen_by(f"cam{c}", s, truth[c], frame_times[c]) for c, s in enumerate(seen)])
+    assert not [w for w in report.warnings if "nothing fires" in w], report.warnings
