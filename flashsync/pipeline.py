@@ -2661,7 +2661,7 @@ def _displaced_doubts(
     bands or more matched to no flash that start one gap (:data:`BURST_GAP_MS`, within
     :data:`BURST_AGREE` of their median) after a flash the others saw and near none (a band
     next to one may be that flash, unmatched: random rig 154's cam3, two flashes left
-    unmatched 44-47 ms after the pre-flashes the others saw and 3-5 ms from those flashes),
+    unmatched 44-47 ms after the pre-flashes the others saw and 5 ms from those flashes),
     and per camera tied to the reference's only through it: how far (ms, the gaps' median;
     into its sigma) and a warning line each. Nothing fires a pre-flash's delay after a
     flash: such a camera saw pre-flashes whose flashes it missed and is tied by them alone,
@@ -2669,8 +2669,8 @@ def _displaced_doubts(
     bench of TTL flashes, fast readouts, two powers and auto exposure (``--preflash 40
     --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5``): its cam8 saw three
     pre-flashes and two flashes, shared the pre-flashes with cam11's flashes (at the true
-    shift it shares two flashes with three cameras) and was 38 ms off at error/sigma 4.2,
-    its two flashes placed 38 ms after the others'."""
+    shift its two flashes with three cameras, which tied it by none) and was 37 ms off at
+    error/sigma 4.2, its two flashes placed 40 ms after the others'."""
     low, high = BURST_GAP_MS
     bands: dict[tuple[str, int], list[float]] = {}
     for name, event, gap in _gaps_after_flashes(best, model, flashes):

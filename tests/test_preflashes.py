@@ -548,7 +548,7 @@ def test_bands_next_to_a_flash_the_others_saw_are_no_doubt_though_a_delay_after_
     """The rig of :func:`tied_by_pre_flashes_alone`, where the others also saw a flash 5 ms
     before each of cam1's two bands that lie 40 ms after a flash of theirs (random rig 154
     of a bench of TTL flashes: its cam3's flashes left unmatched 44-47 ms after the
-    pre-flashes the others saw, and 3-5 ms from those flashes): such a band may be that
+    pre-flashes the others saw, and 5 ms from those flashes): such a band may be that
     flash, unmatched, so it tells no delay, and no doubt is raised."""
     gaps_after_flashes = pipeline._gaps_after_flashes
 
