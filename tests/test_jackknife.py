@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from synthetic import observe
@@ -273,3 +275,33 @@ def test_an_error_of_an_edge_that_alone_places_a_camera_is_in_its_sigma_when_mov
     assert abs(error) > 0.7 and abs(error) > 5.0 * np.sqrt(variance), (error, np.sqrt(variance))
     assert abs(error) < 1.5 * np.sqrt(variance + moved), (error, np.sqrt(variance + moved))
     assert not jackknife.moved_scatter(observations, 2, 0, solution, priors, 0.0 * moves)[1].any()
+
+
+@pytest.mark.parametrize("late_rows", [12.0, 0.0])
+def test_a_split_band_that_alone_pins_the_times_per_row_is_in_sigma_as_far_off_as_its_noise_lets_it_be(late_rows):
+    """The line-locked rig of :func:`one_phase_rig` with only camera 0's band of the flash at
+    the frames' turn split (the others' trailing edges of it unseen): it alone ties the three
+    times per row, and left out it leaves them to the prior, so neither the flashes' scatter
+    nor the split bands left out count it. Its edges 3.4 times a clean edge's noise
+    (`line-locked` at recipe seed 15: its one split band, its leading edge in the last row,
+    read 12.5 rows long; its cameras 0.7 ms off at error/sigma 4.6-4.8). Read 12 rows long,
+    the times per row are off at over 4 sigmas without it; with what a band of that noise
+    may be off in the tail (:data:`~flashsync.jackknife.SPLIT_UNCHECKED_ROWS` each clean
+    edge's noise) within 2. Read right, within 2 as well."""
+    rng = np.random.default_rng(12)
+    priors = Priors({c: (0.0740, 0.026) for c in range(3)}, shared_readout=((0, 1, 2),))
+    observations, truth = one_phase_rig(rng, (late_rows, 0.0, 0.0))
+    observations = observations.take(~(observations.split & (observations.camera > 0)))
+    assert observations.split.sum() == 1  # the premise: one split band in the rig
+    noise = np.where(observations.split, 3.4, 1.0)
+    noise[observations.leading_of[observations.split]] = 3.4
+    observations = replace(observations, sigma_factor=noise)
+    solution = solve_clocks(observations, 3, priors=priors)
+    solve = (observations, 3, 0, solution, priors)
+    other = [a + b for a, b in zip(flash_scatter(*solve), jackknife.split_scatter(*solve))]
+    variance = np.array([camera.covariance[2, 2] + extra[2, 2] for camera, extra in zip(solution.cameras, other)])
+    left_out = np.array([extra[2, 2] for extra in jackknife.split_left_out_scatter(*solve, variance)])
+    error = np.array([camera.row_time_ms for camera in solution.cameras]) - truth
+    if late_rows:
+        assert np.abs(error / np.sqrt(variance)).max() > 4.0, (error, variance)
+    assert np.all(np.abs(error) < 2.0 * np.sqrt(variance + left_out)), (error, variance, left_out)
