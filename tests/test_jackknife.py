@@ -199,6 +199,18 @@ def one_phase_rig(rng, late_rows: tuple[float, float, float]) -> tuple[Observati
     return Observations(camera, flash, t_frame, q, None, trailing, leading_of, split), row_time
 
 
+def one_phase_row_times(observations: Observations, priors: Priors, truth: float) -> tuple[np.ndarray, ...]:
+    """The three cameras of :func:`one_phase_rig` solved: each one's time per row's error
+    (ms), its variance with the flashes' scatter and its split bands' common error in it
+    (ms²), and what :func:`~flashsync.jackknife.split_left_out_scatter` adds to it (ms²)."""
+    solution = solve_clocks(observations, 3, priors=priors)
+    solve = (observations, 3, 0, solution, priors)
+    other = [a + b for a, b in zip(flash_scatter(*solve), jackknife.split_scatter(*solve))]
+    variance = np.array([camera.covariance[2, 2] + extra[2, 2] for camera, extra in zip(solution.cameras, other)])
+    left_out = np.array([extra[2, 2] for extra in jackknife.split_left_out_scatter(*solve, variance)])
+    return np.array([camera.row_time_ms for camera in solution.cameras]) - truth, variance, left_out
+
+
 @pytest.mark.parametrize("late_rows", [(17.0, 0.0, 5.0), (0.0, 0.0, 0.0)])
 def test_split_bands_that_disagree_with_the_other_edges_are_in_sigma(late_rows):
     """The one split flash of three line-locked cameras (one rate, one phase) alone ties their
@@ -214,12 +226,7 @@ def test_split_bands_that_disagree_with_the_other_edges_are_in_sigma(late_rows):
     for _ in range(3):
         observations, truth = one_phase_rig(rng, late_rows)
         assert observations.split.sum() == 3  # the premise: one split band in each camera
-        solution = solve_clocks(observations, 3, priors=priors)
-        solve = (observations, 3, 0, solution, priors)
-        other = [a + b for a, b in zip(flash_scatter(*solve), jackknife.split_scatter(*solve))]
-        variance = np.array([camera.covariance[2, 2] + extra[2, 2] for camera, extra in zip(solution.cameras, other)])
-        left_out = np.array([extra[2, 2] for extra in jackknife.split_left_out_scatter(*solve, variance)])
-        error = np.array([camera.row_time_ms for camera in solution.cameras]) - truth
+        error, variance, left_out = one_phase_row_times(observations, priors, truth)
         if not any(late_rows):
             assert np.all(np.abs(error) < 2.0 * np.sqrt(variance)) and np.all(left_out == 0.0), (error, variance)
             continue
@@ -296,12 +303,7 @@ def test_a_split_band_that_alone_pins_the_times_per_row_is_in_sigma_as_far_off_a
     noise = np.where(observations.split, 3.4, 1.0)
     noise[observations.leading_of[observations.split]] = 3.4
     observations = replace(observations, sigma_factor=noise)
-    solution = solve_clocks(observations, 3, priors=priors)
-    solve = (observations, 3, 0, solution, priors)
-    other = [a + b for a, b in zip(flash_scatter(*solve), jackknife.split_scatter(*solve))]
-    variance = np.array([camera.covariance[2, 2] + extra[2, 2] for camera, extra in zip(solution.cameras, other)])
-    left_out = np.array([extra[2, 2] for extra in jackknife.split_left_out_scatter(*solve, variance)])
-    error = np.array([camera.row_time_ms for camera in solution.cameras]) - truth
+    error, variance, left_out = one_phase_row_times(observations, priors, truth)
     if late_rows:
         assert np.abs(error / np.sqrt(variance)).max() > 4.0, (error, variance)
     assert np.all(np.abs(error) < 2.0 * np.sqrt(variance + left_out)), (error, variance, left_out)
