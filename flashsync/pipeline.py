@@ -2686,7 +2686,8 @@ def _displaced_doubts(
         count = int(np.sum(np.abs(np.array(after) - delay) <= BURST_AGREE * delay))
         if name == best.reference or name in doubted or count < MIN_BURSTS:
             continue
-        for other in (c for c in best.connected if c not in _tied_without(flashes, best.reference, name)):
+        tied = _tied_without(flashes, best.reference, name)
+        for other in (c for c in best.connected if c not in tied):
             if other in doubted or other in doubts or other in best.shift_spreads:
                 continue
             doubts[other] = delay
