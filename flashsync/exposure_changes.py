@@ -205,23 +205,22 @@ def _spans(frames: np.ndarray, lengths: np.ndarray, excused: np.ndarray | None =
 
 def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int]]:
     """The spans ``[a, b)`` of bands, given in frame order (``frames``, decoded frames, and
-    ``lengths``, rows, shape (n,) each), over which the lengths stay one: one span where they
-    do not step, none without :data:`MIN_SPAN_BANDS` bands.
-    The lengths, each clipped to :data:`INLIER_SIGMAS` of the lengths' noise (from one band
-    to the next) about the median of it and its neighbours (at either end its one neighbour
-    counted twice; a lone length that a codec moved leans on no split), are split in two
-    between bands in frames apart where that leaves the least squared deviation from each
-    side's mean, and again within each side, while the means step (:data:`STEP_MEAN_SIGMAS`
-    and :data:`MIN_STEP_ROWS`); neighbours whose medians differ by less than
-    :data:`MIN_STEP_SHARE` are one again; where some span's lengths then scatter
-    (:data:`SPAN_INLIERS`, against the noise or the step to its neighbour), they are taken
-    as one. Where that leaves one span, its first or last band may be a span alone
-    (:func:`_lone_end`).
+    ``lengths``, rows, shape (n,) each), over which the lengths stay one: one span where
+    they do not step, none without :data:`MIN_SPAN_BANDS` bands. The lengths, each clipped
+    to :data:`INLIER_SIGMAS` of the lengths' noise (from one band to the next) about the
+    median of it and its neighbours (:func:`_local_medians`; a lone length that a codec
+    moved leans on no split), are split in two between bands in frames apart where that
+    leaves the least squared deviation from each side's mean, and again within each side,
+    while the means step (:data:`STEP_MEAN_SIGMAS` and :data:`MIN_STEP_ROWS`); neighbours
+    whose medians differ by less than :data:`MIN_STEP_SHARE` are one again; where some
+    span's lengths then scatter (:data:`SPAN_INLIERS`, against the noise or the step to its
+    neighbour), they are taken as one. Where that leaves one
+    span, its first or last band may be a span alone (:func:`_lone_end`).
     """
     if len(lengths) < MIN_SPAN_BANDS:
         return []
     noise = mad_sigma(np.diff(lengths), LENGTH_FLOOR_ROWS * np.sqrt(2.0)) / np.sqrt(2.0)
-    local = median_filter(lengths, size=2 * MIN_SPAN_BANDS - 1, mode="mirror")
+    local = _local_medians(lengths)
     clipped = np.clip(lengths, local - INLIER_SIGMAS * noise, local + INLIER_SIGMAS * noise)
     bursts = np.concatenate([[0], np.cumsum(np.diff(frames) > 1)])
     cuts = _merged(lengths, _cuts(clipped, bursts, 0, len(lengths), noise))
@@ -233,6 +232,20 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
         for (a, b), median, step in zip(cuts, medians, nearest)
     )
     return cuts if steady and len(cuts) > 1 else _lone_end(frames, lengths)
+
+
+def _local_medians(lengths: np.ndarray) -> np.ndarray:
+    """Per length (rows, shape (n,)), the median of it and its neighbours; at either end, of
+    the first or last three (of two, each one's neighbour). With an end's one neighbour
+    counted twice, a wild neighbour held the end to itself: random rig 1064's cam2 (auto
+    exposure) had bands of 10.6 and 7.1 rows (a misread band), then seven of 10.2-11.2 and
+    three of 15.6-16.3; the first, held to 7.1, made a side of the first two whose lengths
+    scatter, and every span was taken as one but the last band."""
+    width = 2 * MIN_SPAN_BANDS - 1
+    local = median_filter(lengths, size=width, mode="mirror")
+    if len(lengths) >= width:
+        local[0], local[-1] = np.median(lengths[:width]), np.median(lengths[-width:])
+    return local
 
 
 def _lone_end(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int]]:

@@ -185,6 +185,21 @@ def test_a_wild_length_at_either_end_leans_on_its_neighbour():
         assert sorted(s.n_bands for s in spans) == [5, 6], spans
 
 
+def test_a_wild_length_next_to_either_end_leaves_the_end_its_own_span_s():
+    """Random rig 1064's cam2 (the auto-exposure bench ``bench_rigs.py --seeds 1060:1068
+    --exposure-changes 1``; 1.06 ms, then 1.67 ms from frame 144): a band of 10.6 rows, then
+    one of 7.1 (a misread band), seven of 10.2-11.2 and three of 15.6-16.3. The first was
+    held about the median of it and its one neighbour counted twice, 7.1 rows: the first two
+    made a side of their own whose lengths scatter, and the lengths made one span but the
+    last band (the camera's times 0.083 ms RMS off the truth). Held about the median of the
+    first three lengths: two spans (0.041 ms), the wild band with the first."""
+    lengths = [10.56, 7.14, 10.19, 10.94, 10.46, 10.82, 11.18, 10.83, 11.06, 16.22, 16.30, 15.59]
+    frames = [25, 35, 66, 85, 96, 107, 117, 129, 141, 151, 174, 188]
+    for order in (1, -1):  # the wild band second, then last but one
+        spans = exposure_spans(bands(lengths[::order], frames=np.cumsum([25, *np.abs(np.diff(frames))[::order]])))
+        assert [s.n_bands for s in spans] == [9, 3][::order], spans
+
+
 @pytest.mark.parametrize(
     "lengths, scatter",
     [
