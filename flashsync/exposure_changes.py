@@ -51,7 +51,8 @@ STEP_MEAN_SIGMAS = 5.0
 #: ... a lone band at either end steps from the others' median by this many standard
 #: deviations of a length (:func:`_lone_end`: a band the codec damaged looks as much like one) ...
 STEP_SIGMAS = 8.0
-#: ... and by this many rows (a step in the lengths under a row moves an edge by less than its noise).
+#: ... and by this many rows (a step in the lengths under a row moves an edge by less than its
+#: noise; a length within it of its span's median is of that span).
 MIN_STEP_ROWS = 1.0
 #: Neighbouring spans whose median lengths differ by less than this share of the longer are
 #: one (auto exposure steps by a third of a stop, 26 %, or more; at two flash powers a
@@ -213,8 +214,8 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
     leaves the least squared deviation from each side's mean, and again within each side,
     while the means step (:data:`STEP_MEAN_SIGMAS` and :data:`MIN_STEP_ROWS`); neighbours
     whose medians differ by less than :data:`MIN_STEP_SHARE` are one again; where some
-    span's lengths then scatter (:data:`SPAN_INLIERS`, against the noise or the step to its
-    neighbour), they are taken as one. Where that leaves one
+    span's lengths then scatter (:data:`SPAN_INLIERS`, against the noise, the step to its
+    neighbour or a row, :data:`MIN_STEP_ROWS`), they are taken as one. Where that leaves one
     span, its first or last band may be a span alone (:func:`_lone_end`).
     """
     if len(lengths) < MIN_SPAN_BANDS:
@@ -228,7 +229,8 @@ def length_spans(frames: np.ndarray, lengths: np.ndarray) -> list[tuple[int, int
     steps = np.abs(np.diff(medians))
     nearest = np.minimum(np.append(steps, np.inf), np.insert(steps, 0, np.inf))
     steady = all(
-        np.mean(np.abs(lengths[a:b] - median) <= max(INLIER_SIGMAS * noise, step / STEP_SIGMAS)) >= SPAN_INLIERS
+        np.mean(np.abs(lengths[a:b] - median) <= max(INLIER_SIGMAS * noise, step / STEP_SIGMAS, MIN_STEP_ROWS))
+        >= SPAN_INLIERS
         for (a, b), median, step in zip(cuts, medians, nearest)
     )
     return cuts if steady and len(cuts) > 1 else _lone_end(frames, lengths)

@@ -200,6 +200,19 @@ def test_a_wild_length_next_to_either_end_leaves_the_end_its_own_span_s():
         assert [s.n_bands for s in spans] == [9, 3][::order], spans
 
 
+def test_a_length_within_a_row_of_its_span_s_median_is_of_it():
+    """Random rig 1067's cam2 (the same bench; 2.42 ms, then 1.33 ms from frame 109): bands of
+    10.6 (a flash of 2.05 ms), 11.6, 11.6 and 11.5 rows, then four of 6.3-6.5. The lengths'
+    noise from one band to the next is 0.1 rows and an eighth of the step 0.65: the first,
+    0.95 rows from its side's median, made that side scatter, and the lengths one span but
+    the first band (1.31 ms over frames 42-166, frame by frame error/sigma 9.9). A length
+    within a row of its span's median (:data:`~flashsync.exposure_changes.MIN_STEP_ROWS`)
+    is of it: two spans."""
+    lengths = [10.62, 11.63, 11.56, 11.52, 6.36, 6.26, 6.28, 6.48]
+    frames = [17, 42, 66, 105, 116, 133, 154, 166]
+    assert [(s.first_frame, s.n_bands) for s in exposure_spans(bands(lengths, frames=frames))] == [(17, 4), (116, 4)]
+
+
 @pytest.mark.parametrize(
     "lengths, scatter",
     [
