@@ -452,7 +452,8 @@ def _synchronized(
     best, pulse_warnings, longer, stepped = _exposures_by_pulses(best, final)
     report.longer_exposures = {name: rows for name, (rows, _) in longer.items()}
     report.stepped_exposures = stepped
-    best, solved_again = _solved_on_one_exposure(best, final, {d.camera: d for d in detections}, stepped)
+    by_name = {d.camera: d for d in detections}
+    best, solved_again = _solved_on_one_exposure(best, final, by_name, stepped)
     if any(alignment.others for alignment in best.alignments.values()):
         best = final(best.cameras, other_shifts=True)
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
@@ -468,9 +469,7 @@ def _synchronized(
             )
     rate_spread = _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)
     frame_std[reference] = np.hypot(frame_std[reference], rate_spread)
-    change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(
-        best, {d.camera: d for d in detections}, stepped, solved_again
-    )
+    change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(best, by_name, stepped, solved_again)
     told_ms, told_warnings = _exposures_bands_tell(best, {*longer, *stepped, *unturned_ms, *changes_ms})
     for name, spread in told_ms.items():  # its times move by half its exposure's error
         frame_std[name] = np.hypot(frame_std[name], spread / 2.0)
