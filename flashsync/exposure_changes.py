@@ -153,6 +153,16 @@ def length_scatter_rows(detection: CameraDetection, exposure_rows: float) -> flo
     return float(np.sqrt(np.mean((lengths[~excused] - exposure_rows) ** 2)))
 
 
+def shorter_bands(detection: CameraDetection, exposure_rows: float) -> tuple[np.ndarray, np.ndarray]:
+    """The frames and lengths (rows; shapes (n,)) of the bands :func:`exposure_spans` takes
+    that are a step (:data:`MIN_STEP_SHARE` and :data:`MIN_STEP_ROWS`) shorter than
+    ``exposure_rows``: a band is one exposure long at least, so the exposure was that short
+    where it was (auto exposure), or the band is misread."""
+    frames, lengths, _ = _measured(detection, pulses=False)
+    short = (lengths < (1 - MIN_STEP_SHARE) * exposure_rows) & (exposure_rows - lengths >= MIN_STEP_ROWS)
+    return frames[short], lengths[short]
+
+
 def _lengths_and_spans(detection: CameraDetection) -> tuple[np.ndarray, np.ndarray, list[ExposureSpan]]:
     """The lengths (rows, in frame order, shape (n,)) of the bands :func:`exposure_spans`
     takes, whether each is as long as a pulse that outlasts the exposure

@@ -45,6 +45,7 @@ from flashsync.exposure_changes import (
     outreaching_splits,
     outside_left_out,
     pulse_spans,
+    shorter_bands,
     split_across_frames,
     split_lengths_ms,
     with_one_exposure,
@@ -473,8 +474,13 @@ def _synchronized(
     told_ms, told_warnings = _exposures_bands_tell(best, {*longer, *stepped, *unturned_ms, *changes_ms})
     for name, spread in told_ms.items():  # its times move by half its exposure's error
         frame_std[name] = np.hypot(frame_std[name], spread / 2.0)
+    short_ms, short_warnings = _exposures_short_bands_tell(
+        best, by_name, {*longer, *stepped, *unturned_ms, *changes_ms}
+    )
     rivals_ms = _rival_exposures_ms(best)
-    best = best.with_scatter(_in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms))
+    best = best.with_scatter(
+        _in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms, short_ms)
+    )
     report.alignments = best.alignments
     report.warnings = (
         best.warnings
@@ -484,11 +490,14 @@ def _synchronized(
         + pulse_warnings
         + unturned_warnings
         + told_warnings
+        + short_warnings
         + _few_flashes(best, reference)
         + _turned_for_display(best.cameras)
         + _row_time_doubts(best)
         + change_warnings
-        + _exposure_doubts(best, told=set(changes_ms) | set(unturned_ms) | set(told_ms) | set(readout_exposures_ms))
+        + _exposure_doubts(
+            best, told=set(changes_ms) | set(unturned_ms) | set(told_ms) | set(short_ms) | set(readout_exposures_ms)
+        )
         + _free_drifts(best, reference)
         + _reference_rate_doubt(report.frame_clocks, reference, best)
         + _apart_warnings(best)
@@ -804,6 +813,43 @@ def _exposures_bands_tell(best: _Attempt, told: set[str]) -> tuple[dict[str, flo
                 "that long at those flashes (auto exposure?), in its sigma (half of it in its times'); set the "
                 "camera's shutter to one exposure to record with it, or give it (restamp --exposure CAMERA=MS)"
             )
+    return spreads, warnings
+
+
+def _exposures_short_bands_tell(
+    best: _Attempt, detections: dict[str, CameraDetection], told: set[str]
+) -> tuple[dict[str, float], list[str]]:
+    """Per camera but the ``told`` (whose exposure changes, or is read the other way round)
+    with bands a step shorter than its solved exposure
+    (:func:`~flashsync.exposure_changes.shorter_bands`, of every band in the reading in use):
+    how far the shortest lies below that exposure, ms (into the exposure's sigma; its
+    times rest on the edges the solve kept), and a warning each. Random rig 1020 of a bench
+    of TTL flashes at two powers, fast readouts and auto exposure (``bench_rigs.py --seeds
+    1020:1032 --preflash 40 --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5
+    --max-height 360 --duration-s 8``): its cam7 (1.65 ms, then 0.79 from frame 66) had one
+    band of a short flash after the change, 0.77 ms long, among bands of pulses that outlast
+    the exposure (1.9-2.4 ms long, of one length with the others); held at 1.63 ± 0.09 ms
+    throughout, its exposure 8.9 sigma off over most of its frames, with no word."""
+    spreads, warnings = {}, []
+    for name, solution in zip(best.connected, best.solution.cameras):
+        if name in told or not solution.exposure_ms > 0:
+            continue
+        frames, rows = shorter_bands(_in_use(best, detections, name), solution.exposure_ms / solution.row_time_ms)
+        if not len(frames):
+            continue
+        shortest_ms = float(rows.min()) * solution.row_time_ms
+        spreads[name] = solution.exposure_ms - shortest_ms
+        one = len(frames) == 1
+        exposure = f"a step shorter than its {solution.exposure_ms:.2f} ms exposure"
+        lengths = (
+            f"is {shortest_ms:.2f} ms long, {exposure}" if one else f"are {exposure}, the shortest {shortest_ms:.2f} ms"
+        )
+        warnings.append(
+            f"{best.cameras[name].video}: {_bands_at(frames)} {lengths}: a band is one exposure long at least, so "
+            f"its exposure was that short there (auto exposure?) or {'that band is' if one else 'those bands are'} "
+            "misread; in its exposure's sigma; set the camera's shutter to one exposure to record with it, or give "
+            "it (restamp --exposure CAMERA=MS)"
+        )
     return spreads, warnings
 
 
