@@ -698,27 +698,33 @@ def test_one_trailing_edge_left_out_amid_the_solved_exposure_shows_no_change():
     assert held == pytest.approx(12.0, abs=0.1) and np.all(std < 0.2), (held, std)
 
 
-def test_a_band_a_step_shorter_than_the_exposure_held_is_in_its_sigma():
+def test_a_band_a_step_shorter_than_the_exposure_held_beyond_every_band_of_it_is_in_its_sigma():
     """Three synthetic cameras, 60 flashes; cam1 reads its rows in half its frame period and
-    exposes each for 12 ms, but for one flash amid them for 5 ms, its band whole (random rig
-    1020's cam7 of a bench of TTL flashes at two powers and auto exposure: 1.65 ms, then 0.79
-    from frame 66, one band of a short flash after the change among bands of pulses that
-    outlast the exposure; held at 1.63 ± 0.09 ms throughout, 8.9 sigma off over most of its
-    frames, no word). No span shows it, and the model holds 12 ms; but a band is one
-    exposure long at least: a warning names the band, and the exposure's sigma holds the 7
-    ms it may be short (its times' sigma as it was). Without that band, neither."""
+    exposes each for 12 ms, but for flash 27 for 5 ms, the bands after it as long as pulses
+    that outlast its exposure (random rig 1020's cam7 of a bench of TTL flashes at two
+    powers and auto exposure: 1.65 ms, then 0.79 from frame 66, one band of a short flash
+    after the change among bands of pulses that outlast the exposure; held at 1.63 ± 0.09 ms
+    throughout, 8.9 sigma off over most of its frames, no word). No span shows it, and the
+    model holds 12 ms; but a band is one exposure long at least: a warning names the band,
+    and the exposure's sigma holds the 7 ms it may be short (its times' sigma as it was).
+    Not where bands of pulses shorter than 12 ms lie after it too (a band misread short),
+    nor without it."""
     events, truth, frame_times = synthetic_events(3, 60, seed=1)
     instants = flash_instants_ms(events, truth)
 
-    def synced(exposures_ms):
+    def synced(exposures_ms, outlasting_after: bool):
         detections = synthetic_detections(events, truth, frame_times, seed=1)
         cam1 = seen_by("cam1", instants, truth[1], frame_times[1], exposures_ms, 0.5)
-        detections[1] = replace(cam1, top_down_pulse_rows=np.ones(cam1.events.event.max() + 1))  # fitted whole
+        rows = 0.99 * 12.0 / (0.5 * truth[1][2])  # the exposure its bands were read to share
+        after = np.arange(cam1.events.event.max() + 1) > 27
+        pulses = np.where(after & outlasting_after, 2.0 * rows, 1.0)  # each band fitted whole
+        detections[1] = replace(cam1, top_down_pulse_rows=pulses, top_down_exposure_rows=rows)
         model, report = synchronize(detections)
         return cam1.events, model.cameras["cam1"], [w for w in report.warnings if w.startswith("cam1.mp4")]
 
-    _, steady, quiet = synced(12.0)
-    events1, camera, (warning,) = synced(np.where(np.arange(60) == 27, 5.0, 12.0))
+    short = np.where(np.arange(60) == 27, 5.0, 12.0)
+    _, steady, quiet = synced(12.0, True)
+    events1, camera, (warning,) = synced(short, True)
     assert quiet == [] and steady.exposure_std_ms < 0.1
     said = re.match(
         r"cam1\.mp4: one of its bands \(frame (\d+)\) is 5\.00 ms long, a step shorter than its 12\.0", warning
@@ -727,6 +733,8 @@ def test_a_band_a_step_shorter_than_the_exposure_held_is_in_its_sigma():
     assert camera.exposure_ms == pytest.approx(12.0, abs=0.05) and not camera.exposure_spans
     assert camera.exposure_std_ms == pytest.approx(np.hypot(steady.exposure_std_ms, 7.0), abs=0.05)
     assert np.median(camera.frame_std_ms) == pytest.approx(np.median(steady.frame_std_ms), abs=0.003)
+    _, amid, none = synced(short, False)
+    assert none == [] and amid.exposure_std_ms < 0.1
 
 
 def test_bands_split_across_frames_hold_the_solved_exposure_against_trailing_edges_left_out():
