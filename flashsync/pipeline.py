@@ -603,6 +603,8 @@ def _exposures_by_pulses(
     band."""
     stepped = _exposure_steps_the_others_tell(best)
     told = {name: seen for name, seen in _exposures_the_others_tell(best).items() if name not in stepped}
+    for name in [name for name in told if _pulses_step(best.cameras[name])]:
+        stepped[name] = told.pop(name)[2]
     if not told and not stepped:
         return best, [], {}, []
     cameras = dict(best.cameras)
@@ -931,6 +933,14 @@ def _pulses_seen(best: _Attempt) -> tuple[np.ndarray, np.ndarray]:
             pulse_of[mine] = detection.pulse_rows[matches.event[mine]] * camera.row_time_ms
         exposure_of[mine] = camera.exposure_ms
     return pulse_of, pulse_of < exposure_of
+
+
+def _pulses_step(detection: CameraDetection) -> bool:
+    """Whether the camera's pulses, read at its exposure under longer pulses, step in spans
+    of one length each (:func:`~flashsync.exposure_changes.pulse_spans`): read the other way
+    round, its exposure changes."""
+    spans = pulse_spans(detection)
+    return len(spans) > 1 and all(span.one_length for span in spans)
 
 
 def _exposure_steps_the_others_tell(best: _Attempt) -> dict[str, int]:

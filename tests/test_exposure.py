@@ -490,6 +490,39 @@ def test_bands_that_cannot_be_as_long_as_the_exposure_a_camera_is_read_at_the_ot
     assert pipeline._bands_at(frames[:1]) == f"one of its bands (frame {frames[0]})"
 
 
+def test_a_camera_the_others_read_the_other_way_round_whose_pulses_step_is_read_band_by_band(
+    read_otherwise, monkeypatch
+):
+    """EC2's rig-1079 cam7 (``bench_rigs.py --seeds 1070:1080 --flash-powers 0.5
+    --exposure-changes 1 --max-height 360 --duration-s 8``; 1.73 ms, then 3.38 from frame
+    70), read as 0.23 ms under longer pulses that step (8.6 rows, then 16.3 from frame 78),
+    had 6 of its 12 flashes seen shorter by the others: not the most, which reading a camera
+    band by band asks (:func:`~flashsync.pipeline._exposure_steps_the_others_tell`), but
+    enough to read it the other way round at one exposure, 1.83 ms (frame by frame 16 sigma
+    off, its times 0.85 ms). A camera the others read the other way round whose pulses step
+    is read band by band (0.14 ms). Here the read-otherwise pair, cam1's pulses set to 5.5
+    rows and, from its ninth band fitted whole, 9 rows; the others telling it as the bench's
+    did (six flashes, not the most)."""
+    (detections, _, _, _), _ = read_otherwise
+    cam1 = detections[1]
+    side = "bottom_up" if cam1.flipped else "top_down"
+    fitted = np.flatnonzero(np.isfinite(cam1.pulse_rows))
+    monkeypatch.setattr(pipeline, "_exposure_steps_the_others_tell", lambda best: {})
+    monkeypatch.setattr(
+        pipeline, "_exposures_the_others_tell", lambda best, turnable=True: {"cam1": (1.0, 0.02, 6)} if turnable else {}
+    )
+
+    def synced(later_rows: float):
+        pulses = cam1.pulse_rows.copy()
+        pulses[fitted] = np.where(np.arange(len(fitted)) < 8, 5.5, later_rows)
+        return synchronize([detections[0], replace(cam1, **{f"{side}_pulse_rows": pulses})])[1]
+
+    stepping, steady = synced(9.0), synced(5.5)
+    assert stepping.stepped_exposures == ["cam1"] and not stepping.longer_exposures, stepping.warnings
+    assert any("pulses that step while it records" in w for w in stepping.warnings), stepping.warnings
+    assert steady.stepped_exposures == [] and list(steady.longer_exposures) == ["cam1"], steady.warnings
+
+
 def test_diagnose_measures_a_camera_read_the_other_way_round_as_sync_reads_it(read_otherwise):
     """The same pair: ``sync`` makes cam1's exposure 4.3 rows longer, which moves each of its
     whole bands' edges 2.1 rows. Measured as detected, none of cam1's bands lay within
