@@ -596,7 +596,8 @@ def _exposures_by_pulses(
     """``best`` solved again with each camera read the other way round by the flashes the
     other cameras see shorter: given one exposure (:func:`_exposures_the_others_tell`,
     :meth:`~flashsync.detect.CameraDetection.with_longer_exposure`), or band by band where
-    its pulses step while it records (:func:`_exposure_steps_the_others_tell`,
+    its pulses step while it records (:func:`_exposure_steps_the_others_tell`, or so read at
+    one exposure and :func:`_pulses_step`;
     :func:`~flashsync.exposure_changes.with_pulses_as_exposures`); a warning naming each,
     per camera given one exposure the readout rows its exposure was made longer by and the
     exposure's standard error (ms; its times take half of it), and the cameras read band by
