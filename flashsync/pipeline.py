@@ -823,7 +823,7 @@ def _exposures_short_bands_tell(
     best: _Attempt, detections: dict[str, CameraDetection], told: set[str]
 ) -> tuple[dict[str, float], list[str]]:
     """Per camera but the ``told`` (whose exposure changes, or is read the other way round)
-    with bands a step shorter than its solved exposure
+    with bands a step shorter than its solved exposure beyond every band of that length
     (:func:`~flashsync.exposure_changes.shorter_bands`, of every band in the reading in use):
     how far the shortest lies below that exposure, ms (into the exposure's sigma; its
     times rest on the edges the solve kept), and a warning each. Random rig 1020 of a bench
@@ -831,7 +831,7 @@ def _exposures_short_bands_tell(
     1020:1032 --preflash 40 --readout 0.4:0.8 --flash-powers 0.5 --exposure-changes 0.5
     --max-height 360 --duration-s 8``): its cam7 (1.65 ms, then 0.79 from frame 66) had one
     band of a short flash after the change, 0.77 ms long, among bands of pulses that outlast
-    the exposure (1.9-2.4 ms long, of one length with the others); held at 1.63 ± 0.09 ms
+    the exposure (1.9-2.4 ms long: no step a span could show); held at 1.63 ± 0.09 ms
     throughout, its exposure 8.9 sigma off over most of its frames, with no word."""
     spreads, warnings = {}, []
     for name, solution in zip(best.connected, best.solution.cameras):
