@@ -169,10 +169,10 @@ def shorter_bands(detection: CameraDetection, exposure_rows: float) -> tuple[np.
     short = (lengths < (1 - MIN_STEP_SHARE) * exposure_rows) & (exposure_rows - lengths >= MIN_STEP_ROWS)
     held = np.abs(lengths - exposure_rows) <= MIN_STEP_SHARE * exposure_rows
     held &= pulse_excess_rows(detection, events) == 0
-    if not (short.any() and held.any()):
-        return np.empty(0, np.int64), np.empty(0)
-    beyond = frames[held].max() < frames[short].min() or frames[held].min() > frames[short].max()
-    return (frames[short], lengths[short]) if beyond else (np.empty(0, np.int64), np.empty(0))
+    beyond = bool(held.any() and short.any()) and (
+        frames[held].max() < frames[short].min() or frames[held].min() > frames[short].max()
+    )
+    return frames[short & beyond], lengths[short & beyond]
 
 
 def _lengths_and_spans(detection: CameraDetection) -> tuple[np.ndarray, np.ndarray, list[ExposureSpan]]:

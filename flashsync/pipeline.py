@@ -471,12 +471,11 @@ def _synchronized(
     rate_spread = _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)
     frame_std[reference] = np.hypot(frame_std[reference], rate_spread)
     change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(best, by_name, stepped, solved_again)
-    told_ms, told_warnings = _exposures_bands_tell(best, {*longer, *stepped, *unturned_ms, *changes_ms})
+    told = {*longer, *stepped, *unturned_ms, *changes_ms}  # cameras whose exposure a rule before told
+    told_ms, told_warnings = _exposures_bands_tell(best, told)
     for name, spread in told_ms.items():  # its times move by half its exposure's error
         frame_std[name] = np.hypot(frame_std[name], spread / 2.0)
-    short_ms, short_warnings = _exposures_short_bands_tell(
-        best, by_name, {*longer, *stepped, *unturned_ms, *changes_ms}
-    )
+    short_ms, short_warnings = _exposures_short_bands_tell(best, by_name, told)
     rivals_ms = _rival_exposures_ms(best)
     best = best.with_scatter(
         _in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms, short_ms)
