@@ -65,7 +65,9 @@ def flash_scatter(
     Each solve is made as ``solution`` was (:func:`_solved_as`). A solve the remaining
     flashes cannot support is skipped, and so, for a camera, one that leaves its time per
     row to the prior where ``solution`` did not (:data:`PRIOR_BOUND_SHARE`); with fewer than
-    two solves a camera's matrix is zero.
+    two solves a camera's matrix is zero. Its exposure's row and column are over the solves
+    that read it (a group left out may leave it none of its bands: EC2's rig-1075 cam7, its
+    exposure on its split bands and a time per row the flashes move, had none added).
     """
     solved = []
     for group in _in_groups(np.unique(events.flash)):
@@ -83,9 +85,20 @@ def flash_scatter(
         if count < 2:
             scatter.append(_none(camera))
             continue
-        deviation = np.array(kept) - np.mean(kept, axis=0)
-        scatter.append((count - 1) / count * deviation.T @ deviation)
+        matrix = _jackknife(np.array(kept), count)
+        read = np.array([values for values in kept if np.isfinite(values[-1])])
+        if 2 <= len(read) < count:  # its exposure over the solves that read it
+            matrix[-1, :] = matrix[:, -1] = _jackknife(read, count)[-1]
+        scatter.append(matrix)
     return scatter
+
+
+def _jackknife(values: np.ndarray, count: int) -> np.ndarray:
+    """The delete-a-group jackknife covariance of ``values`` (n, k), the parameters of
+    ``n`` of ``count`` solves that each left a group out: ``(count - 1) / n`` times the sum
+    of their deviations' outer products (``(count - 1) / count`` of it where all are given)."""
+    deviation = values - values.mean(axis=0)
+    return (count - 1) / len(values) * deviation.T @ deviation
 
 
 #: The error common to the lengths of one camera's bands split across two frames, rows (one

@@ -2160,8 +2160,8 @@ class _Attempt:
         its times by (:meth:`tone_shift_std_ms`) in its shift's; and
         :data:`EXPOSURE_FLOOR_MS`, a share of the widening a tone curve would give its bands
         (:data:`TONE_WIDENING_SHARE`) and the camera's ``exposure_spreads`` (ms, where
-        given) in the exposure's (without the scatter where a solve left an exposure
-        unread)."""
+        given) in the exposure's (the flashes' scatter over the solves that read it; a
+        change to a solve that left it unread adds none)."""
         solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
         toward_cut = np.zeros(len(self.observations.camera))
         toward_cut[: len(self.matches)] = self.matches.toward_cut_rows  # the matched edges come first
