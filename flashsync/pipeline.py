@@ -862,23 +862,31 @@ def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[st
     of its pulses of the flashes that the cameras whose bands of them are one exposure long
     (the pulse measured by the band's ramps) see shorter, that median's standard error (ms)
     and the number of those flashes."""
-    matches = best.matches
-    pulse_of, ramp_read = _pulses_seen(best)
     told = {}
-    for name, camera in zip(best.connected, best.solution.cameras):
-        mine = (matches.camera == name) & np.isfinite(pulse_of)
-        if _turnable(best.cameras[name]) != turnable or not (
-            camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms)
-        ):
-            continue
-        longer = [pulse for _, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)]
-        if len(longer) < MIN_PULSE_FLASHES:
+    for name, (longer, _) in _pulses_seen_shorter(best).items():
+        camera = best.solution.cameras[best.connected.index(name)]
+        if _turnable(best.cameras[name]) != turnable or len(longer) < MIN_PULSE_FLASHES:
             continue
         exposure_ms = float(np.median(longer))
         spread_ms = 1.4826 * float(np.median(np.abs(np.array(longer) - exposure_ms)))
         if exposure_ms >= MIN_EXPOSURE_GAIN * camera.exposure_ms and spread_ms <= PULSES_AGREE * exposure_ms:
             told[name] = (exposure_ms, spread_ms / np.sqrt(len(longer)), len(longer))
     return told
+
+
+def _pulses_seen_shorter(best: _Attempt) -> dict[str, tuple[list[float], int]]:
+    """Per camera whose bands read with some pulses longer than its exposure: its pulses
+    (ms) of the flashes the other cameras show shorter (:func:`_flashes_seen_shorter`) and
+    the number of its flashes with a pulse."""
+    matches = best.matches
+    pulse_of, ramp_read = _pulses_seen(best)
+    seen = {}
+    for name, camera in zip(best.connected, best.solution.cameras):
+        mine = (matches.camera == name) & np.isfinite(pulse_of)
+        if camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms):
+            longer = [pulse for _, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)]
+            seen[name] = (longer, int(np.count_nonzero(mine)))
+    return seen
 
 
 def _flashes_seen_shorter(
