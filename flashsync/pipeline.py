@@ -742,7 +742,13 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
     each. Random rig 103 at two flash powers (``bench_rigs.py --seeds 100:108 --flash-powers
     0.5``) has a 0.666 ms reference of 540 rows whose bands read as a 0.120 ms exposure (3.5
     rows) under 0.67 ms pulses that another camera saw 0-0.07 ms long: its exposure came out
-    0.55 ms short at 26 sigmas, every other camera's times then 0.27 ms off."""
+    0.55 ms short at 26 sigmas, every other camera's times then 0.27 ms off. The same per
+    camera read short enough to turn that fewer than :data:`MIN_PULSE_FLASHES` flashes tell
+    so, but most of those it read a pulse of (their median :data:`MIN_EXPOSURE_GAIN` times
+    its exposure or more; how much they agree does not count: auto exposure may change it
+    between them): EC2's rig-1075 cam5 (0.89 ms, 0.49 from frame 78; three bands, read as 1.1
+    and 3 rows), two of whose three flashes the others saw 0.1-0.2 ms long, held 0.19 ± 0.04
+    ms with no word."""
     spreads, warnings = {}, []
     for name, (exposure_ms, _, n_flashes) in _exposures_the_others_tell(best, turnable=False).items():
         if name in turned:
@@ -756,6 +762,22 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
             f"{exposure_ms:.2f} ms; read over {detection.exposure_rows:.1f} rows, more than blur makes, it is kept, "
             "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
             "give it (restamp --exposure CAMERA=MS)"
+        )
+    for name, (longer, n_pulses) in _pulses_seen_shorter(best).items():
+        too_few = n_pulses < 2 * len(longer) and len(longer) < MIN_PULSE_FLASHES  # but most of its flashes
+        if name in turned or not too_few or not _turnable(best.cameras[name]):
+            continue
+        camera = best.solution.cameras[best.connected.index(name)]
+        exposure_ms = float(np.median(longer))
+        if exposure_ms < MIN_EXPOSURE_GAIN * camera.exposure_ms:
+            continue
+        spreads[name] = exposure_ms - camera.exposure_ms
+        warnings.append(
+            f"{best.cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer "
+            f"pulses, but {len(longer)} of the {n_pulses} flashes it read a pulse of the other cameras saw "
+            f"shorter: its exposure may be {exposure_ms:.2f} ms (its pulses of them); too few flashes to read it so, "
+            "it is kept, the other in its sigma (half of it in its times'); check it against the camera's shutter "
+            "setting, or give it (restamp --exposure CAMERA=MS)"
         )
     return spreads, warnings
 

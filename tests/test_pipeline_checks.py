@@ -753,6 +753,25 @@ def test_a_camera_read_too_long_to_turn_keeps_its_reading_with_the_other_in_its_
     assert _unturned_exposures_ms(_pulse_rig(), turned=set()) == ({}, [])
 
 
+def test_a_camera_too_few_flashes_tell_was_read_the_other_way_round_has_the_other_reading_in_its_sigma():
+    """The short camera (1.2 rows, 0.12 ms) with two of the three flashes it read a pulse of
+    seen shorter by the ramp-reading camera, 0.83-0.84 ms in its bands: too few to read it
+    the other way round, so it keeps 0.12 ms and the 0.715 ms to the other reading is its
+    exposure's doubt, with a warning (EC2's rig-1075 cam5, 0.89 ms held 0.19 ± 0.04 with no
+    word). Not where those are two of four, once turned, nor read too long to turn."""
+    few = dict(short=dict(pulses=[0.84, 0.83, 3.0, np.nan]), ramps=dict(pulses=[0.05, 0.1, np.nan, np.nan]))
+    assert _told(**few) == {}
+    spreads, warnings = _unturned_exposures_ms(_pulse_rig(**few), turned=set())
+    assert spreads == {"short": pytest.approx(0.715)}, spreads
+    assert len(warnings) == 1 and warnings[0].startswith("short.mp4: its bands read as a 0.12 ms exposure"), warnings
+    assert "2 of the 3 flashes" in warnings[0] and "too few flashes" in warnings[0]
+    assert _unturned_exposures_ms(_pulse_rig(**few), turned={"short"}) == ({}, [])
+    two_of_four = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, 2.9]))
+    assert _unturned_exposures_ms(_pulse_rig(**two_of_four), turned=set()) == ({}, [])
+    read_long = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, np.nan], rows=3.5, solved=0.35))
+    assert _unturned_exposures_ms(_pulse_rig(**read_long), turned=set()) == ({}, [])
+
+
 def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pulse_in_its_sigma():
     """A camera on auto exposure whose bands read as 0.3 ms (3 rows) under longer pulses, one
     of them 1.2 ms of a flash two ramp-reading cameras see 0.05-0.06 ms long (or two such
