@@ -459,7 +459,8 @@ def _synchronized(
         best = final(best.cameras, other_shifts=True)
     exposure_spreads = {name: std_ms for name, (_, std_ms) in longer.items()}
     bound_ms = _pulse_bound_exposures_ms(best)
-    unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped))
+    change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(best, by_name, stepped, solved_again)
+    unturned_ms, unturned_warnings = _unturned_exposures_ms(best, set(longer) | set(stepped), shown)
     readings_ms = _in_quadrature(exposure_spreads, bound_ms, unturned_ms)
     for name, spread in [*spreads.items(), *best.shift_spreads.items()]:
         frame_std[name] = np.hypot(frame_std[name], spread)
@@ -470,7 +471,6 @@ def _synchronized(
             )
     rate_spread = _rate_spread_ms(report.frame_clocks[reference], best.cameras[reference].frame_times_ms)
     frame_std[reference] = np.hypot(frame_std[reference], rate_spread)
-    change_warnings, changes_ms, shown, scatters_ms = _exposure_changes(best, by_name, stepped, solved_again)
     told = {*longer, *stepped, *unturned_ms, *changes_ms}  # cameras whose exposure a rule before told
     told_ms, told_warnings = _exposures_bands_tell(best, told)
     for name, spread in told_ms.items():  # its times move by half its exposure's error
@@ -734,7 +734,9 @@ def _turnable(detection: CameraDetection) -> bool:
     return (detection.exposure_rows or np.inf) <= MAX_TURNED_ROWS
 
 
-def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, float], list[str]]:
+def _unturned_exposures_ms(
+    best: _Attempt, turned: set[str], shown: dict[str, list[_ShownExposure]]
+) -> tuple[dict[str, float], list[str]]:
     """Per camera but the ``turned`` that the others' flashes show was read the other way
     round (:func:`_exposures_the_others_tell`) but whose bands share an exposure of more than
     :data:`MAX_TURNED_ROWS` rows, not turned: how far the exposure they tell lies from its
@@ -748,10 +750,28 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
     its exposure or more; how much they agree does not count: auto exposure may change it
     between them): EC2's rig-1075 cam5 (0.89 ms, 0.49 from frame 78; three bands, read as 1.1
     and 3 rows), two of whose three flashes the others saw 0.1-0.2 ms long, held 0.19 ± 0.04
-    ms with no word."""
+    ms with no word. Neither where the exposures its bands show (``shown``,
+    :func:`_exposure_changes`) hold the frame of each of those flashes whose pulse outlasts
+    its exposure at the exposure they tell (:func:`_held_there`): its exposure changed to
+    that, and each span holds its own (EC2's rig-1079 cam2, 8.09 ms, then 15.92 from frame
+    145, held 8.12 and 15.97: the others' flashes told 17.21 ms from its later bands, and its
+    times took 4.5 ms in their sigma for an error of 0.12). Where one of them lies in another
+    span, the change may be misplaced (EC4's rig-1096 cam3: two of its three in the span of
+    its solved exposure, whose first frames held the earlier one)."""
+
+    seen_shorter = _pulses_seen_shorter(best)
+
+    def unexplained(name: str, exposure_ms: float) -> bool:  # by a turn, or by a change its bands show
+        solved_ms = best.solution.cameras[best.connected.index(name)].exposure_ms
+        return name not in turned and not all(
+            _held_there(shown.get(name, []), frame, exposure_ms)
+            for frame, pulse in seen_shorter[name][0]
+            if pulse > solved_ms
+        )
+
     spreads, warnings = {}, []
     for name, (exposure_ms, _, n_flashes) in _exposures_the_others_tell(best, turnable=False).items():
-        if name in turned:
+        if not unexplained(name, exposure_ms):
             continue
         detection = best.cameras[name]
         camera = best.solution.cameras[best.connected.index(name)]
@@ -763,23 +783,32 @@ def _unturned_exposures_ms(best: _Attempt, turned: set[str]) -> tuple[dict[str, 
             "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
             "give it (restamp --exposure CAMERA=MS)"
         )
-    for name, (longer, n_pulses) in _pulses_seen_shorter(best).items():
-        too_few = n_pulses < 2 * len(longer) and len(longer) < MIN_PULSE_FLASHES  # but most of its flashes
-        if name in turned or not too_few or not _turnable(best.cameras[name]):
+    for name, (seen, n_pulses) in seen_shorter.items():
+        too_few = n_pulses < 2 * len(seen) and len(seen) < MIN_PULSE_FLASHES  # but most of its flashes
+        if not too_few or not _turnable(best.cameras[name]):
             continue
         camera = best.solution.cameras[best.connected.index(name)]
-        exposure_ms = float(np.median(longer))
-        if exposure_ms < MIN_EXPOSURE_GAIN * camera.exposure_ms:
+        exposure_ms = float(np.median([pulse for _, pulse in seen]))
+        if exposure_ms < MIN_EXPOSURE_GAIN * camera.exposure_ms or not unexplained(name, exposure_ms):
             continue
         spreads[name] = exposure_ms - camera.exposure_ms
         warnings.append(
             f"{best.cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer "
-            f"pulses, but {len(longer)} of the {n_pulses} flashes it read a pulse of the other cameras saw "
+            f"pulses, but {len(seen)} of the {n_pulses} flashes it read a pulse of the other cameras saw "
             f"shorter: its exposure may be {exposure_ms:.2f} ms (its pulses of them); too few flashes to read it so, "
             "it is kept, the other in its sigma (half of it in its times'); check it against the camera's shutter "
             "setting, or give it (restamp --exposure CAMERA=MS)"
         )
     return spreads, warnings
+
+
+def _held_there(shown: list[_ShownExposure], frame: int, exposure_ms: float) -> bool:
+    """Whether one of the exposures a camera's bands show (``shown``) holds ``frame`` at
+    ``exposure_ms`` (within :data:`MIN_STEP_SHARE`)."""
+    return any(
+        s.first_frame <= frame <= s.last_frame and abs(s.exposure_ms - exposure_ms) <= MIN_STEP_SHARE * s.exposure_ms
+        for s in shown
+    )
 
 
 #: Fewest other cameras that read the pulses by their bands' ramps, over all the flashes of a
@@ -885,8 +914,9 @@ def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[st
     (the pulse measured by the band's ramps) see shorter, that median's standard error (ms)
     and the number of those flashes."""
     told = {}
-    for name, (longer, _) in _pulses_seen_shorter(best).items():
+    for name, (seen, _) in _pulses_seen_shorter(best).items():
         camera = best.solution.cameras[best.connected.index(name)]
+        longer = [pulse for _, pulse in seen]
         if _turnable(best.cameras[name]) != turnable or len(longer) < MIN_PULSE_FLASHES:
             continue
         exposure_ms = float(np.median(longer))
@@ -896,17 +926,21 @@ def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[st
     return told
 
 
-def _pulses_seen_shorter(best: _Attempt) -> dict[str, tuple[list[float], int]]:
-    """Per camera whose bands read with some pulses longer than its exposure: its pulses
-    (ms) of the flashes the other cameras show shorter (:func:`_flashes_seen_shorter`) and
-    the number of its flashes with a pulse."""
+def _pulses_seen_shorter(best: _Attempt) -> dict[str, tuple[list[tuple[int, float]], int]]:
+    """Per camera whose bands read with some pulses longer than its exposure: the frame and
+    its pulse (ms) of each flash the other cameras show shorter (:func:`_flashes_seen_shorter`)
+    and the number of its flashes with a pulse."""
     matches = best.matches
     pulse_of, ramp_read = _pulses_seen(best)
     seen = {}
     for name, camera in zip(best.connected, best.solution.cameras):
         mine = (matches.camera == name) & np.isfinite(pulse_of)
         if camera.exposure_ms > 0 and np.any(pulse_of[mine] > camera.exposure_ms):
-            longer = [pulse for _, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)]
+            frame_of = dict(zip(matches.flash[mine], matches.frame[mine]))
+            longer = [
+                (int(frame_of[flash]), pulse)
+                for flash, pulse in _flashes_seen_shorter(matches, name, pulse_of, ramp_read)
+            ]
             seen[name] = (longer, int(np.count_nonzero(mine)))
     return seen
 

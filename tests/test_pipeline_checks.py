@@ -38,6 +38,7 @@ from flashsync.pipeline import (
     _misread_decay_rows,
     _pulse_lengths,
     _readout_doubts,
+    _ShownExposure,
     _sync_events,
     _toward_cut_rows,
     _unturned_exposures_ms,
@@ -686,7 +687,10 @@ def _pulse_rig(**changes) -> SimpleNamespace:
     best = SimpleNamespace(
         connected=names,
         matches=_Matched(
-            flash=np.tile(np.arange(4), len(names)), camera=np.repeat(names, 4), event=np.tile(np.arange(4), len(names))
+            flash=np.tile(np.arange(4), len(names)),
+            camera=np.repeat(names, 4),
+            event=np.tile(np.arange(4), len(names)),
+            frame=np.tile(10 * np.arange(1, 5), len(names)),
         ),
         cameras={
             n: SimpleNamespace(
@@ -742,15 +746,22 @@ def test_a_camera_read_too_long_to_turn_keeps_its_reading_with_the_other_in_its_
     """The same camera with its exposure read at 3.5 rows (0.35 ms), more than the fits'
     largest blur: the others' flashes tell 0.84 ms, but a reading that long is not turned on
     their ramps alone; the 0.49 ms between the two is its exposure's doubt, with a warning
-    naming both. Read at 1.2 rows (turned), or once turned, none."""
+    naming both. Read at 1.2 rows (turned), once turned, or where a span of its bands holds
+    the frames of those flashes (10-30) at about 0.84 ms (auto exposure changed it there:
+    each span holds its own), none; a span of 0.6 ms, or one that holds but two of them,
+    does not explain them."""
     long_read = _pulse_rig(short=dict(rows=3.5, solved=0.35))
     assert _told(turnable=False) == {} and "short" in _told(turnable=False, short=dict(rows=3.5, solved=0.35))
-    spreads, warnings = _unturned_exposures_ms(long_read, turned=set())
+    spreads, warnings = _unturned_exposures_ms(long_read, turned=set(), shown={})
     assert spreads == {"short": pytest.approx(0.49)}, spreads
     assert len(warnings) == 1 and warnings[0].startswith("short.mp4: its bands read as a 0.35 ms exposure"), warnings
     assert "may be 0.84 ms" in warnings[0] and "3.5 rows" in warnings[0]
-    assert _unturned_exposures_ms(long_read, turned={"short"}) == ({}, [])
-    assert _unturned_exposures_ms(_pulse_rig(), turned=set()) == ({}, [])
+    assert _unturned_exposures_ms(long_read, turned={"short"}, shown={}) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(), turned=set(), shown={}) == ({}, [])
+    held = _ShownExposure(0, 5, 0.35, 2, True, solved=True)
+    for later_ms, last_frame, doubted in ((0.8, 40, False), (0.6, 40, True), (0.8, 25, True)):
+        shown = {"short": [held, _ShownExposure(6, last_frame, later_ms, 4, True, solved=False)]}
+        assert ("short" in _unturned_exposures_ms(long_read, turned=set(), shown=shown)[0]) == doubted, later_ms
 
 
 def test_a_camera_too_few_flashes_tell_was_read_the_other_way_round_has_the_other_reading_in_its_sigma():
@@ -761,15 +772,15 @@ def test_a_camera_too_few_flashes_tell_was_read_the_other_way_round_has_the_othe
     word). Not where those are two of four, once turned, nor read too long to turn."""
     few = dict(short=dict(pulses=[0.84, 0.83, 3.0, np.nan]), ramps=dict(pulses=[0.05, 0.1, np.nan, np.nan]))
     assert _told(**few) == {}
-    spreads, warnings = _unturned_exposures_ms(_pulse_rig(**few), turned=set())
+    spreads, warnings = _unturned_exposures_ms(_pulse_rig(**few), turned=set(), shown={})
     assert spreads == {"short": pytest.approx(0.715)}, spreads
     assert len(warnings) == 1 and warnings[0].startswith("short.mp4: its bands read as a 0.12 ms exposure"), warnings
     assert "2 of the 3 flashes" in warnings[0] and "too few flashes" in warnings[0]
-    assert _unturned_exposures_ms(_pulse_rig(**few), turned={"short"}) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(**few), turned={"short"}, shown={}) == ({}, [])
     two_of_four = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, 2.9]))
-    assert _unturned_exposures_ms(_pulse_rig(**two_of_four), turned=set()) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(**two_of_four), turned=set(), shown={}) == ({}, [])
     read_long = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, np.nan], rows=3.5, solved=0.35))
-    assert _unturned_exposures_ms(_pulse_rig(**read_long), turned=set()) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(**read_long), turned=set(), shown={}) == ({}, [])
 
 
 def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pulse_in_its_sigma():
