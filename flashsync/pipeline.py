@@ -478,7 +478,8 @@ def _synchronized(
     short_ms, short_warnings = _exposures_short_bands_tell(best, by_name, told)
     rivals_ms = _rival_exposures_ms(best)
     best = best.with_scatter(
-        _in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms, short_ms)
+        _in_quadrature(readings_ms, scatters_ms, rivals_ms, readout_exposures_ms, told_ms, short_ms),
+        _refit_rows(best, by_name, shown),
     )
     report.alignments = best.alignments
     report.warnings = (
@@ -2208,7 +2209,7 @@ class _Attempt:
             cost += float(np.log1p(((self.solution.cameras[c].alpha - 1.0) / std) ** 2))
         return cost
 
-    def with_scatter(self, exposure_spreads: dict[str, float]) -> _Attempt:
+    def with_scatter(self, exposure_spreads: dict[str, float], refit_rows: np.ndarray) -> _Attempt:
         """This attempt with what the residuals do not show added to every camera's
         covariance and exposure variance: the scatter of the solve with each flash left out
         (:func:`~flashsync.jackknife.flash_scatter`: the errors a flash brings to all its
@@ -2218,7 +2219,9 @@ class _Attempt:
         :func:`~flashsync.jackknife.moved_scatter`), what an error common to its readings of
         the pulses that outlast its exposure moves (:func:`_misread_decay_rows`), what
         solving flashes that may be one matched apart as one moves (:meth:`flashes_apart`,
-        :func:`~flashsync.jackknife.rival_scatter`) and what a camera's split bands left out
+        :func:`~flashsync.jackknife.rival_scatter`), what the edges of bands the detector
+        fitted too short move (``refit_rows``, readout rows per observation: :func:`_refit_rows`)
+        and what a camera's split bands left out
         move where they disagree with the other edges
         (:func:`~flashsync.jackknife.split_left_out_scatter`); what the tone curves may move
         its times by (:meth:`tone_shift_std_ms`) in its shift's; and
@@ -2236,12 +2239,13 @@ class _Attempt:
             misread[paired] = misread[self.observations.leading_of[paired]]
         apart = self.flashes_apart()
         scatter = [
-            flashes + split + cut + decay + one
-            for flashes, split, cut, decay, one in zip(
+            flashes + split + cut + decay + refit + one
+            for flashes, split, cut, decay, refit, one in zip(
                 flash_scatter(*solve, self.priors),
                 split_scatter(*solve, self.priors),
                 moved_scatter(*solve, self.priors, toward_cut),
                 moved_scatter(*solve, self.priors, misread),
+                moved_scatter(*solve, self.priors, refit_rows),
                 rival_scatter(
                     replace(self.observations, flash=_as_one(self.observations.flash, apart)), *solve[1:], self.priors
                 )
@@ -3491,6 +3495,58 @@ def _within_one_frame(events: Events, bands: Bands) -> tuple[Bands, np.ndarray]:
 #: RC12's rolling-flicker reference, a 5.7-row exposure under 7-15-row decays read 2-36 %
 #: short, had 0.1: its time per row 0.74 % off at 4.6 sigma.
 MISREAD_DECAY_SHARE = 0.05
+
+
+def _refit_rows(
+    best: _Attempt, detections: dict[str, CameraDetection], shown: dict[str, list[_ShownExposure]]
+) -> np.ndarray:
+    """How far each of ``best``'s observations may lie inside its band's edge, readout rows
+    (shape (n_observations,); leading edges negative, trailing positive, 0 for the others):
+    a band the detector fitted at the exposure its camera's bands share under a longer pulse
+    (:attr:`~flashsync.detect.CameraDetection.exposure_rows`) is that long, so where its
+    camera's bands show another exposure at its frame (``shown``, :func:`_exposure_at`) both
+    its edges lie half the difference inside (its bands from ``detections``, every band: the
+    solve may have left trailing edges out). EC5's rig-1100 cam1, the reference (0.60 ms,
+    then 1.07 from frame 216), had its bands read as a 5.6-row exposure under longer pulses
+    where they were 8.4 and then 14.9 rows long; its six bands fitted at 5.6 rows put their
+    leading edges 0.10, then 0.33 ms late, and every other camera's times came out on a ramp
+    0.4 ms steep over the recording, at error/sigma 1.8-2.95."""
+    observations, matches = best.observations, best.matches
+    moves = np.zeros(len(observations.camera))
+    for name, camera in zip(best.connected, best.solution.cameras):
+        detection = _in_use(best, detections, name)
+        fitted = detection.exposure_rows
+        if fitted is None or detection.pulse_rows is None or not camera.exposure_ms > 0:
+            continue
+        events = detection.events
+        bands, lengths = _within_one_frame(events, _timing_bands(events))
+        at_fitted = (np.abs(lengths - fitted) < 1e-6) & (detection.pulse_rows[bands.event] > fitted)
+        half = {}
+        for event, frame in zip(bands.event[at_fitted], events.frame[bands.leading[at_fitted]]):
+            shown_ms = _exposure_at(shown.get(name, []), int(frame), camera.exposure_ms, fitted * camera.row_time_ms)
+            difference = shown_ms / camera.row_time_ms - fitted
+            half[int(event)] = difference / 2.0 if abs(difference) > 1e-6 else 0.0  # the same width
+        mine = np.flatnonzero((matches.camera == name) & np.isin(matches.event, list(half)))
+        moves[mine] = [-half[int(event)] for event in matches.event[mine]]
+    if observations.leading_of is not None:  # a band's trailing edge, the other way
+        paired = observations.leading_of >= 0
+        moves[paired] = -moves[observations.leading_of[paired]]
+    return moves
+
+
+def _exposure_at(shown: list[_ShownExposure], frame: int, solved_ms: float, fitted_ms: float) -> float:
+    """The exposure (ms) a camera's bands show at ``frame``: the span's of ``shown`` that
+    holds it; else of the spans either side of it the one farther from ``fitted_ms`` (either
+    may hold it); else ``solved_ms``."""
+    holding = [s.exposure_ms for s in shown if s.first_frame <= frame <= s.last_frame]
+    if holding:
+        return float(holding[0])
+    before = [s for s in shown if s.last_frame < frame]
+    after = [s for s in shown if s.first_frame > frame]
+    sides = ([max(before, key=lambda s: s.last_frame)] if before else []) + (
+        [min(after, key=lambda s: s.first_frame)] if after else []
+    )
+    return float(max((s.exposure_ms for s in sides), key=lambda e: abs(e - fitted_ms), default=solved_ms))
 
 
 def _misread_decay_rows(detection: CameraDetection, events: Events) -> np.ndarray:

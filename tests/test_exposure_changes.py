@@ -6,6 +6,7 @@ import json
 import re
 from dataclasses import asdict, replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -785,3 +786,38 @@ def test_a_change_only_split_bands_show_is_solved_again_on_one_exposure():
     origin = model.cameras["cam0"].t_global_ms(0, 0.0) - frame_times[0][0]
     error = model.cameras["cam1"].t_global_ms(frame, row) - (alpha * frame_times[1][frame] + beta + row * row_time)
     assert np.sqrt(np.mean((error - origin) ** 2)) < 0.05, np.sqrt(np.mean((error - origin) ** 2))
+
+
+def test_bands_fitted_at_a_width_the_spans_do_not_hold_have_their_edges_moved_out_in_sigma():
+    """EC5's rig-1100 cam1 (the reference; 0.60 ms, then 1.07 from frame 216) had its bands read
+    as a 5.6-row exposure under longer pulses where they were 8.4, then 14.9 rows long; the
+    bands the detector fitted at 5.6 rows put each edge half the difference inside, and every
+    other camera's times came out on one ramp at error/sigma 1.8-2.95. Here bands of 8.4 rows
+    at frames 10 and 30 (a span of 0.84 ms at 0.1 ms a row) and of 14.9 at frame 50 (a lone
+    band), and three fitted at 5.56 under pulses of 9 rows at frames 20, 40 and 60: their edges
+    move out by half of 8.4 - 5.56 in the span, and between or beyond spans by half of the
+    farther, 14.9 - 5.56 (leading edges up, trailing down, in readout rows); the others and a
+    band at 5.56 under a 2-row pulse (one exposure long: its length is the exposure's) stay."""
+    detection = bands([8.4, 5.56, 8.4, 5.56, 14.9, 5.56, 5.56], frames=[10, 20, 30, 40, 50, 60, 70], exposure_rows=5.56)
+    detection = replace(detection, top_down_pulse_rows=np.array([1.0, 9.0, 1.0, 9.0, 1.0, 9.0, 2.0]))
+    n = 7
+    best = SimpleNamespace(
+        connected=["cam1"],
+        cameras={"cam1": SimpleNamespace(frame_times_ms=detection.frame_times_ms, flipped=False)},
+        solution=SimpleNamespace(cameras=[SimpleNamespace(exposure_ms=0.84, row_time_ms=0.1)]),
+        matches=SimpleNamespace(camera=np.array(["cam1"] * n), event=np.arange(n)),
+        observations=SimpleNamespace(camera=np.zeros(2 * n, int), leading_of=np.r_[np.full(n, -1), np.arange(n)]),
+    )
+    shown = {
+        "cam1": [
+            pipeline._ShownExposure(10, 30, 0.84, 2, True, True),
+            pipeline._ShownExposure(50, 50, 1.49, 1, False, False),
+        ]
+    }
+    moves = pipeline._refit_rows(best, {"cam1": detection}, shown)
+    half_span, half_far = (8.4 - 5.56) / 2, (14.9 - 5.56) / 2
+    expected = np.array([0.0, -half_span, 0.0, -half_far, 0.0, -half_far, 0.0])
+    assert moves == pytest.approx(np.r_[expected, -expected]), moves
+    assert not pipeline._refit_rows(
+        best, {"cam1": detection}, {"cam1": [pipeline._ShownExposure(10, 70, 0.556, 7, True, True)]}
+    ).any()
