@@ -381,7 +381,7 @@ def test_an_error_common_to_a_cameras_long_pulses_is_in_sigma(monkeypatch):
     moved_scatter = pipeline.moved_scatter
     monkeypatch.setattr(pipeline, "moved_scatter", lambda *args: seen.append(args) or moved_scatter(*args))
     model, _ = synchronize(detections)
-    observations, moves = seen[-1][0], seen[-1][-1]
+    observations, moves = seen[-2][0], seen[-2][-1]  # the misread decays' (the bands fitted too short follow)
     long_pulse = 1.5 * EXPOSURE_MS / truth[1][2]
     assert sorted(set(np.round(moves, 6))) == pytest.approx([0.0, MISREAD_DECAY_SHARE * long_pulse])
     moved, trailing = moves != 0, observations.trailing
