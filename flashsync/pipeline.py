@@ -3504,7 +3504,7 @@ def _refit_rows(
     (shape (n_observations,); leading edges negative, trailing positive, 0 for the others):
     a band the detector fitted at the exposure its camera's bands share under a longer pulse
     (:attr:`~flashsync.detect.CameraDetection.exposure_rows`) is that long, so where its
-    camera's bands show another exposure at its frame (``shown``, :func:`_exposure_at`) both
+    camera's bands show another exposure at its frame (``shown``, :func:`_shown_exposure_ms`) both
     its edges lie half the difference inside (its bands from ``detections``, every band: the
     solve may have left trailing edges out). EC5's rig-1100 cam1, the reference (0.60 ms,
     then 1.07 from frame 216), had its bands read as a 5.6-row exposure under longer pulses
@@ -3523,7 +3523,9 @@ def _refit_rows(
         at_fitted = (np.abs(lengths - fitted) < 1e-6) & (detection.pulse_rows[bands.event] > fitted)
         half = {}
         for event, frame in zip(bands.event[at_fitted], events.frame[bands.leading[at_fitted]]):
-            shown_ms = _exposure_at(shown.get(name, []), int(frame), camera.exposure_ms, fitted * camera.row_time_ms)
+            shown_ms = _shown_exposure_ms(
+                shown.get(name, []), int(frame), camera.exposure_ms, fitted * camera.row_time_ms
+            )
             difference = shown_ms / camera.row_time_ms - fitted
             half[int(event)] = difference / 2.0 if abs(difference) > 1e-6 else 0.0  # the same width
         mine = np.flatnonzero((matches.camera == name) & np.isin(matches.event, list(half)))
@@ -3534,7 +3536,7 @@ def _refit_rows(
     return moves
 
 
-def _exposure_at(shown: list[_ShownExposure], frame: int, solved_ms: float, fitted_ms: float) -> float:
+def _shown_exposure_ms(shown: list[_ShownExposure], frame: int, solved_ms: float, fitted_ms: float) -> float:
     """The exposure (ms) a camera's bands show at ``frame``: the span's of ``shown`` that
     holds it; else of the spans either side of it the one farther from ``fitted_ms`` (either
     may hold it); else ``solved_ms``."""
