@@ -315,7 +315,7 @@ def one_band_rig(rng, exposure_ms: float = 8.0) -> tuple[Observations, float]:
     frame, ``exposure_ms`` after its flash (8 ms: 216 rows) and moved alike: camera 2's
     exposure rests on that one band's rows and its time per row. Also the true exposure, ms."""
     observations, _ = biased_rig(rng, 12, 0.05)
-    alpha, beta, row_time, fps, height = CAMERAS[2]
+    _, _, row_time, _, height = CAMERAS[2]
     leading = next(
         i for i in np.flatnonzero(observations.camera == 2) if observations.q[i] + exposure_ms / row_time <= height - 1
     )
