@@ -966,17 +966,20 @@ def _seen_shorter(
 ) -> bool:
     """Whether the ``witnesses`` among the matched sync events of one ``flash`` (masks of shape
     (n_matches,); :func:`_pulses_seen` gives ``pulse_of`` and ``ramp_read``) show its pulse
-    shorter than ``pulse_ms``: those whose bands of it are one exposure long see it
-    :data:`SHORTER_PULSE_SHARE` shorter (their median), and more witnesses see it so than
-    :data:`PULSES_AGREE` as long. One witness's misread pulse does not outvote the rest:
-    random rig 133's cam8 (6.61 ms, read as 0.15 ms under 7.4 ms pulses) saw four flashes
-    that four to six cameras saw at most 1 ms long, two of them seen as long by one camera
-    each (cam10's ramps fitted at 8.8 ms; cam12, itself read the other way round), and
-    stayed 2.7 ms off at 3.7 sigma."""
-    seen = flash & witnesses
-    others = seen & ramp_read
-    shorter = np.count_nonzero(seen & (pulse_of <= (1 - SHORTER_PULSE_SHARE) * pulse_ms))
-    as_long = np.count_nonzero(seen & (pulse_of >= (1 - PULSES_AGREE) * pulse_ms))
+    shorter than ``pulse_ms``: those whose bands of it are one exposure long (its pulse read
+    by their ramps) see it :data:`SHORTER_PULSE_SHARE` shorter (their median), and more of
+    them see it so than :data:`PULSES_AGREE` as long. One witness's misread pulse does not
+    outvote the rest: random rig 133's cam8 (6.61 ms, read as 0.15 ms under 7.4 ms pulses)
+    saw four flashes that four to six cameras saw at most 1 ms long, two of them seen as long
+    by one camera each (cam10's ramps fitted at 8.8 ms; cam12, itself read the other way
+    round), and stayed 2.7 ms off at 3.7 sigma. A witness whose band of it is longer than
+    one exposure is no witness: its pulse, too, is a reading under a pulse longer than its
+    exposure, misread alike where the camera's is (EC5's rig-1107: cam2 and cam3, 0.93 and
+    0.97 ms read as 0.16 and 0.19 ms under longer pulses, saw each other's flashes as long
+    as their own and outvoted the reference's ramps; their exposures 53 and 31 sigma off)."""
+    others = flash & witnesses & ramp_read
+    shorter = np.count_nonzero(others & (pulse_of <= (1 - SHORTER_PULSE_SHARE) * pulse_ms))
+    as_long = np.count_nonzero(others & (pulse_of >= (1 - PULSES_AGREE) * pulse_ms))
     return bool(
         others.any() and shorter > as_long and pulse_ms - np.median(pulse_of[others]) >= SHORTER_PULSE_SHARE * pulse_ms
     )

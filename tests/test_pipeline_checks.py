@@ -716,13 +716,17 @@ def _told(turnable: bool = True, **changes) -> dict:
 def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
     """The short camera's three flashes the ramp-reading camera sees at most half as long,
     its pulses of them 0.83-0.85 ms: read as a 0.84 ms exposure. Not where its pulses of them
-    disagree, where another camera sees them as long, where its exposure was read longer
-    than the fits' largest blur, nor where the ramp-reading camera's pulses were fitted at an
-    exposure its solve does not confirm."""
+    disagree, where another ramp-reading camera sees them as long, where its exposure was
+    read longer than the fits' largest blur, nor where the ramp-reading camera's pulses were
+    fitted at an exposure its solve does not confirm. A third camera that sees them as long
+    under its own shorter exposure (its bands longer than one exposure) is no witness: it
+    reads them as the short camera does (EC5's rig-1107: two cameras misread so outvoted the
+    reference's ramps, their exposures 53 and 31 sigma off)."""
     exposure_ms, std_ms, n_flashes = _told()["short"]
     assert (round(exposure_ms, 3), n_flashes) == (0.84, 3) and 0 < std_ms < 0.01
     assert _told(short=dict(pulses=[0.84, 0.4, 1.3, 3.0])) == {}
-    assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5)) == {}
+    assert _told(third=dict(rows=30.0, pulses=[0.8, 0.8, 0.8, np.nan], solved=3.0)) == {}
+    assert _told(third=dict(rows=5.0, pulses=[0.8, 0.8, 0.8, 3.0], solved=0.5))["short"][2] == 3
     assert _told(short=dict(rows=3.5, solved=0.35)) == {}
     assert _told(ramps=dict(rows=40.0)) == {}
 
