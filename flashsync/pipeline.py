@@ -746,12 +746,15 @@ def _unturned_exposures_ms(
     0.5``) has a 0.666 ms reference of 540 rows whose bands read as a 0.120 ms exposure (3.5
     rows) under 0.67 ms pulses that another camera saw 0-0.07 ms long: its exposure came out
     0.55 ms short at 26 sigmas, every other camera's times then 0.27 ms off. The same per
-    camera read short enough to turn that fewer than :data:`MIN_PULSE_FLASHES` flashes tell
-    so, but most of those it read a pulse of (their median :data:`MIN_EXPOSURE_GAIN` times
-    its exposure or more; how much they agree does not count: auto exposure may change it
-    between them): EC2's rig-1075 cam5 (0.89 ms, 0.49 from frame 78; three bands, read as 1.1
-    and 3 rows), two of whose three flashes the others saw 0.1-0.2 ms long, held 0.19 ± 0.04
-    ms with no word. Neither where the exposures its bands show (``shown``,
+    camera, short enough to turn or not, that most of the flashes it read a pulse of tell so
+    (their median :data:`MIN_EXPOSURE_GAIN` times its exposure or more), but too few of them
+    (fewer than :data:`MIN_PULSE_FLASHES`) or with pulses that disagree (auto exposure may
+    change it between them): EC2's rig-1075 cam5 (0.89 ms, 0.49 from frame 78; three bands,
+    read as 1.1 and 3 rows), two of whose three flashes the others saw 0.1-0.2 ms long, held
+    0.19 ± 0.04 ms with no word; EC6's rig-1117 cam8 (1.24 ms, then 2.01 from frame 122;
+    read as 0.43 ms over 5.2 rows), four of whose five flashes the others saw at most 0.15 ms
+    long, its pulses of them 1.06-1.83 ms, held 0.43 ± 0.04 ms frame by frame at error/sigma
+    24.6 and its times at 2.9. Neither where the exposures its bands show (``shown``,
     :func:`_exposure_changes`) hold the frame of each of those flashes whose pulse outlasts
     its exposure at the exposure they tell (:func:`_held_there`): its exposure changed to
     that, and each span holds its own (EC2's rig-1079 cam2, 8.09 ms, then 15.92 from frame
@@ -771,7 +774,8 @@ def _unturned_exposures_ms(
         )
 
     spreads, warnings = {}, []
-    for name, (exposure_ms, _, n_flashes) in _exposures_the_others_tell(best, turnable=False).items():
+    unturnable = _exposures_the_others_tell(best, turnable=False)
+    for name, (exposure_ms, _, n_flashes) in unturnable.items():
         if not unexplained(name, exposure_ms):
             continue
         detection = best.cameras[name]
@@ -784,19 +788,25 @@ def _unturned_exposures_ms(
             "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
             "give it (restamp --exposure CAMERA=MS)"
         )
+    told = {*unturnable, *_exposures_the_others_tell(best)}
     for name, (seen, n_pulses) in seen_shorter.items():
-        too_few = n_pulses < 2 * len(seen) and len(seen) < MIN_PULSE_FLASHES  # but most of its flashes
-        if not too_few or not _turnable(best.cameras[name]):
+        if name in told or n_pulses >= 2 * len(seen):  # told so above (or turned), or not by most of its flashes
             continue
         camera = best.solution.cameras[best.connected.index(name)]
-        exposure_ms = float(np.median([pulse for _, pulse in seen]))
+        pulses = [pulse for _, pulse in seen]
+        exposure_ms = float(np.median(pulses))
         if exposure_ms < MIN_EXPOSURE_GAIN * camera.exposure_ms or not unexplained(name, exposure_ms):
             continue
         spreads[name] = exposure_ms - camera.exposure_ms
+        why = (
+            "too few flashes to read it so"
+            if len(seen) < MIN_PULSE_FLASHES
+            else f"those pulses disagree ({min(pulses):.2f}-{max(pulses):.2f} ms: auto exposure?), so it is not read so"
+        )
         warnings.append(
             f"{best.cameras[name].video}: its bands read as a {camera.exposure_ms:.2f} ms exposure under longer "
             f"pulses, but {len(seen)} of the {n_pulses} flashes it read a pulse of the other cameras saw "
-            f"shorter: its exposure may be {exposure_ms:.2f} ms (its pulses of them); too few flashes to read it so, "
+            f"shorter: its exposure may be {exposure_ms:.2f} ms (its pulses of them); {why}, "
             "it is kept, the other in its sigma (half of it in its times'); check it against the camera's shutter "
             "setting, or give it (restamp --exposure CAMERA=MS)"
         )

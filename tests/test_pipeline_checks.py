@@ -773,7 +773,10 @@ def test_a_camera_too_few_flashes_tell_was_read_the_other_way_round_has_the_othe
     seen shorter by the ramp-reading camera, 0.83-0.84 ms in its bands: too few to read it
     the other way round, so it keeps 0.12 ms and the 0.715 ms to the other reading is its
     exposure's doubt, with a warning (EC2's rig-1075 cam5, 0.89 ms held 0.19 ± 0.04 with no
-    word). Not where those are two of four, once turned, nor read too long to turn."""
+    word); read too long to turn (3.5 rows, 0.35 ms), the 0.485 ms (EC5's rig-1107 cam2, 0.93 ms
+    read as 0.16 ms over 3.1 rows, two of its three flashes seen shorter: its exposure 1.6
+    sigma off where the doubt was the turnable camera's alone). Not where those are two of
+    four, nor once turned."""
     few = dict(short=dict(pulses=[0.84, 0.83, 3.0, np.nan]), ramps=dict(pulses=[0.05, 0.1, np.nan, np.nan]))
     assert _told(**few) == {}
     spreads, warnings = _unturned_exposures_ms(_pulse_rig(**few), turned=set(), shown={})
@@ -784,7 +787,28 @@ def test_a_camera_too_few_flashes_tell_was_read_the_other_way_round_has_the_othe
     two_of_four = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, 2.9]))
     assert _unturned_exposures_ms(_pulse_rig(**two_of_four), turned=set(), shown={}) == ({}, [])
     read_long = dict(few, short=dict(pulses=[0.84, 0.83, 3.0, np.nan], rows=3.5, solved=0.35))
-    assert _unturned_exposures_ms(_pulse_rig(**read_long), turned=set(), shown={}) == ({}, [])
+    assert _unturned_exposures_ms(_pulse_rig(**read_long), turned=set(), shown={})[0] == {"short": pytest.approx(0.485)}
+
+
+def test_a_camera_whose_flashes_tell_exposures_that_disagree_has_the_other_reading_in_its_sigma():
+    """EC6's rig-1117 cam8 (1.24 ms, then 2.01 from frame 122) was read as 0.43 ms under
+    longer pulses; four of its five flashes the others saw at most 0.15 ms long, its pulses of
+    them 1.06, 1.15, 1.83 and 1.83 ms: too far apart to read it as one exposure (auto exposure
+    changed it between them), and it was held at 0.43 ± 0.04 ms, frame by frame at
+    error/sigma 24.6, its times at 2.9, with no word of it. Here the short camera's four
+    flashes, seen at most 0.1 ms long, read 0.83-1.7 ms: not turned, the 1.1 ms to the other
+    reading (their median, 1.22 ms) in its sigma, with a warning naming them; read at 3.5 rows
+    (0.35 ms: too long to turn, as cam8's 5.2 rows were), the 0.87 ms."""
+    ramps = dict(pulses=[0.05, 0.1, 0.08, 0.09])
+    for rows, solved_ms in ((1.2, 0.12), (3.5, 0.35)):
+        disagree = dict(short=dict(pulses=[0.84, 0.83, 1.6, 1.7], rows=rows, solved=solved_ms), ramps=ramps)
+        assert _told(**disagree) == {} and _told(turnable=False, **disagree) == {}
+        spreads, warnings = _unturned_exposures_ms(_pulse_rig(**disagree), turned=set(), shown={})
+        assert spreads == {"short": pytest.approx(1.22 - solved_ms)}, spreads
+        assert len(warnings) == 1, warnings
+        assert warnings[0].startswith(f"short.mp4: its bands read as a {solved_ms:.2f} ms exposure"), warnings
+        assert "4 of the 4 flashes" in warnings[0] and "those pulses disagree (0.83-1.70 ms" in warnings[0]
+        assert _unturned_exposures_ms(_pulse_rig(**disagree), turned={"short"}, shown={}) == ({}, [])
 
 
 def test_a_band_whose_flash_the_others_see_shorter_than_the_exposure_puts_its_pulse_in_its_sigma():
