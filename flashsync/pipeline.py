@@ -603,7 +603,11 @@ def _exposures_by_pulses(
     exposure's standard error (ms; its times take half of it), and the cameras read band by
     band."""
     stepped = _exposure_steps_the_others_tell(best)
-    told = {name: seen for name, seen in _exposures_the_others_tell(best).items() if name not in stepped}
+    told = {
+        name: seen
+        for name, seen in _exposures_the_others_tell(best, _pulses_seen_shorter(best)).items()
+        if name not in stepped
+    }
     for name in [name for name in told if _pulses_step(best.cameras[name])]:
         stepped[name] = told.pop(name)[2]
     if not told and not stepped:
@@ -774,7 +778,7 @@ def _unturned_exposures_ms(
         )
 
     spreads, warnings = {}, []
-    unturnable = _exposures_the_others_tell(best, turnable=False)
+    unturnable = _exposures_the_others_tell(best, seen_shorter, turnable=False)
     for name, (exposure_ms, _, n_flashes) in unturnable.items():
         if not unexplained(name, exposure_ms):
             continue
@@ -788,7 +792,7 @@ def _unturned_exposures_ms(
             "the other in its sigma (half of it in its times'); check it against the camera's shutter setting, or "
             "give it (restamp --exposure CAMERA=MS)"
         )
-    told = {*unturnable, *_exposures_the_others_tell(best)}
+    told = {*unturnable, *_exposures_the_others_tell(best, seen_shorter)}
     for name, (seen, n_pulses) in seen_shorter.items():
         if name in told or n_pulses >= 2 * len(seen):  # told so above (or turned), or not by most of its flashes
             continue
@@ -917,15 +921,18 @@ def _exposures_short_bands_tell(
     return spreads, warnings
 
 
-def _exposures_the_others_tell(best: _Attempt, turnable: bool = True) -> dict[str, tuple[float, float, int]]:
-    """Per camera whose bands read with some pulses longer than its exposure, :func:`_turnable`
-    (or, ``turnable`` False, not), and that the other cameras show was read the other way
-    round (:func:`_seen_shorter`, :data:`MIN_EXPOSURE_GAIN`): its exposure (ms), the median
-    of its pulses of the flashes that the cameras whose bands of them are one exposure long
-    (the pulse measured by the band's ramps) see shorter, that median's standard error (ms)
-    and the number of those flashes."""
+def _exposures_the_others_tell(
+    best: _Attempt, seen_shorter: dict[str, tuple[list[tuple[int, float]], int]], turnable: bool = True
+) -> dict[str, tuple[float, float, int]]:
+    """Per camera of ``seen_shorter`` (:func:`_pulses_seen_shorter` of ``best``: its bands
+    read with some pulses longer than its exposure), :func:`_turnable` (or, ``turnable``
+    False, not), and that the other cameras show was read the other way round
+    (:func:`_seen_shorter`, :data:`MIN_EXPOSURE_GAIN`): its exposure (ms), the median of its
+    pulses of the flashes that the cameras whose bands of them are one exposure long (the
+    pulse measured by the band's ramps) see shorter, that median's standard error (ms) and
+    the number of those flashes."""
     told = {}
-    for name, (seen, _) in _pulses_seen_shorter(best).items():
+    for name, (seen, _) in seen_shorter.items():
         camera = best.solution.cameras[best.connected.index(name)]
         longer = [pulse for _, pulse in seen]
         if _turnable(best.cameras[name]) != turnable or len(longer) < MIN_PULSE_FLASHES:

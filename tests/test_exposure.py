@@ -509,7 +509,9 @@ def test_a_camera_the_others_read_the_other_way_round_whose_pulses_step_is_read_
     fitted = np.flatnonzero(np.isfinite(cam1.pulse_rows))
     monkeypatch.setattr(pipeline, "_exposure_steps_the_others_tell", lambda best: {})
     monkeypatch.setattr(
-        pipeline, "_exposures_the_others_tell", lambda best, turnable=True: {"cam1": (1.0, 0.02, 6)} if turnable else {}
+        pipeline,
+        "_exposures_the_others_tell",
+        lambda best, seen_shorter, turnable=True: {"cam1": (1.0, 0.02, 6)} if turnable else {},
     )
 
     def synced(later_rows: float):

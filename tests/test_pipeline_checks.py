@@ -37,6 +37,7 @@ from flashsync.pipeline import (
     _lone_sigma,
     _misread_decay_rows,
     _pulse_lengths,
+    _pulses_seen_shorter,
     _readout_doubts,
     _ShownExposure,
     _sync_events,
@@ -710,7 +711,8 @@ def _pulse_rig(**changes) -> SimpleNamespace:
 
 def _told(turnable: bool = True, **changes) -> dict:
     """:func:`_exposures_the_others_tell` on :func:`_pulse_rig` with ``changes``."""
-    return _exposures_the_others_tell(_pulse_rig(**changes), turnable)
+    best = _pulse_rig(**changes)
+    return _exposures_the_others_tell(best, _pulses_seen_shorter(best), turnable)
 
 
 def test_a_camera_is_read_the_other_way_round_only_on_evidence_that_holds():
