@@ -2240,14 +2240,13 @@ class _Attempt:
         the pulses that outlast its exposure moves (:func:`_misread_decay_rows`), what
         solving flashes that may be one matched apart as one moves (:meth:`flashes_apart`,
         :func:`~flashsync.jackknife.rival_scatter`), what the edges of bands the detector
-        fitted too short move (``refit_rows``, readout rows per observation: :func:`_refit_rows`)
-        and what a camera's split bands left out
-        move where they disagree with the other edges
-        (:func:`~flashsync.jackknife.split_left_out_scatter`); what the tone curves may move
-        its times by (:meth:`tone_shift_std_ms`) in its shift's; and
-        :data:`EXPOSURE_FLOOR_MS`, a share of the widening a tone curve would give its bands
-        (:data:`TONE_WIDENING_SHARE`) and the camera's ``exposure_spreads`` (ms, where
-        given) in the exposure's (the flashes' scatter over the solves that read it; a
+        fitted too short move (``refit_rows``, readout rows per observation:
+        :func:`_refit_rows`) and what a camera's split bands left out move where they
+        disagree with the other edges (:func:`~flashsync.jackknife.split_left_out_scatter`);
+        what the tone curves may move its times by (:meth:`tone_shift_std_ms`) in its
+        shift's; and :data:`EXPOSURE_FLOOR_MS`, a share of the widening a tone curve would
+        give its bands (:data:`TONE_WIDENING_SHARE`) and the camera's ``exposure_spreads``
+        (ms, where given) in the exposure's (the flashes' scatter over the solves that read it; a
         change to a solve that left it unread adds none)."""
         solve = (self.observations, len(self.connected), self.connected.index(self.reference), self.solution)
         toward_cut = np.zeros(len(self.observations.camera))
@@ -3524,9 +3523,9 @@ def _refit_rows(
     (shape (n_observations,); leading edges negative, trailing positive, 0 for the others):
     a band the detector fitted at the exposure its camera's bands share under a longer pulse
     (:attr:`~flashsync.detect.CameraDetection.exposure_rows`) is that long, so where its
-    camera's bands show another exposure at its frame (``shown``, :func:`_shown_exposure_ms`) both
-    its edges lie half the difference inside (its bands from ``detections``, every band: the
-    solve may have left trailing edges out). EC5's rig-1100 cam1, the reference (0.60 ms,
+    camera's bands show another exposure at its frame (``shown``, :func:`_shown_exposure_ms`)
+    both its edges lie half the difference inside (its bands from ``detections``, every
+    band: the solve may have left trailing edges out). EC5's rig-1100 cam1, the reference (0.60 ms,
     then 1.07 from frame 216), had its bands read as a 5.6-row exposure under longer pulses
     where they were 8.4 and then 14.9 rows long; its six bands fitted at 5.6 rows put their
     leading edges 0.10, then 0.33 ms late, and every other camera's times came out on a ramp
