@@ -2737,7 +2737,7 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     that one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
-    pins, lone, firsts = {}, {}, {}
+    pins, lone, firsts, at_firsts = {}, {}, {}, {}
     flashes = _matched_flashes(best.matches)
     for flash, seen in flashes.items():
         for a, b in combinations(seen.items(), 2):
@@ -2756,6 +2756,7 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
                     pins.setdefault(pair, []).append(following[burst])
                 else:
                     firsts.setdefault(pair, {})[burst] = followed[burst]
+                    at_firsts.setdefault(pair, []).append(alone)
             elif not pair & bursty:
                 lone.setdefault(pair, set()).add(flash)
     if not firsts:
@@ -2764,8 +2765,12 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     seers = _pre_flash_seers(firsts, bursty)
     misled = seers & {name for name, _ in _displaced(best, model, flashes, delay)} if seers else set()
     trusted = {pair: shared for pair, shared in lone.items() if not pair & misled}
+    told = _flashes_at_firsts(best, followed, following, at_firsts)
+    outweighed = {pair: len(gaps) for pair, gaps in pins.items() if pair in told and len(gaps) < len(firsts[pair])}
     groups = {name: {name} for name in best.connected}
     for (a, b), gaps in pins.items():
+        if frozenset((a, b)) in outweighed:
+            continue
         if np.any(np.abs(np.array(gaps) - delay) <= BURST_AGREE * delay):  # a burst of the rig's delay
             _tie(groups, a, b)
     for g, h in combinations({frozenset(group) for group in groups.values()}, 2):
@@ -2774,8 +2779,11 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     doubts, warnings = {}, []
     others = {frozenset(group) for group in groups.values()} - {frozenset(groups[best.reference])}
     for group in sorted(others, key=lambda group: min(map(best.connected.index, group))):
-        gaps = [followed[first] for first in _between(firsts, group, frozenset(best.connected) - group)]
-        if not gaps or np.ptp(gaps) > BURST_AGREE * np.median(gaps):
+        rest = frozenset(best.connected) - group
+        gaps = [followed[first] for first in _between(firsts, group, rest)]
+        ties = [pair for pair in firsts if pair & group and pair & rest]
+        bright = all(pair in told for pair in ties)
+        if not gaps or (np.ptp(gaps) > BURST_AGREE * np.median(gaps) and not bright):
             continue
         gap_ms, names = float(np.median(gaps)), ", ".join(sorted(group, key=best.connected.index))
         after = {band for band in _displaced(best, model, flashes, gap_ms) if band[0] in group} - set(following)
@@ -2783,12 +2791,16 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
             continue
         lie = "a band of its lies" if len(after) == 1 else f"{len(after)} of its bands lie"
         late = f", and {lie} that long after a flash the others saw (nothing fires then)" if after else ""
+        seconds = sum(outweighed.get(pair, 0) for pair in ties)
+        which = f"the first (at {len(gaps)}; at {seconds} the second)" if seconds else "only the first"
+        apart = f"{gap_ms:.0f}" if np.ptp(gaps) <= BURST_AGREE * gap_ms else f"{min(gaps):.0f}-{max(gaps):.0f}"
+        flashes_there = ", its events there as bright as its others (flashes, not pre-flashes)" if bright else ""
         for name in sorted(group - set(best.shift_spreads), key=best.connected.index):
             doubts[name] = gap_ms
             warnings.append(
-                f"{best.cameras[name].video}: the flashes that tie {names} to the rest of the rig match only the "
-                f"first of one camera's pairs of events {gap_ms:.0f} ms apart, each followed by one the other camera "
-                f"does not see (a TTL flash's pre-flash and its flash?){late}; its times may be off by "
+                f"{best.cameras[name].video}: the flashes that tie {names} to the rest of the rig match {which} "
+                f"of one camera's pairs of events {apart} ms apart, each followed by one the other camera "
+                f"does not see (a TTL flash's pre-flash and its flash?){flashes_there}{late}; its times may be off by "
                 f"{gap_ms:.0f} ms (in its sigma); name one flash both saw (--anchor CAMERA:EVENT, the events table) "
                 "to decide"
             )
@@ -2902,6 +2914,44 @@ def _gaps_after_flashes(
         for seen, at in flash_starts
         if name not in seen
     ]
+
+
+#: A camera's bursts are a TTL flash's pre-flash and its flash by their bands' strengths where
+#: the firsts' median is at most this share of the seconds' (:func:`_flashes_at_firsts`; the
+#: bench's pre-flashes fire at 0.3 of their flash).
+PRE_FLASH_SHARE = 0.5
+
+
+def _flashes_at_firsts(
+    best: _Attempt, followed: dict, following: dict, at_firsts: dict[frozenset, list[tuple[str, int]]]
+) -> set[frozenset]:
+    """The pairs of cameras (of ``at_firsts``: per pair, the lone events (camera, event
+    number) of the camera without bursts matched to the first of the other's) whose such
+    events are its flashes, not pre-flashes, by their bands' strengths: the other camera's
+    firsts are faint beside its seconds (:data:`PRE_FLASH_SHARE`), as a pre-flash is in every
+    camera that sees it, and these events' median is nearer their camera's other events'
+    than that share of it (over its root). A camera that sees pre-flashes whose flash it
+    misses (a fast readout's blanking) is matched to the firsts by faint events; one matched a
+    pre-flash's delay off, by bright ones: FP8's rig-1135, whose cam2, blind to the
+    pre-flashes, matched four of its five flashes to cam1's pre-flashes."""
+    strength = {}
+    for name in best.connected:
+        events = _sync_events(best.cameras[name])
+        strength.update({(name, int(e)): abs(float(s)) for e, s in zip(events.event, events.strength)})
+
+    def median(keys: Iterable[tuple[str, int]]) -> float:
+        values = [strength[key] for key in keys]
+        return float(np.median(values)) if values else np.nan
+
+    told = set()
+    for pair, alone in at_firsts.items():
+        name = alone[0][0]
+        (bursty,) = pair - {name}
+        share = median(k for k in followed if k[0] == bursty) / median(k for k in following if k[0] == bursty)
+        others = median(k for k in strength if k[0] == name and k not in alone)
+        if share <= PRE_FLASH_SHARE and median(alone) > np.sqrt(share) * others:
+            told.add(pair)
+    return told
 
 
 def _pre_flash_seers(firsts: dict[frozenset, dict], bursty: set[str]) -> set[str]:

@@ -560,3 +560,61 @@ def test_bands_next_to_a_flash_the_others_saw_are_no_doubt_though_a_delay_after_
     seen, truth, frame_times = tied_by_pre_flashes_alone()
     _, report = synchronize([seen_by(f"cam{c}", s, truth[c], frame_times[c]) for c, s in enumerate(seen)])
     assert not [w for w in report.warnings if "nothing fires" in w], report.warnings
+
+
+def test_a_tie_at_a_bursts_second_is_outweighed_where_flashes_meet_more_of_their_firsts():
+    """Two synthetic cameras (1080 rows) and twelve TTL flashes, each with a pre-flash 40 ms
+    before it at 0.3 of its strength. cam0 (the reference) sees every pre-flash and flashes
+    0-4; cam1, blind to the pre-flashes, misses flashes 0 and 5-9 and has a band as bright as
+    its flashes 40 ms after flash 0. cam1 is matched by its six flashes to cam0's
+    pre-flashes, 40 ms off, four of them the first of a burst, and by that band to cam0's
+    flash 0, the second of one: one tie against four (FP8's rig-1135, two cameras read the
+    wrong way up, whose solve matched four of cam1's pre-flashes and one flash to cam2's
+    flashes: 14.8 ms off at error/sigma 63 with no word). cam1's events there are as bright
+    as its others, flashes (:func:`~flashsync.pipeline._flashes_at_firsts`, below): the one
+    tie is outweighed, and cam1 takes the 40 ms in its sigma, warned."""
+    events, truth, frame_times = synthetic_events(2, 12, seed=4)
+    instants = flash_instants_ms(events, truth)
+    cam0 = np.concatenate([instants - 40.0, instants[:5]])
+    cam1 = np.concatenate([instants[1:5], instants[10:], instants[:1] + 40.0])
+    cameras = [
+        seen_by("cam0", cam0, truth[0], frame_times[0], strength=np.r_[np.tile([0.15, 0.5], 5), [0.15] * 7]),
+        seen_by("cam1", cam1, truth[1], frame_times[1]),
+    ]
+    model, report = synchronize(cameras)
+    error, sigma = clock_errors_ms(model, truth, frame_times, 1)
+    (warning,) = [w for w in report.warnings if w.startswith("cam1.mp4: the flashes that tie cam1 to the rest of")]
+    assert "match the first (at 4; at 1 the second)" in warning and "its times may be off by 40 ms" in warning
+    assert np.abs(error).mean() == pytest.approx(40.0, abs=1.0), error  # the premise: the pre-flashes' shift
+    assert np.sqrt(np.mean((error / sigma) ** 2)) < 1.5, (error, sigma)
+
+
+@pytest.mark.parametrize(
+    "firsts, at_them, told",
+    [
+        pytest.param(0.15, 0.5, True, id="flashes at pre-flashes"),
+        pytest.param(0.15, 0.15, False, id="pre-flashes alone at pre-flashes"),
+        pytest.param(0.5, 0.6, False, id="bursts of two flashes"),
+    ],
+)
+def test_events_at_the_first_of_bursts_are_flashes_where_as_bright_as_their_cameras_others(firsts, at_them, told):
+    """cam0 sees twelve bursts (its firsts at strength ``firsts``, its seconds at 0.5); cam1's
+    events 0-5 are matched to the first of six of them, its events 6-11 elsewhere, at 0.5.
+    cam1's matched events are its flashes where they are as bright as its others while
+    cam0's firsts are faint (pre-flashes): not where they are faint too (pre-flashes whose
+    flashes cam1 missed: rig-128's cam10 and cam11 of a TTL bench with fast readouts, read
+    right, were doubted at 39.5 ms by a first draft that counted ties alone), nor where
+    cam0's firsts are as bright as its seconds (no pre-flash to mistake a flash for)."""
+    events, truth, frame_times = synthetic_events(2, 12, seed=4)
+    instants = flash_instants_ms(events, truth)
+    cameras = {
+        "cam0": seen_by(
+            "cam0", np.r_[instants - 40.0, instants], truth[0], frame_times[0], strength=[firsts, 0.5] * 12
+        ),
+        "cam1": seen_by("cam1", instants, truth[1], frame_times[1], strength=np.r_[[at_them] * 6, [0.5] * 6]),
+    }
+    best = SimpleNamespace(connected=list(cameras), cameras=cameras)
+    followed = {("cam0", 2 * k): 40.0 for k in range(12)}
+    following = {("cam0", 2 * k + 1): 40.0 for k in range(12)}
+    at_firsts = {frozenset(cameras): [("cam1", k) for k in range(6)]}
+    assert bool(pipeline._flashes_at_firsts(best, followed, following, at_firsts)) == told

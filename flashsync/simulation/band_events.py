@@ -110,6 +110,7 @@ def seen_by(
     exposure_ms: np.ndarray | float = EXPOSURE_MS,
     readout_share: float = 1.0,
     split: bool = False,
+    strength: np.ndarray | float = 0.5,
 ) -> CameraDetection:
     """What the detector gives ``sync`` of a synthetic camera (its ``clock``: alpha, beta_ms
     and row_time_ms, one row of :func:`synthetic_events`'s truth; its ``frame_times``, ms)
@@ -120,14 +121,16 @@ def seen_by(
     the next frame where the flash fell in the vertical blanking less than one exposure before
     that frame and it lies in the rows read; with ``split``, a band whose trailing edge lies
     past the rows read goes on in the next frame where it lies in them (a readout with no
-    blanking: ``readout_share`` near 1). Events numbered in time order, no noise, top-down
+    blanking: ``readout_share`` near 1). Each band's ``strength`` (relative brightness; one for
+    all, or one per instant in time order). Events numbered in time order, no noise, top-down
     (the reading known)."""
     alpha, beta, row_time = clock
     start, row_time = alpha * frame_times + beta, row_time * readout_share
     stamps = np.round(frame_times - frame_times[0])
     exposures = np.broadcast_to(exposure_ms, len(instants_ms))
+    strengths = np.broadcast_to(strength, len(instants_ms))
     rows = []
-    for number, (instant, exposure) in enumerate(zip(np.sort(instants_ms), exposures)):
+    for number, (instant, exposure, brightness) in enumerate(zip(np.sort(instants_ms), exposures, strengths)):
         frame = int(np.searchsorted(start, instant, side="right")) - 1
         if frame < 0 or frame + 1 >= len(start):
             continue  # before the first frame, or after the last frame's start: not in sight
@@ -148,5 +151,5 @@ def seen_by(
                 else []
             )
         for at, edge, row, flags in edges:
-            rows.append((name, number, at, stamps[at], row, edge, Band.PULSE, 2.0, 0.5, 50.0, flags))
+            rows.append((name, number, at, stamps[at], row, edge, Band.PULSE, 2.0, brightness, 50.0, flags))
     return CameraDetection(name, f"{name}.mp4", WIDTH, HEIGHT, stamps, Events.from_columns(*zip(*rows)))
