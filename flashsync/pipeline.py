@@ -2990,16 +2990,27 @@ def _tie(groups: dict[str, set[str]], a: str, b: str) -> None:
 def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], float], dict[tuple[str, int], float]]:
     """The cameras' sync events (camera, event number) that another of the same camera's
     follows within :data:`BURST_GAP_MS`, and those that follow one, each with that gap (ms,
-    by the solved clocks)."""
-    followed, following = {}, {}
+    by the solved clocks), of the bursts of the rig's delay: those whose gap lies within
+    :data:`BURST_AGREE` of the median of the most bursts that agree so. A TTL flash fires its
+    pre-flash one delay before it for the whole rig, and a false event next to a flash makes
+    a burst of another gap (TT9's rig-1141: cam3, blind to the pre-flashes, had two of 80 and
+    125 ms among cam1's and cam5's of 39-41; counted as a camera that sees bursts, whose
+    flashes matched to cam1's pre-flashes tie it to neither side, it was tied to cam1 by one
+    of its own, and it and two more were 38.7 ms off at error/sigma 32-33 with no word)."""
+    bursts = []
     for name in best.connected:
         events = _sync_events(best.cameras[name])
         times = _band_starts_ms(model.cameras[name], events)
         order = np.argsort(times)
         for first, second in pairwise(order):
             if BURST_GAP_MS[0] <= times[second] - times[first] <= BURST_GAP_MS[1]:
-                followed[(name, int(events.event[first]))] = float(times[second] - times[first])
-                following[(name, int(events.event[second]))] = float(times[second] - times[first])
+                bursts.append((name, int(events.event[first]), int(events.event[second]), times[second] - times[first]))
+    gaps = np.array([gap for *_, gap in bursts])
+    agree = np.abs(gaps[:, None] - gaps[None, :]) <= BURST_AGREE * gaps[:, None]  # [i, j]: gap j near gap i
+    delay = np.median(gaps[agree[np.argmax(agree.sum(axis=1))]]) if bursts else 0.0
+    kept = [(name, a, b, float(gap)) for name, a, b, gap in bursts if abs(gap - delay) <= BURST_AGREE * delay]
+    followed = {(name, a): gap for name, a, _, gap in kept}
+    following = {(name, b): gap for name, _, b, gap in kept}
     return followed, following
 
 

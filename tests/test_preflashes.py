@@ -483,6 +483,29 @@ def test_a_camera_that_sees_bursts_is_not_tied_by_its_lone_events_nor_a_false_bu
     assert np.abs(error).max() < 0.1 and sigma.max() < 1.0, (error, sigma)
 
 
+def test_a_false_burst_of_another_gap_makes_no_camera_one_that_sees_bursts():
+    """Three synthetic cameras (1080 rows) and twelve TTL flashes, each with a pre-flash 40 ms
+    before it. cam0 (the reference) sees every pre-flash and flashes 0 and 1; cam1 and cam2
+    see every flash and no pre-flash, and cam2 two false events too, 80 ms after flash 3 and
+    125 ms after flash 6 (TT9's rig-1141: its cam3 had two such bursts among the TTL ones
+    of 39-41 ms, and it and two more were 38.7 ms off at error/sigma 32-33 with no word).
+    cam1 and cam2 are matched by their flashes to cam0's pre-flashes, 40 ms off. cam2's
+    false bursts made it a camera that sees bursts: its flashes at cam0's firsts counted
+    for neither side, and its flash 6, the first of its own burst, met cam0's first and tied
+    it to cam0. Bursts off the rig's delay are no TTL flash's: cam1 and cam2 are one group,
+    both take the 40 ms in their sigma, warned."""
+    events, truth, frame_times = synthetic_events(3, 12, seed=4)
+    instants = flash_instants_ms(events, truth)
+    seen = [np.r_[instants - 40.0, instants[:2]], instants, np.r_[instants, instants[3] + 80.0, instants[6] + 125.0]]
+    model, report = synchronize([seen_by(f"cam{c}", s, truth[c], frame_times[c]) for c, s in enumerate(seen)])
+    for c in (1, 2):
+        error, sigma = clock_errors_ms(model, truth, frame_times, c)
+        (warning,) = [w for w in report.warnings if w.startswith(f"cam{c}.mp4: the flashes that tie cam1, cam2 to")]
+        assert "its times may be off by 40 ms" in warning
+        assert np.abs(error).mean() == pytest.approx(40.0, abs=1.0), error  # the premise: the pre-flashes' shift
+        assert np.sqrt(np.mean((error / sigma) ** 2)) < 1.5, (error, sigma)
+
+
 def test_a_camera_tied_by_one_burst_whose_band_lies_a_delay_after_a_flash_is_in_doubt():
     """Three synthetic cameras (1080 rows) and twelve TTL flashes, each with a pre-flash 40 ms
     before it. cam0 (the reference) and cam2 see every flash; cam1 the pre-flash and the
