@@ -2733,8 +2733,13 @@ def _burst_doubts(best: _Attempt, model: SyncModel) -> tuple[dict[str, float], l
     had two cameras that saw one burst each, matched by it and their lone pre-flashes to the
     others' flashes, 24-30 ms off with no word (error/sigma 28-29 with a codec-drawn edge of
     the reference left out; 2.1 with it, every sigma 11 ms), each with a flash seen alone 30
-    ms after the others'. A camera whose pair's other shift is its doubt already keeps
-    that one."""
+    ms after the others'. A pair's ties at a burst's second do not tie it where the other
+    camera's events at the burst camera's firsts outnumber them and are its flashes by their
+    strengths (:func:`_flashes_at_firsts`); the gaps then need not agree, measured by the
+    times per row such a match bent: FP8's rig-1135, two cameras read the wrong way up, one
+    matched by four flashes to the other's pre-flashes and by one to a flash, 14.8 ms off at
+    error/sigma 63 with no word (its gaps 17-43 ms). A camera whose pair's other shift is
+    its doubt already keeps that one."""
     followed, following = _bursts(best, model)
     bursty = {name for name, _ in followed}
     pins, lone, firsts, at_firsts = {}, {}, {}, {}
@@ -3005,9 +3010,11 @@ def _bursts(best: _Attempt, model: SyncModel) -> tuple[dict[tuple[str, int], flo
         for first, second in pairwise(order):
             if BURST_GAP_MS[0] <= times[second] - times[first] <= BURST_GAP_MS[1]:
                 bursts.append((name, int(events.event[first]), int(events.event[second]), times[second] - times[first]))
+    if not bursts:
+        return {}, {}
     gaps = np.array([gap for *_, gap in bursts])
     agree = np.abs(gaps[:, None] - gaps[None, :]) <= BURST_AGREE * gaps[:, None]  # [i, j]: gap j near gap i
-    delay = np.median(gaps[agree[np.argmax(agree.sum(axis=1))]]) if bursts else 0.0
+    delay = np.median(gaps[agree[np.argmax(agree.sum(axis=1))]])
     kept = [(name, a, b, float(gap)) for name, a, b, gap in bursts if abs(gap - delay) <= BURST_AGREE * delay]
     followed = {(name, a): gap for name, a, _, gap in kept}
     following = {(name, b): gap for name, _, b, gap in kept}
