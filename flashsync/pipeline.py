@@ -2934,14 +2934,14 @@ def _flashes_at_firsts(
     number) of the camera without bursts matched to the first of the other's) whose such
     events are its flashes, not pre-flashes, by their bands' strengths: the other camera's
     firsts are faint beside its seconds (:data:`PRE_FLASH_SHARE`), as a pre-flash is in every
-    camera that sees it, and these events' median is nearer their camera's other events'
+    camera that sees it, and these events' median is nearer their camera's other bands'
     than that share of it (over its root). A camera that sees pre-flashes whose flash it
     misses (a fast readout's blanking) is matched to the firsts by faint events; one matched a
     pre-flash's delay off, by bright ones: FP8's rig-1135, whose cam2, blind to the
     pre-flashes, matched four of its five flashes to cam1's pre-flashes."""
-    strength = {}
+    strength = {}  # per event (camera, event number), its band's
     for name in best.connected:
-        events = _sync_events(best.cameras[name])
+        events = best.cameras[name].events
         strength.update({(name, int(e)): abs(float(s)) for e, s in zip(events.event, events.strength)})
 
     def median(keys: Iterable[tuple[str, int]]) -> float:
